@@ -1,0 +1,28 @@
+#pragma once
+/*!
+  \file camera_file.h
+  \brief Read camera files: ViSP camera XML (vpXmlParserCamera) or OpenCV YAML/XML (cv::FileStorage).
+*/
+#include <string>
+#include <yawdepth/camera/camera_model.h>
+
+namespace yawdepth {
+
+/*!
+  \brief Load a camera file.
+
+  - ViSP XML (root element `<root>` with `<camera>` entries, as vpXmlParserCamera writes them):
+    `camera_name` picks the camera; it may be empty when the file holds exactly one camera. The
+    model with distortion (kud) is used when present, else the one without.
+  - OpenCV YAML or XML (cv::FileStorage): `camera_matrix` (3x3), `distortion_coefficients`
+    (0, 4, 5 or 8 values), `image_width`, `image_height`.
+
+  \throws yawdepth::Error with a one-line reason (missing file, unknown camera name, missing key,
+  non-finite or non-positive focal length, wrong number of coefficients, ...).
+*/
+CameraModel loadCameraFile(const std::string &path, const std::string &camera_name = "");
+
+/*! \brief Write an OpenCV YAML camera file (the format loadCameraFile() reads). */
+void saveCameraYaml(const std::string &path, const CameraModel &camera);
+
+} // namespace yawdepth

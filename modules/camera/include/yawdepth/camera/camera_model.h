@@ -1,0 +1,86 @@
+#pragma once
+/*!
+  \file camera_model.h
+  \brief Pinhole camera with lens distortion, and its exact inverse (undistortion).
+
+  Pixels: \f$ u = u_0 + k_x x_d,\ v = v_0 + k_y y_d \f$ where \f$(x_d, y_d)\f$ is the distorted
+  normalised point; eq. (3) of the paper inverts this after undistortion. Two distortion models:
+  - `Brown`: OpenCV's model, coefficients in OpenCV order k1 k2 p1 p2 [k3 [k4 k5 k6]]
+    (0, 4, 5 or 8 values; the rational part k4..k6 is used when 8 are given).
+  - `ViSP`: ViSP's kud model, \f$ x_d = x (1 + k_{ud} r^2) \f$ (undistorted to distorted, as
+    vpMeterPixelConversion applies it). Its kdu companion is an approximation of the inverse and is
+    not needed: undistortion here is the exact inverse of the kud projection.
+  Undistortion is solved by Newton's method to convergence (|step| below 1e-15 in normalised
+  units, i.e. far below 1e-9 px), not by a fixed number of iterations.
+*/
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpImagePoint.h>
+
+namespace yawdepth {
+
+class CameraModel {
+public:
+  enum class Distortion { None, Brown, ViSP };
+
+  /*! \brief An identity-like default camera (px = py = 1, u0 = v0 = 0, no distortion). */
+  CameraModel();
+  /*!
+    \brief Pinhole camera, or ViSP's kud model when `cam` is `perspectiveProjWithDistortion`.
+    \param cam ViSP camera parameters.
+    \param width, height Image size in pixels (0 when unknown).
+  */
+  explicit CameraModel(const vpCameraParameters &cam, unsigned width = 0, unsigned height = 0);
+  /*!
+    \brief OpenCV/Brown camera.
+    \param fx, fy Focal lengths in pixels (\f$k_x, k_y\f$). \param u0, v0 Principal point.
+    \param coeffs 0, 4, 5 or 8 coefficients in OpenCV order. Throws yawdepth::Error otherwise.
+  */
+  static CameraModel brown(double fx, double fy, double u0, double v0, const std::vector<double> &coeffs,
+                           unsigned width = 0, unsigned height = 0);
+
+  Distortion distortion() const { return model_; }
+  /*! \brief The pinhole part as ViSP parameters (perspectiveProjWithoutDistortion), or the ViSP
+      kud/kdu model when distortion() is ViSP. */
+  const vpCameraParameters &parameters() const { return cam_; }
+  double kx() const { return kx_; }
+  double ky() const { return ky_; }
+  double u0() const { return u0_; }
+  double v0() const { return v0_; }
+  unsigned width() const { return width_; }
+  unsigned height() const { return height_; }
+  /*! \brief Brown coefficients, always 8 (k1 k2 p1 p2 k3 k4 k5 k6), zero-padded. */
+  const std::vector<double> &brownCoefficients() const { return coeffs_; }
+
+  /*!
+    \brief Distort a normalised point: \f$ (x, y) \mapsto (x_d, y_d) \f$.
+    \param J If not null, receives \f$ \partial (x_d,y_d) / \partial (x,y) \f$.
+  */
+  Eigen::Vector2d distortNormalized(const Eigen::Vector2d &m, Eigen::Matrix2d *J = nullptr) const;
+  /*! \brief Normalised (undistorted) point to observed pixel. */
+  Eigen::Vector2d project(const Eigen::Vector2d &m) const;
+  /*!
+    \brief Observed (distorted) pixel to undistorted normalised point, exactly.
+    \param uv Pixel (u, v).
+    \param m Output normalised point (x, y).
+    \param J If not null, receives \f$ \partial (x,y) / \partial (u,v) \f$ (for noise propagation).
+    \return false when Newton's method does not converge (pixel outside the model's valid range).
+  */
+  bool undistort(const Eigen::Vector2d &uv, Eigen::Vector2d &m, Eigen::Matrix2d *J = nullptr) const;
+  /*! \brief Same as undistort(), ViSP types. Throws yawdepth::Error when it does not converge. */
+  void pixelToMeter(const vpImagePoint &ip, double &x, double &y) const;
+  /*! \brief Undistorted pixel (pinhole, no distortion) of an observed pixel. */
+  bool undistortPixel(const Eigen::Vector2d &uv, Eigen::Vector2d &uv_undist) const;
+
+private:
+  Distortion model_ = Distortion::None;
+  vpCameraParameters cam_;
+  double kx_ = 1, ky_ = 1, u0_ = 0, v0_ = 0;
+  double kud_ = 0;
+  std::vector<double> coeffs_ = std::vector<double>(8, 0.0);
+  unsigned width_ = 0, height_ = 0;
+};
+
+} // namespace yawdepth

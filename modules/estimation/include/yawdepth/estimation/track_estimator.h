@@ -1,0 +1,48 @@
+#pragma once
+/*!
+  \file track_estimator.h
+  \brief One entry point for every method: a feature's track and the motion log in, a point out.
+
+  This is the interface the CLI, the servo depth provider and the benchmarks share.
+*/
+#include <string>
+#include <vector>
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/estimation/two_view.h>
+#include <yawdepth/estimation/types.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth {
+
+/*! \brief Estimation methods (the `--method` words of `yawdepth estimate`). */
+enum class Method {
+  Paper, //!< "paper": eq. (5)-(7) on the last increment, as published.
+  Exact  //!< "exact": finite-increment two-view form on the last increment, rotation compensated.
+};
+
+/*! \brief "paper", "exact". */
+const char *toString(Method m);
+/*! \brief Parse a method word; throws yawdepth::Error for an unknown one. */
+Method methodFromString(const std::string &word);
+
+/*! \brief Options of estimateTrack(). */
+struct TrackEstimatorOptions {
+  Method method = Method::Exact;
+  TwoViewOptions two_view;
+};
+
+/*!
+  \brief Estimate one feature's point at the last frame it was observed in.
+
+  `paper` and `exact` use the last two observations of the track (the last increment the feature
+  was seen across; when frames in between are missing, the odometry noise grows with the number
+  of motion-log rows spanned).
+  \param motion Motion-log rows sorted by strictly increasing frame; every observed frame must be in
+         it (throws yawdepth::Error otherwise).
+  \return An estimate whose status says whether it is valid; `too_few_frames` for fewer than two
+          observations.
+*/
+PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                            const Track &track, const TrackEstimatorOptions &options = TrackEstimatorOptions());
+
+} // namespace yawdepth

@@ -1,0 +1,99 @@
+#pragma once
+/*!
+  \file types.h
+  \brief Observations in, point estimates out: the types every yawdepth estimator shares.
+*/
+#include <Eigen/Core>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+#include <visp3/core/vpColVector.h>
+#include <visp3/core/vpMatrix.h>
+
+namespace yawdepth {
+
+/*! \brief One observation of a feature: its observed (distorted) pixel in a frame. */
+struct Observation {
+  long frame = 0;
+  double u = 0, v = 0;
+};
+
+/*! \brief Every observation of one feature, sorted by frame. */
+struct Track {
+  long id = 0;
+  std::vector<Observation> observations;
+};
+
+/*!
+  \brief Why an estimate is or is not valid. Written in files as the word of toString().
+*/
+enum class Status {
+  Ok,              //!< "ok": a valid estimate.
+  Degenerate,      //!< "degenerate": too little parallax (feature near the focus of expansion).
+  Behind,          //!< "behind": the depth at either frame is not positive.
+  NoMotion,        //!< "no_motion": the camera did not translate (baseline below the gate).
+  TooFewFrames,    //!< "too_few_frames": the feature was seen in fewer than two frames.
+  UndistortFailed, //!< "undistort_failed": a pixel lies outside the distortion model's valid range.
+  Unavailable      //!< "unavailable": the method is not built in (e.g. Ceres missing).
+};
+
+/*! \brief The status word used in files: "ok", "degenerate", "behind", "no_motion", ... */
+const char *toString(Status s);
+/*! \brief Parse a status word; throws yawdepth::Error for an unknown word. */
+Status statusFromString(const std::string &word);
+
+/*!
+  \brief A point estimate with its uncertainty.
+
+  Valid (finite) only when `status == Status::Ok`; otherwise the numbers are NaN.
+*/
+struct PointEstimate {
+  Status status = Status::TooFewFrames;
+  long frame = 0;                 //!< Frame the point is expressed at (the last observation).
+  Eigen::Vector3d c_P = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+                                  //!< (Xc, Yc, Zc) in the camera frame at `frame` (m).
+  Eigen::Vector3d v_P = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+                                  //!< (X, Y, Z) in the vision frame at `frame`, eq. (7) (m).
+  Eigen::Matrix3d c_cov = Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
+                                  //!< First-order covariance of c_P (m^2).
+  double parallax_px = std::numeric_limits<double>::quiet_NaN(); //!< Parallax used by the gate (px).
+
+  bool ok() const { return status == Status::Ok; }
+  /*! \brief 1-sigma depth uncertainty \f$ \sqrt{\Sigma_{ZZ}} \f$ (m). */
+  double sigmaZ() const { return std::sqrt(c_cov(2, 2)); }
+  /*! \brief c_P as a ViSP column vector (Xc, Yc, Zc). */
+  vpColVector cP() const;
+  /*! \brief v_P as a ViSP column vector (X, Y, Z). */
+  vpColVector vP() const;
+  /*! \brief c_cov as a ViSP matrix. */
+  vpMatrix covariance() const;
+};
+
+/*!
+  \brief Noise model of the inputs (1-sigma), used for uncertainty and for weighting.
+*/
+struct NoiseModel {
+  double sigma_px = 0.3;            //!< Pixel noise per coordinate of an observation (px).
+  double sigma_odom = 1e-3;         //!< Translation noise per frame-to-frame increment, per axis (m).
+  double sigma_heading = 8.7266e-4; //!< Heading noise per increment (rad); 0.05 degree.
+  double sigma_yaw = 8.7266e-4;     //!< Noise of each yaw reading (rad); 0.05 degree.
+  /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative. */
+  void validate() const;
+};
+
+/*!
+  \brief Gates that turn bad geometry into a status word instead of a wrong number.
+*/
+struct GateOptions {
+  /*! Camera translation between the two frames below this is `no_motion` (m). */
+  double min_baseline = 1e-6;
+  /*! Parallax below this is `degenerate` (px). Parallax is the image distance between the observed
+      point and where a point at infinity would be after the known rotation; it vanishes at the
+      focus of expansion. */
+  double min_parallax_px = 0.02;
+  /*! Throws yawdepth::Error unless both thresholds are finite and non-negative. */
+  void validate() const;
+};
+
+} // namespace yawdepth

@@ -1,0 +1,76 @@
+#include <cmath>
+#include <yawdepth/error.h>
+#include <yawdepth/estimation/types.h>
+
+namespace yawdepth {
+
+const char *toString(Status s)
+{
+  switch (s) {
+  case Status::Ok:
+    return "ok";
+  case Status::Degenerate:
+    return "degenerate";
+  case Status::Behind:
+    return "behind";
+  case Status::NoMotion:
+    return "no_motion";
+  case Status::TooFewFrames:
+    return "too_few_frames";
+  case Status::UndistortFailed:
+    return "undistort_failed";
+  case Status::Unavailable:
+    return "unavailable";
+  }
+  return "unknown";
+}
+
+Status statusFromString(const std::string &word)
+{
+  for (Status s : {Status::Ok, Status::Degenerate, Status::Behind, Status::NoMotion, Status::TooFewFrames,
+                   Status::UndistortFailed, Status::Unavailable})
+    if (word == toString(s))
+      return s;
+  throw Error("unknown status word '" + word + "'");
+}
+
+static vpColVector toVispVec(const Eigen::Vector3d &e)
+{
+  vpColVector v(3);
+  for (unsigned i = 0; i < 3; ++i)
+    v[i] = e(i);
+  return v;
+}
+
+vpColVector PointEstimate::cP() const { return toVispVec(c_P); }
+vpColVector PointEstimate::vP() const { return toVispVec(v_P); }
+vpMatrix PointEstimate::covariance() const
+{
+  vpMatrix M(3, 3);
+  for (unsigned i = 0; i < 3; ++i)
+    for (unsigned j = 0; j < 3; ++j)
+      M[i][j] = c_cov(i, j);
+  return M;
+}
+
+static void checkSigma(double v, const char *name)
+{
+  if (!std::isfinite(v) || v < 0)
+    throw Error(std::string(name) + " must be a finite non-negative number");
+}
+
+void NoiseModel::validate() const
+{
+  checkSigma(sigma_px, "sigma-px");
+  checkSigma(sigma_odom, "sigma-odom");
+  checkSigma(sigma_heading, "sigma-heading");
+  checkSigma(sigma_yaw, "sigma-yaw");
+}
+
+void GateOptions::validate() const
+{
+  checkSigma(min_baseline, "min-baseline");
+  checkSigma(min_parallax_px, "min-parallax-px");
+}
+
+} // namespace yawdepth

@@ -1,0 +1,78 @@
+#include <yawdepth/error.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth {
+
+vpHomogeneousMatrix toVisp(const Eigen::Matrix3d &R, const Eigen::Vector3d &t)
+{
+  vpHomogeneousMatrix M;
+  for (unsigned i = 0; i < 3; ++i) {
+    for (unsigned j = 0; j < 3; ++j)
+      M[i][j] = R(i, j);
+    M[i][3] = t(i);
+  }
+  return M;
+}
+
+void fromVisp(const vpHomogeneousMatrix &M, Eigen::Matrix3d &R, Eigen::Vector3d &t)
+{
+  for (unsigned i = 0; i < 3; ++i) {
+    for (unsigned j = 0; j < 3; ++j)
+      R(i, j) = M[i][j];
+    t(i) = M[i][3];
+  }
+}
+
+vpHomogeneousMatrix YawRig::vMc(double yaw) const
+{
+  const Eigen::Matrix3d R = rotY(yaw);
+  return toVisp(R, R * v_t0_);
+}
+
+vpHomogeneousMatrix YawRig::cMv(double yaw) const { return toVisp(rotY(yaw).transpose(), -v_t0_); }
+
+static Eigen::Vector3d toEigen3(const vpColVector &v, const char *what)
+{
+  if (v.size() != 3)
+    throw Error(std::string(what) + ": expected a 3-vector");
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+static vpColVector toVisp3(const Eigen::Vector3d &e)
+{
+  vpColVector v(3);
+  v[0] = e(0);
+  v[1] = e(1);
+  v[2] = e(2);
+  return v;
+}
+
+vpColVector YawRig::cameraIncrement(double yaw, const vpColVector &v_d) const
+{
+  return toVisp3(rotY(yaw).transpose() * toEigen3(v_d, "cameraIncrement"));
+}
+
+vpColVector YawRig::toVision(double yaw, const vpColVector &c_P) const
+{
+  const Eigen::Matrix3d R = rotY(yaw);
+  return toVisp3(R * (toEigen3(c_P, "toVision") + v_t0_));
+}
+
+vpColVector YawRig::toCamera(double yaw, const vpColVector &v_P) const
+{
+  return toVisp3(rotY(yaw).transpose() * toEigen3(v_P, "toCamera") - v_t0_);
+}
+
+vpHomogeneousMatrix wMv(const MotionSample &s) { return toVisp(rotY(s.heading), Eigen::Vector3d(s.x, s.y, s.z)); }
+
+vpHomogeneousMatrix wMc(const YawRig &rig, const MotionSample &s) { return wMv(s) * rig.vMc(s.yaw); }
+
+vpHomogeneousMatrix curMprev(const YawRig &rig, const MotionSample &prev, const MotionSample &cur)
+{
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  relativeMotion<double>(rig.cameraOffset(), prev, cur, IncrementPerturbation<double>(), R, t);
+  return toVisp(R, t);
+}
+
+} // namespace yawdepth

@@ -1,0 +1,97 @@
+#pragma once
+/*!
+  \file files.h
+  \brief The public file formats (shared/docs/formats.md): motion log, feature tracks, rig file,
+  points output. Every reader throws yawdepth::Error with a one-line reason naming the file and,
+  where there is one, the line and column: missing file, empty file, bad header, missing column,
+  text in a number, NaN or infinite number, duplicated or unsorted frames.
+*/
+#include <Eigen/Core>
+#include <map>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+#include <yawdepth/estimation/types.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth {
+
+/*! \brief Contents of a rig file (YAML). */
+struct RigFile {
+  Eigen::Vector3d camera_offset = Eigen::Vector3d::Zero(); //!< `camera_offset: [x, y, z]` (m), required.
+  std::optional<double> yaw; //!< optional `yaw:` (rad), used when the motion log has no yaw column.
+};
+
+/*!
+  \brief Read a rig YAML file. Required key `camera_offset` (3 finite numbers); optional `yaw`.
+  Unknown keys are ignored.
+*/
+RigFile readRigFile(const std::string &path);
+
+/*! \brief A motion log: one MotionSample per frame, frames strictly increasing. */
+struct MotionLog {
+  std::vector<MotionSample> samples; //!< sorted by frame, no duplicates
+  std::vector<std::string> images;   //!< same size as samples when the `image` column exists (paths
+                                     //!< resolved against the CSV's folder), else empty
+  /*! \brief The sample of `frame`, or nullptr when the log has no such frame. */
+  const MotionSample *find(long frame) const;
+  /*! \brief Index of `frame` in samples, or -1. */
+  long indexOf(long frame) const;
+};
+
+/*!
+  \brief Read a motion log CSV: columns frame,x,y,z,heading,yaw (+ optional image); column order
+  free, unknown columns ignored. When the file has no `yaw` column, `fixed_yaw` is used for every
+  row; without either, it is an error.
+*/
+MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw = std::nullopt);
+
+/*!
+  \brief Read feature tracks CSV: columns frame,id,u,v (any order, unknown columns ignored).
+  Returns the tracks sorted by id, each track's observations sorted by frame. A repeated
+  (frame, id) pair is an error.
+*/
+std::vector<Track> readTracksCsv(const std::string &path);
+
+/*!
+  \brief Check that every observation names a frame of the motion log; throws yawdepth::Error
+  naming the first track and frame that does not.
+*/
+void checkTracksAgainstMotion(const std::vector<Track> &tracks, const MotionLog &motion,
+                              const std::string &tracks_path);
+
+/*! \brief One output row: a feature id and its estimate. */
+struct PointRow {
+  long id = 0;
+  PointEstimate estimate;
+};
+
+/*!
+  \brief Write points CSV: header `id,frame,x,y,z,xc,yc,zc,sigma_zc,status`, numbers with 17
+  significant digits; numbers are left empty when the status is not ok.
+*/
+void writePointsCsv(std::ostream &out, const std::vector<PointRow> &rows);
+/*!
+  \brief Same, to a file, atomically: written to a temporary file beside `path` and renamed over
+  it only once complete, so a failed run never leaves a partial file looking complete.
+*/
+void writePointsCsv(const std::string &path, const std::vector<PointRow> &rows);
+
+/*!
+  \brief Write `contents` to `path` atomically (temporary file in the same folder, then rename).
+  Throws yawdepth::Error on failure.
+*/
+void writeFileAtomically(const std::string &path, const std::string &contents);
+
+/*! \brief Write a motion log CSV (frame,x,y,z,heading,yaw[,image]), atomically, 17 significant digits. */
+void writeMotionCsv(const std::string &path, const MotionLog &motion);
+/*! \brief Write feature tracks CSV (frame,id,u,v), rows ordered by frame then id, atomically. */
+void writeTracksCsv(const std::string &path, const std::vector<Track> &tracks);
+/*! \brief Write a rig YAML file, atomically. */
+void writeRigFile(const std::string &path, const RigFile &rig);
+
+/*! \brief Read a whole points CSV back (for tests and tools). Empty numbers read as NaN. */
+std::vector<PointRow> readPointsCsv(const std::string &path);
+
+} // namespace yawdepth
