@@ -51,7 +51,8 @@ public:
   double v0() const { return v0_; }
   unsigned width() const { return width_; }
   unsigned height() const { return height_; }
-  /*! \brief Brown coefficients, always 8 (k1 k2 p1 p2 k3 k4 k5 k6), zero-padded. */
+  /*! \brief Brown coefficients, always 8 (k1 k2 p1 p2 k3 k4 k5 k6), zero-padded. For the ViSP
+      model these are the equivalent Brown coefficients (k1 = kud, the others 0); all zero for None. */
   const std::vector<double> &brownCoefficients() const { return coeffs_; }
 
   /*!

@@ -91,7 +91,13 @@ void writeTracksCsv(const std::string &path, const std::vector<Track> &tracks);
 /*! \brief Write a rig YAML file, atomically. */
 void writeRigFile(const std::string &path, const RigFile &rig);
 
-/*! \brief Read a whole points CSV back (for tests and tools). Empty numbers read as NaN. */
+/*!
+  \brief Read a whole points CSV back (for tests and tools). Empty numbers read as NaN.
+
+  The file holds only `sigma_zc` of the covariance: the estimates' `c_cov` is NaN except
+  `c_cov(2, 2) = sigma_zc^2`, so that `sigmaZ()` returns `sigma_zc` exactly. A file with a header and
+  no rows is valid (no points).
+*/
 std::vector<PointRow> readPointsCsv(const std::string &path);
 
 } // namespace yawdepth

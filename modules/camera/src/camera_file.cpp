@@ -1,0 +1,460 @@
+/*!
+  \file camera_file.cpp
+  \brief Camera files: ViSP XML through vpXmlParserCamera, OpenCV YAML/XML through cv::FileStorage.
+*/
+#include <yawdepth/camera/camera_file.h>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <sstream>
+#include <streambuf>
+#include <string>
+#include <vector>
+#include <visp3/core/vpXmlParserCamera.h>
+#include <yawdepth/error.h>
+
+namespace yawdepth {
+
+namespace {
+
+/*! \brief One-line version of a message (newlines and tabs become spaces, trimmed). */
+std::string oneLine(const std::string &s) {
+  std::string r;
+  r.reserve(s.size());
+  bool space = false;
+  for (char c : s) {
+    if (c == '\n' || c == '\r' || c == '\t' || c == ' ') {
+      space = !r.empty();
+      continue;
+    }
+    if (space)
+      r += ' ';
+    space = false;
+    r += c;
+  }
+  return r;
+}
+
+std::string trim(const std::string &s) {
+  const char *ws = " \t\r\n";
+  const auto b = s.find_first_not_of(ws);
+  if (b == std::string::npos)
+    return "";
+  const auto e = s.find_last_not_of(ws);
+  return s.substr(b, e - b + 1);
+}
+
+/*! \brief Whole file as text; throws yawdepth::Error when missing, a directory or unreadable. */
+std::string readWholeFile(const std::string &path) {
+  std::error_code ec;
+  if (path.empty())
+    throw Error("camera file: empty path");
+  const auto st = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(st))
+    throw Error(path + ": camera file not found");
+  if (std::filesystem::is_directory(st))
+    throw Error(path + ": is a directory, not a camera file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw Error(path + ": cannot open camera file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad())
+    throw Error(path + ": cannot read camera file");
+  std::string text = ss.str();
+  if (text.size() >= 3 && static_cast<unsigned char>(text[0]) == 0xEF &&
+      static_cast<unsigned char>(text[1]) == 0xBB && static_cast<unsigned char>(text[2]) == 0xBF)
+    text.erase(0, 3); // UTF-8 byte order mark
+  return text;
+}
+
+/*! \brief True when `text` has the tag `<name` followed by `>`, `/` or white space. */
+std::size_t findTag(const std::string &text, const std::string &name, std::size_t from = 0) {
+  const std::string open = "<" + name;
+  for (std::size_t p = text.find(open, from); p != std::string::npos; p = text.find(open, p + 1)) {
+    const std::size_t after = p + open.size();
+    if (after >= text.size())
+      return std::string::npos;
+    const char c = text[after];
+    if (c == '>' || c == '/' || c == ' ' || c == '\t' || c == '\n' || c == '\r')
+      return p;
+  }
+  return std::string::npos;
+}
+
+/*! \brief The text with XML comments blanked out. */
+std::string stripXmlComments(const std::string &text) {
+  std::string r = text;
+  for (std::size_t p = r.find("<!--"); p != std::string::npos; p = r.find("<!--", p)) {
+    std::size_t e = r.find("-->", p + 4);
+    e = (e == std::string::npos) ? r.size() : e + 3;
+    std::fill(r.begin() + static_cast<std::ptrdiff_t>(p), r.begin() + static_cast<std::ptrdiff_t>(e), ' ');
+    p = e;
+  }
+  return r;
+}
+
+std::string decodeXmlEntities(const std::string &s) {
+  static const std::pair<const char *, char> entities[] = {
+      {"&lt;", '<'}, {"&gt;", '>'}, {"&quot;", '"'}, {"&apos;", '\''}, {"&amp;", '&'}};
+  std::string r;
+  for (std::size_t i = 0; i < s.size();) {
+    bool done = false;
+    if (s[i] == '&')
+      for (const auto &e : entities) {
+        const std::size_t n = std::char_traits<char>::length(e.first);
+        if (s.compare(i, n, e.first) == 0) {
+          r += e.second;
+          i += n;
+          done = true;
+          break;
+        }
+      }
+    if (!done)
+      r += s[i++];
+  }
+  return r;
+}
+
+/*!
+  \brief Names of the `<camera>` entries of a ViSP XML file, in file order (light text scan; the
+  real parsing is vpXmlParserCamera's). A camera without `<name>` has an empty name.
+*/
+std::vector<std::string> vispCameraNames(const std::string &raw) {
+  const std::string text = stripXmlComments(raw);
+  std::vector<std::string> names;
+  for (std::size_t p = findTag(text, "camera"); p != std::string::npos;) {
+    const std::size_t gt = text.find('>', p);
+    if (gt == std::string::npos)
+      break;
+    if (text[gt - 1] == '/') { // <camera/>
+      names.emplace_back();
+      p = findTag(text, "camera", gt);
+      continue;
+    }
+    std::size_t end = text.find("</camera>", gt);
+    if (end == std::string::npos)
+      end = text.size();
+    const std::string body = text.substr(gt + 1, end - gt - 1);
+    std::string name;
+    const std::size_t n = findTag(body, "name");
+    if (n != std::string::npos) {
+      const std::size_t ngt = body.find('>', n);
+      if (ngt != std::string::npos && body[ngt - 1] != '/') {
+        const std::size_t nend = body.find("</name>", ngt);
+        name = body.substr(ngt + 1, (nend == std::string::npos ? body.size() : nend) - ngt - 1);
+        const std::string cdata = "<![CDATA[";
+        if (name.compare(0, cdata.size(), cdata) == 0 && name.size() >= cdata.size() + 3)
+          name = name.substr(cdata.size(), name.size() - cdata.size() - 3);
+        else
+          name = decodeXmlEntities(name);
+      }
+    }
+    names.push_back(name);
+    p = findTag(text, "camera", end);
+  }
+  return names;
+}
+
+std::string joinNames(const std::vector<std::string> &names) {
+  std::string r;
+  for (const auto &n : names)
+    r += (r.empty() ? "" : ", ") + (n.empty() ? std::string("<unnamed>") : n);
+  return r;
+}
+
+/*!
+  \brief Silences std::cout, std::cerr and std::clog while alive: vpXmlParserCamera::parse prints
+  "Found camera with name ..." to std::cout (and its error traces to std::cerr), and the library
+  must not print. Process-wide and not thread-safe with respect to other printing threads; calls
+  from yawdepth itself are serialised by a mutex.
+*/
+class SilenceStdStreams {
+public:
+  SilenceStdStreams()
+      : cout_(std::cout.rdbuf(&null_)), cerr_(std::cerr.rdbuf(&null_)), clog_(std::clog.rdbuf(&null_)) {}
+  ~SilenceStdStreams() {
+    std::cout.rdbuf(cout_);
+    std::cerr.rdbuf(cerr_);
+    std::clog.rdbuf(clog_);
+  }
+  SilenceStdStreams(const SilenceStdStreams &) = delete;
+  SilenceStdStreams &operator=(const SilenceStdStreams &) = delete;
+
+private:
+  struct NullBuf : std::streambuf {
+    int overflow(int c) override { return traits_type::not_eof(c); }
+    std::streamsize xsputn(const char *, std::streamsize n) override { return n; }
+  };
+  NullBuf null_;
+  std::streambuf *cout_, *cerr_, *clog_;
+};
+
+std::mutex &vispParserMutex() {
+  static std::mutex m;
+  return m;
+}
+
+/*! \brief One vpXmlParserCamera::parse call, silenced; false when ViSP reports an error. */
+bool vispParse(const std::string &path, const std::string &name,
+               vpCameraParameters::vpCameraParametersProjType model, vpCameraParameters &cam, unsigned &w,
+               unsigned &h) {
+  std::lock_guard<std::mutex> lock(vispParserMutex());
+  SilenceStdStreams silence;
+  vpXmlParserCamera parser;
+  vpCameraParameters c;
+  if (parser.parse(c, path, name, model, 0, 0) != vpXmlParserCamera::SEQUENCE_OK)
+    return false;
+  if (c.get_projModel() != model)
+    return false;
+  cam = c;
+  w = parser.getWidth();
+  h = parser.getHeight();
+  return true;
+}
+
+CameraModel loadVispXml(const std::string &path, const std::string &text, const std::string &camera_name) {
+  const std::vector<std::string> names = vispCameraNames(text);
+  if (names.empty())
+    throw Error(path + ": no <camera> entry in this ViSP camera file");
+
+  std::string name; // exactly as written in the file (vpXmlParserCamera compares verbatim)
+  if (camera_name.empty()) {
+    if (names.size() > 1)
+      throw Error("several cameras in " + path + "; pick one with --camera-name (" + joinNames(names) + ")");
+    name = names.front();
+  } else {
+    std::vector<std::string> matches;
+    for (const auto &n : names)
+      if (n == camera_name || trim(n) == trim(camera_name))
+        matches.push_back(n);
+    if (matches.empty())
+      throw Error(path + ": no camera named '" + camera_name + "' (cameras: " + joinNames(names) + ")");
+    name = matches.front();
+    for (const auto &n : matches)
+      if (n == camera_name)
+        name = n;
+  }
+  if (std::count(names.begin(), names.end(), name) > 1)
+    throw Error(path + ": several cameras named '" + name + "'");
+
+  vpCameraParameters cam;
+  unsigned w = 0, h = 0;
+  bool ok = false;
+  try {
+    ok = vispParse(path, name, vpCameraParameters::perspectiveProjWithDistortion, cam, w, h) ||
+         vispParse(path, name, vpCameraParameters::perspectiveProjWithoutDistortion, cam, w, h);
+  } catch (const std::exception &e) {
+    throw Error(path + ": ViSP could not read the camera file: " + oneLine(e.what()));
+  } catch (...) {
+    throw Error(path + ": ViSP could not read the camera file");
+  }
+  if (!ok)
+    throw Error(path + ": vpXmlParserCamera rejected camera '" + name +
+                "' (malformed XML, unexpected element, or no complete perspectiveProjWithDistortion / "
+                "perspectiveProjWithoutDistortion model)");
+  try {
+    return CameraModel(cam, w, h);
+  } catch (const Error &e) {
+    throw Error(path + ": " + e.what());
+  }
+}
+
+/*! \brief Numbers of an OpenCV matrix node (map `!!opencv-matrix`), a sequence, or a scalar. */
+std::vector<double> readNumbers(const cv::FileNode &node, const std::string &path, const std::string &key,
+                                int &rows, int &cols) {
+  std::vector<double> v;
+  if (node.isMap()) {
+    cv::Mat m;
+    node >> m;
+    if (m.empty()) {
+      rows = cols = 0;
+      return v;
+    }
+    if (m.channels() != 1)
+      throw Error(path + ": " + key + " must be a single-channel matrix");
+    cv::Mat md;
+    m.convertTo(md, CV_64F);
+    rows = md.rows;
+    cols = md.cols;
+    for (int r = 0; r < md.rows; ++r)
+      for (int c = 0; c < md.cols; ++c)
+        v.push_back(md.at<double>(r, c));
+  } else if (node.isSeq()) {
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      const cv::FileNode e = *it;
+      if (!e.isInt() && !e.isReal())
+        throw Error(path + ": " + key + " must hold numbers only");
+      v.push_back(static_cast<double>(e));
+    }
+    rows = 1;
+    cols = static_cast<int>(v.size());
+  } else if (node.isInt() || node.isReal()) {
+    v.push_back(static_cast<double>(node));
+    rows = cols = 1;
+  } else {
+    throw Error(path + ": " + key + " is not a matrix");
+  }
+  for (double x : v)
+    if (!std::isfinite(x))
+      throw Error(path + ": " + key + " holds a non-finite value");
+  return v;
+}
+
+unsigned readImageSize(const cv::FileNode &node, const std::string &path, const std::string &key) {
+  if (node.empty() || node.isNone())
+    return 0;
+  if (!node.isInt())
+    throw Error(path + ": " + key + " must be an integer");
+  const int v = static_cast<int>(node);
+  if (v < 0)
+    throw Error(path + ": " + key + " = " + std::to_string(v) + " must be >= 0");
+  return static_cast<unsigned>(v);
+}
+
+CameraModel loadOpenCv(const std::string &path, const std::string &text, bool yaml) {
+  std::string content = text;
+  if (yaml && trim(text).rfind("%YAML", 0) != 0)
+    content = "%YAML:1.0\n---\n" + text; // OpenCV 4 insists on the YAML header
+  std::vector<double> K, D;
+  int kr = 0, kc = 0, dr = 0, dc = 0;
+  unsigned w = 0, h = 0;
+  try {
+    cv::FileStorage fs(content, cv::FileStorage::READ | cv::FileStorage::MEMORY |
+                                    (yaml ? cv::FileStorage::FORMAT_YAML : cv::FileStorage::FORMAT_XML));
+    if (!fs.isOpened())
+      throw Error(path + ": OpenCV cannot parse this camera file");
+    const cv::FileNode root = fs.root();
+    if (!root.isMap())
+      throw Error(path + ": not a camera file (expected camera_matrix, distortion_coefficients, ...)");
+    const cv::FileNode kn = fs["camera_matrix"];
+    if (kn.empty() || kn.isNone())
+      throw Error(path + ": missing camera_matrix");
+    K = readNumbers(kn, path, "camera_matrix", kr, kc);
+    const cv::FileNode dn = fs["distortion_coefficients"];
+    if (!dn.empty() && !dn.isNone())
+      D = readNumbers(dn, path, "distortion_coefficients", dr, dc);
+    w = readImageSize(fs["image_width"], path, "image_width");
+    h = readImageSize(fs["image_height"], path, "image_height");
+  } catch (const Error &) {
+    throw;
+  } catch (const cv::Exception &e) {
+    throw Error(path + ": OpenCV cannot read this camera file: " + oneLine(e.err) +
+                (e.func.empty() ? std::string() : " (" + oneLine(e.func).substr(0, 120) + ")"));
+  } catch (const std::exception &e) {
+    throw Error(path + ": cannot read this camera file: " + oneLine(e.what()));
+  }
+
+  if (K.size() != 9 || !((kr == 3 && kc == 3) || kr == 1 || kc == 1))
+    throw Error(path + ": camera_matrix must be 3x3 (got " + std::to_string(kr) + "x" + std::to_string(kc) + ")");
+  const double fx = K[0], skew = K[1], u0 = K[2], fy = K[4], v0 = K[5];
+  if (std::abs(K[3]) > 0 || std::abs(K[6]) > 0 || std::abs(K[7]) > 0 || std::abs(K[8] - 1) > 1e-12)
+    throw Error(path + ": camera_matrix last row must be [0 0 1] and K(1,0) must be 0");
+  if (std::abs(skew) > 1e-9 * std::max(1.0, std::abs(fx)))
+    throw Error(path + ": camera_matrix has a non-zero skew, which is not supported");
+  if (!D.empty() && dr != 1 && dc != 1)
+    throw Error(path + ": distortion_coefficients must be a 1xN or Nx1 matrix");
+  try {
+    return CameraModel::brown(fx, fy, u0, v0, D, w, h);
+  } catch (const Error &e) {
+    throw Error(path + ": " + e.what());
+  }
+}
+
+enum class Format { ViSPXml, OpenCvXml, OpenCvYaml, Unknown };
+
+Format detectFormat(const std::string &text) {
+  const std::string t = trim(text);
+  const std::string nc = stripXmlComments(t);
+  if (t.rfind("%YAML", 0) == 0)
+    return Format::OpenCvYaml;
+  if (t.rfind("<", 0) == 0) {
+    if (findTag(nc, "opencv_storage") != std::string::npos)
+      return Format::OpenCvXml;
+    if (findTag(nc, "root") != std::string::npos && findTag(nc, "camera") != std::string::npos)
+      return Format::ViSPXml;
+    return Format::Unknown;
+  }
+  if (t.rfind("camera_matrix:", 0) == 0 || t.find("\ncamera_matrix:") != std::string::npos)
+    return Format::OpenCvYaml;
+  return Format::Unknown;
+}
+
+} // namespace
+
+CameraModel loadCameraFile(const std::string &path, const std::string &camera_name) {
+  try {
+    const std::string text = readWholeFile(path);
+    if (trim(text).empty())
+      throw Error(path + ": empty camera file");
+    switch (detectFormat(text)) {
+    case Format::ViSPXml:
+      return loadVispXml(path, text, camera_name);
+    case Format::OpenCvXml:
+      return loadOpenCv(path, text, false);
+    case Format::OpenCvYaml:
+      return loadOpenCv(path, text, true);
+    case Format::Unknown:
+      break;
+    }
+    throw Error(path + ": not a camera file (expected a ViSP camera XML <root><camera>, or an OpenCV "
+                       "YAML/XML with camera_matrix)");
+  } catch (const Error &) {
+    throw;
+  } catch (const std::exception &e) {
+    throw Error(path + ": cannot read camera file: " + oneLine(e.what()));
+  } catch (...) {
+    throw Error(path + ": cannot read camera file");
+  }
+}
+
+void saveCameraYaml(const std::string &path, const CameraModel &camera) {
+  // ViSP's kud model is Brown with k1 = kud, so every model has an exact OpenCV form.
+  std::vector<double> d;
+  if (camera.distortion() != CameraModel::Distortion::None) {
+    const std::vector<double> &k = camera.brownCoefficients();
+    std::size_t n = 4;
+    if (k[5] != 0 || k[6] != 0 || k[7] != 0)
+      n = 8;
+    else if (k[4] != 0)
+      n = 5;
+    d.assign(k.begin(), k.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+  // Serialise in memory (OpenCV would log to stderr when it cannot open a path), then write.
+  std::string text;
+  try {
+    cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+    if (!fs.isOpened())
+      throw Error(path + ": cannot write camera file (OpenCV FileStorage failed)");
+    fs << "image_width" << static_cast<int>(camera.width());
+    fs << "image_height" << static_cast<int>(camera.height());
+    const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.kx(), 0, camera.u0(), 0, camera.ky(), camera.v0(), 0, 0, 1);
+    fs << "camera_matrix" << K;
+    if (d.empty())
+      fs << "distortion_coefficients" << cv::Mat(1, 0, CV_64F);
+    else
+      fs << "distortion_coefficients" << cv::Mat(1, static_cast<int>(d.size()), CV_64F, d.data()).clone();
+    text = fs.releaseAndGetString();
+  } catch (const Error &) {
+    throw;
+  } catch (const cv::Exception &e) {
+    throw Error(path + ": cannot write camera file: " + oneLine(e.err));
+  } catch (const std::exception &e) {
+    throw Error(path + ": cannot write camera file: " + oneLine(e.what()));
+  }
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out)
+    throw Error(path + ": cannot open for writing");
+  out << text;
+  out.close();
+  if (!out)
+    throw Error(path + ": write failed");
+}
+
+} // namespace yawdepth

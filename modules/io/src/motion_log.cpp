@@ -1,0 +1,128 @@
+#include "csv.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <yawdepth/error.h>
+#include <yawdepth/io/files.h>
+
+namespace yawdepth {
+
+namespace fs = std::filesystem;
+using io_detail::CsvReader;
+using io_detail::csvField;
+using io_detail::formatNumber;
+using io_detail::throwError;
+
+long MotionLog::indexOf(long frame) const
+{
+  const auto it = std::lower_bound(samples.begin(), samples.end(), frame,
+                                   [](const MotionSample &s, long f) { return s.frame < f; });
+  if (it == samples.end() || it->frame != frame)
+    return -1;
+  return static_cast<long>(it - samples.begin());
+}
+
+const MotionSample *MotionLog::find(long frame) const
+{
+  const long i = indexOf(frame);
+  return i < 0 ? nullptr : &samples[static_cast<std::size_t>(i)];
+}
+
+MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw)
+{
+  CsvReader csv(path);
+  const std::size_t c_frame = csv.requireColumn("frame");
+  const std::size_t c_x = csv.requireColumn("x");
+  const std::size_t c_y = csv.requireColumn("y");
+  const std::size_t c_z = csv.requireColumn("z");
+  const std::size_t c_heading = csv.requireColumn("heading");
+  const auto c_yaw = csv.column("yaw");
+  const auto c_image = csv.column("image");
+  if (!c_yaw) {
+    if (!fixed_yaw)
+      csv.failFile("no 'yaw' column and the rig file has no 'yaw'");
+    if (!std::isfinite(*fixed_yaw))
+      csv.failFile("no 'yaw' column and the fixed yaw is not a finite number");
+  }
+  const fs::path folder = fs::path(path).parent_path();
+
+  MotionLog log;
+  std::vector<std::size_t> lines;
+  while (csv.next()) {
+    MotionSample s;
+    s.frame = csv.integer(c_frame);
+    s.x = csv.number(c_x);
+    s.y = csv.number(c_y);
+    s.z = csv.number(c_z);
+    s.heading = csv.number(c_heading);
+    s.yaw = c_yaw ? csv.number(*c_yaw) : *fixed_yaw;
+    if (!log.samples.empty()) {
+      const long prev = log.samples.back().frame;
+      if (s.frame == prev)
+        csv.fail("frame " + std::to_string(s.frame) + " is repeated (first at line " +
+                 std::to_string(lines.back()) + ")");
+      if (s.frame < prev)
+        csv.fail("frame " + std::to_string(s.frame) + " follows frame " + std::to_string(prev) +
+                 ": frames must be strictly increasing");
+    }
+    if (c_image) {
+      const std::string &img = csv.field(*c_image);
+      log.images.push_back(img.empty() ? std::string() : (folder / img).string());
+    }
+    log.samples.push_back(s);
+    lines.push_back(csv.line());
+  }
+  if (log.samples.empty())
+    csv.failFile("no data rows after the header");
+  return log;
+}
+
+/* `image` as written in a CSV in `folder`: relative to it when inside it, else absolute. */
+static std::string imageForFolder(const std::string &image, const fs::path &folder)
+{
+  if (image.empty())
+    return image;
+  std::error_code ec;
+  const fs::path img = fs::absolute(fs::path(image), ec).lexically_normal();
+  if (ec)
+    return image;
+  const fs::path dir = fs::absolute(folder.empty() ? fs::path(".") : folder, ec).lexically_normal();
+  if (ec)
+    return image;
+  const fs::path rel = img.lexically_relative(dir);
+  if (!rel.empty() && *rel.begin() != ".." && rel != ".")
+    return rel.generic_string();
+  // Outside the folder: an absolute path reads back the same from anywhere.
+  return fs::path(image).is_absolute() ? image : img.string();
+}
+
+void writeMotionCsv(const std::string &path, const MotionLog &motion)
+{
+  const bool with_images = !motion.images.empty();
+  if (with_images && motion.images.size() != motion.samples.size())
+    throwError(path + ": the motion log has " + std::to_string(motion.samples.size()) + " samples but " +
+               std::to_string(motion.images.size()) + " images");
+  const fs::path folder = fs::path(path).parent_path();
+  std::string out = with_images ? "frame,x,y,z,heading,yaw,image\n" : "frame,x,y,z,heading,yaw\n";
+  for (std::size_t i = 0; i < motion.samples.size(); ++i) {
+    const MotionSample &s = motion.samples[i];
+    for (double v : {s.x, s.y, s.z, s.heading, s.yaw})
+      if (!std::isfinite(v))
+        throwError(path + ": frame " + std::to_string(s.frame) + " has a non-finite value");
+    out += std::to_string(s.frame);
+    for (double v : {s.x, s.y, s.z, s.heading, s.yaw}) {
+      out += ',';
+      out += formatNumber(v);
+    }
+    if (with_images) {
+      out += ',';
+      out += csvField(imageForFolder(motion.images[i], folder));
+    }
+    out += '\n';
+  }
+  writeFileAtomically(path, out);
+}
+
+} // namespace yawdepth

@@ -1,0 +1,113 @@
+#include "csv.h"
+
+#include <cmath>
+#include <set>
+#include <yaml-cpp/yaml.h>
+#include <yawdepth/error.h>
+#include <yawdepth/io/files.h>
+
+namespace yawdepth {
+
+using io_detail::excerpt;
+using io_detail::formatNumber;
+using io_detail::NumberStatus;
+using io_detail::parseDouble;
+using io_detail::throwError;
+
+namespace {
+
+/* A rig file is a few lines; anything much larger is not one. */
+constexpr std::size_t kMaxRigFileBytes = 1 << 20;
+
+std::string where(const std::string &path, const YAML::Mark &mark)
+{
+  if (mark.is_null() || mark.line < 0)
+    return path + ": ";
+  return path + ":" + std::to_string(mark.line + 1) + ": ";
+}
+
+double finiteNumber(const std::string &path, const YAML::Node &node, const std::string &what)
+{
+  if (!node.IsScalar())
+    throwError(where(path, node.Mark()) + what + " must be a number");
+  double v = 0;
+  const std::string &text = node.Scalar();
+  switch (parseDouble(text, v)) {
+  case NumberStatus::Ok:
+    return v;
+  case NumberStatus::Empty:
+    throwError(where(path, node.Mark()) + what + " is empty");
+  case NumberStatus::NotFinite:
+    throwError(where(path, node.Mark()) + what + ": '" + excerpt(text) + "' is not a finite number");
+  case NumberStatus::OutOfRange:
+    throwError(where(path, node.Mark()) + what + ": '" + excerpt(text) + "' is out of range");
+  default:
+    throwError(where(path, node.Mark()) + what + ": '" + excerpt(text) + "' is not a number");
+  }
+}
+
+} // namespace
+
+RigFile readRigFile(const std::string &path)
+{
+  const std::string text = io_detail::readWholeFile(path, kMaxRigFileBytes);
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throwError(path + ": empty file");
+  if (text.find('\0') != std::string::npos)
+    throwError(path + ": not a YAML file (it holds a NUL byte)");
+
+  RigFile rig;
+  try {
+    const YAML::Node root = YAML::Load(text);
+    if (!root || root.IsNull())
+      throwError(path + ": empty file (no YAML content)");
+    if (!root.IsMap())
+      throwError(where(path, root.Mark()) + "not a YAML map of keys (expected 'camera_offset: [x, y, z]')");
+
+    std::set<std::string> seen;
+    YAML::Mark yaw_mark = YAML::Mark::null_mark();
+    for (const auto &kv : root) {
+      if (!kv.first.IsScalar())
+        continue;
+      const std::string &key = kv.first.Scalar();
+      if (key == "yaw")
+        yaw_mark = kv.first.Mark();
+      if (!seen.insert(key).second && (key == "camera_offset" || key == "yaw"))
+        throwError(where(path, kv.first.Mark()) + "duplicated key '" + key + "'");
+    }
+
+    const YAML::Node offset = root["camera_offset"];
+    if (!offset)
+      throwError(path + ": missing key 'camera_offset'");
+    if (!offset.IsSequence() || offset.size() != 3)
+      throwError(where(path, offset.Mark()) + "'camera_offset' must be a sequence of 3 numbers [x, y, z]" +
+                 (offset.IsSequence() ? " (it has " + std::to_string(offset.size()) + ")" : ""));
+    for (std::size_t i = 0; i < 3; ++i)
+      rig.camera_offset(static_cast<Eigen::Index>(i)) =
+          finiteNumber(path, offset[i], "'camera_offset' value " + std::to_string(i + 1));
+
+    const YAML::Node yaw = root["yaw"];
+    if (yaw && !yaw.IsNull())
+      rig.yaw = finiteNumber(path, yaw, "'yaw'");
+    else if (yaw)
+      throwError(where(path, yaw_mark) + "'yaw' has no value");
+  } catch (const YAML::Exception &e) {
+    throwError(where(path, e.mark) + "not valid YAML (" + e.msg + ")");
+  }
+  return rig;
+}
+
+void writeRigFile(const std::string &path, const RigFile &rig)
+{
+  if (!rig.camera_offset.allFinite())
+    throwError(path + ": camera_offset is not finite");
+  if (rig.yaw && !std::isfinite(*rig.yaw))
+    throwError(path + ": yaw is not finite");
+  std::string out = "camera_offset: [" + formatNumber(rig.camera_offset.x()) + ", " +
+                    formatNumber(rig.camera_offset.y()) + ", " + formatNumber(rig.camera_offset.z()) + "]\n";
+  if (rig.yaw)
+    out += "yaw: " + formatNumber(*rig.yaw) + "\n";
+  writeFileAtomically(path, out);
+}
+
+} // namespace yawdepth

@@ -1,0 +1,54 @@
+#pragma once
+/*!
+  \file scene.h
+  \brief Seeded synthetic scenes with known truth: a robot driving with a yawing camera, random
+  3D points, their observed (distorted, noisy) pixels and a dead-reckoned (noisy) motion log.
+
+  Used by the tests, the benchmarks and `yawdepth simulate`. The same seed gives the same scene.
+*/
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/estimation/types.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth {
+
+/*! \brief How to make a scene. Lengths in m, angles in rad, noise 1-sigma. */
+struct SceneOptions {
+  int frames = 10;            //!< Number of frames (>= 1).
+  double step = 0.02;         //!< Forward translation per frame along the vision frame's +Z (m).
+  double lateral_step = 0.0;  //!< Translation per frame along the vision frame's +X (m).
+  double yaw = 0.0;           //!< Camera yaw at frame 0 (rad).
+  double yaw_rate = 0.0;      //!< Yaw change per frame (rad).
+  double heading = 0.0;       //!< Robot heading at frame 0 (rad).
+  double turn_rate = 0.0;     //!< Heading change per frame (rad).
+  int points = 30;            //!< Number of 3D points.
+  double min_depth = 0.5;     //!< Points' depth range in the first camera frame (m).
+  double max_depth = 3.0;
+  double margin_px = 20.0;    //!< Points start at least this far inside the image border (px).
+  NoiseModel noise{0.0, 0.0, 0.0, 0.0}; //!< Noise added to pixels and to the motion log (default: none).
+  std::uint64_t seed = 1;     //!< Random seed.
+  /*! \brief Throws yawdepth::Error for invalid options. */
+  void validate() const;
+};
+
+/*! \brief A synthetic scene. */
+struct Scene {
+  std::vector<MotionSample> truth;    //!< True motion log.
+  std::vector<MotionSample> measured; //!< Dead-reckoned motion log (odometry and yaw noise).
+  std::vector<Track> tracks;          //!< Observed pixels (distortion and pixel noise), ids 0..points-1.
+  std::vector<Eigen::Vector3d> w_points; //!< True points in the world frame, by id.
+  /*! \brief True point of feature `id` in the camera frame at motion-log row `index`. */
+  Eigen::Vector3d cameraPoint(const YawRig &rig, long id, std::size_t index) const;
+};
+
+/*!
+  \brief Build a scene. Points are drawn uniformly in the first image (inside the margin) and in
+  depth; a point is observed in every frame where it is in front of the camera and inside the image
+  (the image size is the camera's, or 640x480 when the camera has none).
+*/
+Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOptions &options);
+
+} // namespace yawdepth

@@ -1,0 +1,113 @@
+#include <yawdepth/simulation/scene.h>
+
+#include <cmath>
+#include <random>
+#include <yawdepth/error.h>
+
+namespace yawdepth {
+
+void SceneOptions::validate() const
+{
+  for (double v : {step, lateral_step, yaw, yaw_rate, heading, turn_rate, min_depth, max_depth, margin_px})
+    if (!std::isfinite(v))
+      throw Error("simulate: every scene parameter must be a finite number");
+  if (frames < 1 || frames > 1000000)
+    throw Error("simulate: frames must be between 1 and 1000000");
+  if (points < 0 || points > 10000000)
+    throw Error("simulate: points must be between 0 and 10000000");
+  if (!(min_depth > 0) || !(max_depth >= min_depth))
+    throw Error("simulate: depths must satisfy 0 < min-depth <= max-depth");
+  if (margin_px < 0)
+    throw Error("simulate: margin must be non-negative");
+  noise.validate();
+}
+
+Eigen::Vector3d Scene::cameraPoint(const YawRig &rig, long id, std::size_t index) const
+{
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  fromVisp(wMc(rig, truth.at(index)).inverse(), R, t);
+  return R * w_points.at(static_cast<std::size_t>(id)) + t;
+}
+
+Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOptions &o)
+{
+  o.validate();
+  const double width = camera.width() > 0 ? camera.width() : 640.0;
+  const double height = camera.height() > 0 ? camera.height() : 480.0;
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+
+  Scene scene;
+  // True trajectory: steps along the vision frame's own axes, so a turning robot curves.
+  MotionSample s;
+  s.heading = o.heading;
+  s.yaw = o.yaw;
+  for (int k = 0; k < o.frames; ++k) {
+    s.frame = k;
+    if (k > 0) {
+      const Eigen::Vector3d w_d = rotY(s.heading) * Eigen::Vector3d(o.lateral_step, 0, o.step);
+      s.x += w_d.x();
+      s.y += w_d.y();
+      s.z += w_d.z();
+      s.heading += o.turn_rate;
+      s.yaw += o.yaw_rate;
+    }
+    scene.truth.push_back(s);
+  }
+  // Dead reckoning: each increment (in the earlier vision frame) and heading change is perturbed
+  // and accumulated; each yaw reading is perturbed independently.
+  scene.measured = scene.truth;
+  for (int k = 1; k < o.frames; ++k) {
+    const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
+    const Eigen::Vector3d d = rotY(a.heading).transpose() * Eigen::Vector3d(b.x - a.x, b.y - a.y, b.z - a.z);
+    const Eigen::Vector3d d_noisy =
+        d + o.noise.sigma_odom * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+    const double dh = b.heading - a.heading + o.noise.sigma_heading * gauss(rng);
+    MotionSample &pm = scene.measured[k - 1], &m = scene.measured[k];
+    const Eigen::Vector3d w_d = rotY(pm.heading) * d_noisy;
+    m.x = pm.x + w_d.x();
+    m.y = pm.y + w_d.y();
+    m.z = pm.z + w_d.z();
+    m.heading = pm.heading + dh;
+  }
+  for (auto &m : scene.measured)
+    m.yaw += o.noise.sigma_yaw * gauss(rng);
+
+  // Points: uniform in the first image and in depth.
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  fromVisp(wMc(rig, scene.truth.front()), R0, t0);
+  for (int i = 0; i < o.points; ++i) {
+    const double u = o.margin_px + uni(rng) * std::max(0.0, width - 2 * o.margin_px);
+    const double v = o.margin_px + uni(rng) * std::max(0.0, height - 2 * o.margin_px);
+    const double Z = o.min_depth + uni(rng) * (o.max_depth - o.min_depth);
+    Eigen::Vector2d m;
+    if (!camera.undistort(Eigen::Vector2d(u, v), m))
+      throw Error("simulate: the camera's distortion model cannot be inverted inside the image");
+    scene.w_points.push_back(R0 * (Z * Eigen::Vector3d(m.x(), m.y(), 1.0)) + t0);
+  }
+  // Observations.
+  scene.tracks.resize(static_cast<std::size_t>(o.points));
+  for (int i = 0; i < o.points; ++i)
+    scene.tracks[i].id = i;
+  for (std::size_t k = 0; k < scene.truth.size(); ++k) {
+    for (int i = 0; i < o.points; ++i) {
+      const Eigen::Vector3d c_P = scene.cameraPoint(rig, i, k);
+      if (!(c_P.z() > 1e-6))
+        continue;
+      const Eigen::Vector2d uv = camera.project(Eigen::Vector2d(c_P.x() / c_P.z(), c_P.y() / c_P.z()));
+      if (!(uv.x() >= 0 && uv.x() <= width - 1 && uv.y() >= 0 && uv.y() <= height - 1))
+        continue;
+      Observation ob;
+      ob.frame = scene.truth[k].frame;
+      ob.u = uv.x() + o.noise.sigma_px * gauss(rng);
+      ob.v = uv.y() + o.noise.sigma_px * gauss(rng);
+      scene.tracks[i].observations.push_back(ob);
+    }
+  }
+  return scene;
+}
+
+} // namespace yawdepth

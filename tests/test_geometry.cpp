@@ -1,0 +1,150 @@
+// Rig geometry: eq. (1), (4), (7), world poses and relative motion.
+#include <catch2/catch.hpp>
+
+#include <Eigen/LU>
+#include <random>
+#include <yawdepth/geometry/rig.h>
+
+using namespace yawdepth;
+
+namespace {
+constexpr double kRoundOff = 1e-12; // exact maths on metre-scale numbers
+
+double maxAbsDiff(const vpHomogeneousMatrix &A, const vpHomogeneousMatrix &B)
+{
+  double m = 0;
+  for (unsigned i = 0; i < 4; ++i)
+    for (unsigned j = 0; j < 4; ++j)
+      m = std::max(m, std::abs(A[i][j] - B[i][j]));
+  return m;
+}
+
+MotionSample randomSample(std::mt19937_64 &rng, long frame)
+{
+  std::uniform_real_distribution<double> pos(-2.0, 2.0), ang(-M_PI, M_PI);
+  MotionSample s;
+  s.frame = frame;
+  s.x = pos(rng);
+  s.y = 0.1 * pos(rng);
+  s.z = pos(rng);
+  s.heading = ang(rng);
+  s.yaw = ang(rng);
+  return s;
+}
+} // namespace
+
+TEST_CASE("rotY turns the optical axis toward +X for positive yaw", "[geometry]")
+{
+  const Eigen::Vector3d z = rotY(0.3) * Eigen::Vector3d::UnitZ();
+  CHECK(z.x() == Approx(std::sin(0.3)).margin(kRoundOff));
+  CHECK(z.z() == Approx(std::cos(0.3)).margin(kRoundOff));
+  CHECK(z.y() == 0.0);
+  const Eigen::Matrix3d R = rotY(1.234);
+  CHECK((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() < kRoundOff);
+  CHECK(R.determinant() == Approx(1.0).margin(kRoundOff));
+  // Side view: at yaw 90 degrees the optical axis is the vision frame's +X.
+  CHECK((rotY(M_PI / 2) * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitX()).norm() < kRoundOff);
+}
+
+TEST_CASE("vMc follows eq. (1) and cMv is its inverse", "[geometry]")
+{
+  const YawRig rig(Eigen::Vector3d(-0.1503, 0.0, 0.0));
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> ang(-M_PI, M_PI);
+  for (int k = 0; k < 200; ++k) {
+    const double yaw = ang(rng);
+    const vpHomogeneousMatrix vMc = rig.vMc(yaw);
+    const Eigen::Matrix3d R = rotY(yaw);
+    const Eigen::Vector3d t = R * rig.cameraOffset();
+    for (unsigned i = 0; i < 3; ++i) {
+      for (unsigned j = 0; j < 3; ++j)
+        REQUIRE(vMc[i][j] == Approx(R(i, j)).margin(kRoundOff));
+      REQUIRE(vMc[i][3] == Approx(t(i)).margin(kRoundOff));
+    }
+    REQUIRE(maxAbsDiff(rig.cMv(yaw) * vMc, vpHomogeneousMatrix()) < kRoundOff);
+  }
+  // At yaw 0 the optical centre is at t0: the paper's vision origin is Lb along the camera's +X.
+  const vpHomogeneousMatrix vMc0 = rig.vMc(0.0);
+  CHECK(vMc0[0][3] == Approx(-0.1503));
+}
+
+TEST_CASE("eq. (7) round trip and eq. (4) increment", "[geometry]")
+{
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), ang(-M_PI, M_PI);
+  for (int k = 0; k < 200; ++k) {
+    const YawRig rig(Eigen::Vector3d(0.2 * u(rng), 0.05 * u(rng), 0.2 * u(rng)));
+    const double yaw = ang(rng);
+    vpColVector c_P(3);
+    c_P[0] = u(rng);
+    c_P[1] = u(rng);
+    c_P[2] = 2 + u(rng);
+    const vpColVector v_P = rig.toVision(yaw, c_P);
+    // Same as the homogeneous product vTc [Xc Yc Zc 1]^T.
+    const vpColVector v_P_h = rig.vMc(yaw) * vpColVector({c_P[0], c_P[1], c_P[2], 1.0});
+    for (unsigned i = 0; i < 3; ++i)
+      REQUIRE(v_P[i] == Approx(v_P_h[i]).margin(kRoundOff));
+    const vpColVector back = rig.toCamera(yaw, v_P);
+    for (unsigned i = 0; i < 3; ++i)
+      REQUIRE(back[i] == Approx(c_P[i]).margin(kRoundOff));
+    // eq. (4): the increment rotates with cRv.
+    vpColVector v_d(3);
+    v_d[0] = u(rng);
+    v_d[1] = 0.0;
+    v_d[2] = u(rng);
+    const vpColVector c_d = rig.cameraIncrement(yaw, v_d);
+    const Eigen::Vector3d expect = rotY(yaw).transpose() * Eigen::Vector3d(v_d[0], v_d[1], v_d[2]);
+    for (unsigned i = 0; i < 3; ++i)
+      REQUIRE(c_d[i] == Approx(expect(i)).margin(kRoundOff));
+  }
+}
+
+TEST_CASE("paper's increments for forward motion: dXc = -dz sin(theta), dZc = dz cos(theta)", "[geometry]")
+{
+  const YawRig rig(Eigen::Vector3d(-0.1503, 0, 0));
+  for (double theta : {0.0, M_PI / 4, M_PI / 2}) {
+    const vpColVector c_d = rig.cameraIncrement(theta, vpColVector({0.0, 0.0, 0.02}));
+    CHECK(c_d[0] == Approx(-0.02 * std::sin(theta)).margin(kRoundOff));
+    CHECK(c_d[2] == Approx(0.02 * std::cos(theta)).margin(kRoundOff));
+  }
+}
+
+TEST_CASE("relative motion equals the composition of world poses", "[geometry]")
+{
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (int k = 0; k < 300; ++k) {
+    const YawRig rig(Eigen::Vector3d(u(rng), 0.1 * u(rng), u(rng)));
+    const MotionSample a = randomSample(rng, 1), b = randomSample(rng, 2);
+    const vpHomogeneousMatrix expect = wMc(rig, b).inverse() * wMc(rig, a);
+    REQUIRE(maxAbsDiff(curMprev(rig, a, b), expect) < 1e-12);
+  }
+}
+
+TEST_CASE("increment perturbations act on the odometry increment and the yaw readings", "[geometry]")
+{
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (int k = 0; k < 100; ++k) {
+    const YawRig rig(Eigen::Vector3d(u(rng), 0.0, u(rng)));
+    const MotionSample a = randomSample(rng, 1), b = randomSample(rng, 2);
+    IncrementPerturbation<double> p;
+    p.d_translation = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    p.d_heading = u(rng);
+    p.d_yaw_prev = u(rng);
+    p.d_yaw_cur = u(rng);
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    relativeMotion(rig.cameraOffset(), a, b, p, R, t);
+    // The same motion from explicitly perturbed motion-log rows.
+    MotionSample a2 = a, b2 = b;
+    const Eigen::Vector3d w_dd = rotY(a.heading) * p.d_translation;
+    b2.x += w_dd.x();
+    b2.y += w_dd.y();
+    b2.z += w_dd.z();
+    b2.heading += p.d_heading;
+    a2.yaw += p.d_yaw_prev;
+    b2.yaw += p.d_yaw_cur;
+    REQUIRE(maxAbsDiff(toVisp(R, t), curMprev(rig, a2, b2)) < 1e-12);
+  }
+}

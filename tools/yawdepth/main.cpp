@@ -1,0 +1,96 @@
+// The `yawdepth` command line: subcommands wiring the library's modules.
+#include "commands.h"
+
+#include <cmath>
+#include <exception>
+#include <iostream>
+#include <new>
+#include <string>
+#include <vector>
+#include <yawdepth/error.h>
+
+namespace yawdepth::cli {
+
+static std::string finiteCheck(const std::string &text, bool non_negative)
+{
+  try {
+    std::size_t pos = 0;
+    const double v = std::stod(text, &pos);
+    if (pos != text.size())
+      return "'" + text + "' is not a number";
+    if (!std::isfinite(v))
+      return "'" + text + "' is not a finite number";
+    if (non_negative && v < 0)
+      return "'" + text + "' must not be negative";
+  } catch (const std::exception &) {
+    return "'" + text + "' is not a number";
+  }
+  return {};
+}
+
+const CLI::Validator Finite([](std::string &s) { return finiteCheck(s, false); }, "FINITE");
+const CLI::Validator FiniteNonNegative([](std::string &s) { return finiteCheck(s, true); }, "NON-NEGATIVE");
+
+/* Messages from other libraries can span lines; the contract is one line on stderr. */
+static std::string oneLine(std::string what)
+{
+  for (char &c : what)
+    if (c == '\n' || c == '\r' || c == '\t')
+      c = ' ';
+  while (!what.empty() && what.back() == ' ')
+    what.pop_back();
+  return what;
+}
+
+} // namespace yawdepth::cli
+
+int main(int argc, char **argv)
+{
+  using namespace yawdepth::cli;
+  CLI::App app{"yawdepth: 3D points from the motion of a yawing monocular camera (depth from "
+               "odometry and image motion, on ViSP).",
+               "yawdepth"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("yawdepth 0.1.0"));
+
+  std::vector<std::pair<CLI::App *, Runner>> commands;
+  auto add = [&](Runner (*adder)(CLI::App &)) {
+    const std::size_t before = app.get_subcommands({}).size();
+    Runner r = adder(app);
+    commands.emplace_back(app.get_subcommands({}).at(before), std::move(r));
+  };
+  add(addEstimate);
+  add(addErrorAnalysis);
+  add(addSimulate);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp &e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp &e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion &e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError &e) {
+    std::cerr << "yawdepth: error: " << oneLine(e.what()) << " (see yawdepth --help)\n";
+    return 2;
+  }
+
+  for (auto &[sub, run] : commands) {
+    if (!sub->parsed())
+      continue;
+    try {
+      return run();
+    } catch (const yawdepth::Error &e) {
+      std::cerr << "yawdepth " << sub->get_name() << ": error: " << oneLine(e.what()) << "\n";
+      return 1;
+    } catch (const std::bad_alloc &) {
+      std::cerr << "yawdepth " << sub->get_name() << ": error: out of memory\n";
+      return 1;
+    } catch (const std::exception &e) {
+      std::cerr << "yawdepth " << sub->get_name() << ": error: " << oneLine(e.what()) << "\n";
+      return 1;
+    }
+  }
+  return 2;
+}
