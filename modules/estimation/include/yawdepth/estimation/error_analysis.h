@@ -14,6 +14,7 @@
      + \frac{|\delta u_i - \delta u_{i-1}|}{|D|} \f]
   which is eq. (12) at \f$\theta = 0\f$ and eq. (14) at \f$\theta = 90^\circ\f$.
 */
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -28,7 +29,7 @@ struct ErrorAnalysisCase {
   double dz = 0.02;              //!< Forward increment (m).
   double kx = 1700.0;            //!< Focal length (px).
   double delta_dz = 0.001;       //!< Odometry error \f$\delta dz\f$ (m).
-  double delta_yaw = 8.7266e-4;  //!< Yaw error \f$\delta\theta\f$ (rad), 0.05 degree.
+  double delta_yaw = 0.05 * M_PI / 180.0; //!< Yaw error \f$\delta\theta\f$ (rad), 0.05 degree.
   double delta_u = 0.1;          //!< Pixel error \f$\delta u_i\f$ (px).
   double delta_du = 0.1;         //!< \f$ |\delta u_i - \delta u_{i-1}| \f$ (px).
   /*! \brief Throws yawdepth::Error unless every field is finite, depth, dz and kx positive, errors non-negative. */

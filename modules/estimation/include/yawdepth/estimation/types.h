@@ -76,8 +76,8 @@ struct PointEstimate {
 struct NoiseModel {
   double sigma_px = 0.3;            //!< Pixel noise per coordinate of an observation (px).
   double sigma_odom = 1e-3;         //!< Translation noise per frame-to-frame increment, per axis (m).
-  double sigma_heading = 8.7266e-4; //!< Heading noise per increment (rad); 0.05 degree.
-  double sigma_yaw = 8.7266e-4;     //!< Noise of each yaw reading (rad); 0.05 degree.
+  double sigma_heading = 0.05 * M_PI / 180.0; //!< Heading noise per increment (rad); 0.05 degree.
+  double sigma_yaw = 0.05 * M_PI / 180.0;     //!< Noise of each yaw reading (rad); 0.05 degree.
   /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative. */
   void validate() const;
 };
