@@ -50,9 +50,9 @@ demo() {
   echo "== against the truth ($out/truth.csv):"
   awk -F, 'NR==FNR { if (FNR > 1) zt[$1] = $8; next }
            FNR == 1 { next }
-           $10 == "ok" { n++; e = ($8 - zt[$1]); se += e * e; sz += $9 * $9;
+           $10 == "ok" { n++; e = ($8 - zt[$1]); se += e * e; me += e; sz += $9 * $9;
                          printf "id %-3s zc %.4f m  true %.4f m  error %+.1f mm  sigma_zc %.1f mm\n", $1, $8, zt[$1], 1000 * e, 1000 * $9 }
-           END { if (n) printf "%d points: RMS depth error %.1f mm, RMS predicted sigma %.1f mm\n", n, 1000 * sqrt(se / n), 1000 * sqrt(sz / n) }' \
+           END { if (n) printf "%d points: RMS depth error %.1f mm (mean %+.1f mm: the points share one draw of odometry and yaw noise), RMS predicted sigma %.1f mm\n", n, 1000 * sqrt(se / n), 1000 * me / n, 1000 * sqrt(sz / n) }' \
       "$out/truth.csv" "$out/points.csv"
 }
 

@@ -1,0 +1,377 @@
+#!/usr/bin/env bash
+# Command-line contract test for yawdepth (see shared/docs/formats.md).
+#
+#   YAWDEPTH=/path/to/yawdepth CALIB=/path/to/calib bash tests/cli_contract.sh
+#
+# Prints one line per failed check ("FAIL: ...") and ends with "N passed, M failed".
+# Exits 0 only when every check passed. Needs bash, coreutils and awk only.
+
+set -u
+
+YAWDEPTH=${YAWDEPTH:-}
+CALIB=${CALIB:-}
+if [ -z "$YAWDEPTH" ] || [ ! -x "$YAWDEPTH" ]; then
+  echo "FAIL: YAWDEPTH is not set to an executable (got '$YAWDEPTH')"
+  echo "0 passed, 1 failed"
+  exit 1
+fi
+if [ -z "$CALIB" ] || [ ! -d "$CALIB" ]; then
+  echo "FAIL: CALIB is not set to a folder (got '$CALIB')"
+  echo "0 passed, 1 failed"
+  exit 1
+fi
+
+XML="$CALIB/paper_camera.xml"
+YML="$CALIB/paper_camera.yaml"
+RIG="$CALIB/paper_rig.yaml"
+
+W=$(mktemp -d "${TMPDIR:-/tmp}/yawdepth_cli.XXXXXX") || { echo "FAIL: mktemp"; echo "0 passed, 1 failed"; exit 1; }
+trap '[ -n "${KEEP:-}" ] || rm -rf "$W"' EXIT
+
+PASSED=0
+FAILED=0
+pass() { PASSED=$((PASSED + 1)); }
+fail() { FAILED=$((FAILED + 1)); echo "FAIL: $*"; }
+
+# run OUTPREFIX ARGS...: runs yawdepth, stdout/stderr/rc into OUTPREFIX.{out,err,rc}.
+run() {
+  local p=$1; shift
+  { "$YAWDEPTH" "$@" >"$p.out" 2>"$p.err"; } 2>/dev/null
+  echo $? >"$p.rc"
+}
+rc_of() { cat "$1.rc"; }
+lines_of() { awk 'END { print NR }' "$1"; }
+# first line of a file, for messages
+first() { head -n 1 "$1" 2>/dev/null | cut -c 1-200; }
+
+HEADER='id,frame,x,y,z,xc,yc,zc,sigma_zc,status'
+
+# ---------------------------------------------------------------------------
+# Points checker (awk). Joins the estimate and the truth on id.
+#   est truth tol minfrac -> prints "OK <nok> <nrows>" or a list of problems.
+# Relative error: |p_est - p_true| / |p_true| for (xc,yc,zc) and for (x,y,z),
+# plus frame equality. Non-ok rows must hold no number in the numeric fields.
+compare_points() {
+  awk -F, -v tol="$3" -v minfrac="$4" -v hdr="$HEADER" '
+    function isnum(s) { return s ~ /^[ \t]*[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?[ \t]*$/ }
+    function isempty(s) { return s ~ /^[ \t]*$/ || tolower(s) ~ /^[ \t]*[-+]?nan[ \t]*$/ }
+    FNR == 1 {
+      if (FILENAME == ARGV[2]) { if ($0 != hdr) { print "estimate header is \"" $0 "\""; bad = 1 } }
+      next
+    }
+    FILENAME == ARGV[1] {
+      sub(/\r$/, "")
+      tid[$1] = 1; ntruth++
+      tf[$1] = $2
+      for (k = 3; k <= 8; k++) tv[$1, k] = $k
+      next
+    }
+    {
+      sub(/\r$/, "")
+      nrows++
+      id = $1
+      if (id in seen) { print "id " id " appears twice"; bad = 1 }
+      seen[id] = 1
+      if (NF != 10) { print "row with " NF " fields: " $0; bad = 1; next }
+      if (!(id in tid)) { print "id " id " not in truth"; bad = 1; next }
+      if ($10 != "ok") {
+        for (k = 3; k <= 9; k++) if (!isempty($k)) { print "non-ok row (" $10 ") holds a number in column " k ": " $0; bad = 1; break }
+        if ($10 !~ /^[a-z_]+$/) { print "bad status word: " $10; bad = 1 }
+        next
+      }
+      nok++
+      for (k = 3; k <= 9; k++) if (!isnum($k)) { print "ok row with non-number in column " k ": " $0; bad = 1; next }
+      if ($2 != tf[id]) { print "id " id ": frame " $2 ", truth frame " tf[id]; bad = 1 }
+      if (!($9 > 0)) { print "id " id ": sigma_zc not positive: " $9; bad = 1 }
+      for (g = 0; g < 2; g++) {
+        b = (g == 0) ? 6 : 3
+        d2 = 0; n2 = 0
+        for (k = b; k < b + 3; k++) { d = $k - tv[id, k]; d2 += d * d; n2 += tv[id, k] * tv[id, k] }
+        rel = sqrt(d2) / (n2 > 0 ? sqrt(n2) : 1)
+        if (rel > maxrel[g]) maxrel[g] = rel
+      }
+    }
+    END {
+      for (i in tid) if (!(i in seen)) { print "truth id " i " missing from estimate"; bad = 1 }
+      if (nrows == 0) { print "no rows"; bad = 1 }
+      else if (nok < minfrac * nrows) { print "only " nok " of " nrows " rows ok"; bad = 1 }
+      if (maxrel[0] > tol) { printf "max relative error of (xc,yc,zc) %.3g > %g\n", maxrel[0], tol; bad = 1 }
+      if (maxrel[1] > tol) { printf "max relative error of (x,y,z) %.3g > %g\n", maxrel[1], tol; bad = 1 }
+      if (!bad) printf "OK %d %d %.3g %.3g\n", nok, nrows, maxrel[0], maxrel[1]
+    }' "$2" "$1"
+}
+
+# ---------------------------------------------------------------------------
+# 1. Noise-free exactness through the CLI.
+SCENES=(
+  "front:--yaw 0"
+  "oblique:--yaw 0.7"
+  "side:--yaw 1.5708"
+  "turning:--yaw 0.3 --turn-rate 0.02"
+  "yawrate:--yaw 0.2 --yaw-rate 0.03"
+  "lateral:--yaw 0.5 --lateral-step 0.01"
+  "seed:--yaw 0.9 --seed 7 --frames 6"
+)
+for cam in xml yaml; do
+  if [ "$cam" = xml ]; then CAMF=$XML; TOL=1e-9; else CAMF=$YML; TOL=1e-6; fi
+  for sc in "${SCENES[@]}"; do
+    name=${sc%%:*}; opts=${sc#*:}
+    D="$W/sim_${cam}_$name"
+    # shellcheck disable=SC2086
+    run "$W/sim_${cam}_$name" simulate --camera "$CAMF" --rig "$RIG" --out-dir "$D" --points 40 $opts
+    if [ "$(rc_of "$W/sim_${cam}_$name")" -ne 0 ]; then
+      fail "simulate $cam $name: exit $(rc_of "$W/sim_${cam}_$name"): $(first "$W/sim_${cam}_$name.err")"
+      continue
+    fi
+    missing=""
+    for f in motion.csv motion_truth.csv tracks.csv truth.csv; do [ -s "$D/$f" ] || missing="$missing $f"; done
+    if [ -n "$missing" ]; then fail "simulate $cam $name: missing output:$missing"; continue; fi
+    pass
+    if [ "$(head -n 1 "$D/truth.csv" | tr -d '\r')" = "$HEADER" ]; then pass; else fail "simulate $cam $name: truth.csv header is '$(first "$D/truth.csv")'"; fi
+    E="$W/est_${cam}_$name"
+    run "$E" estimate --method exact --camera "$CAMF" --rig "$RIG" --motion "$D/motion_truth.csv" --tracks "$D/tracks.csv"
+    if [ "$(rc_of "$E")" -ne 0 ]; then fail "estimate exact $cam $name: exit $(rc_of "$E"): $(first "$E.err")"; continue; fi
+    res=$(compare_points "$E.out" "$D/truth.csv" "$TOL" 0.9)
+    case $res in
+      OK*) pass ;;
+      *) fail "estimate exact $cam $name ($opts): $(echo "$res" | head -n 3 | tr '\n' ';')" ;;
+    esac
+  done
+done
+
+# ---------------------------------------------------------------------------
+# 2. --method paper on a pure-translation scene.
+D="$W/sim_xml_front"
+if [ -s "$D/tracks.csv" ]; then
+  run "$W/paper" estimate --method paper --camera "$XML" --rig "$RIG" --motion "$D/motion_truth.csv" --tracks "$D/tracks.csv"
+  if [ "$(rc_of "$W/paper")" -ne 0 ]; then
+    fail "estimate --method paper: exit $(rc_of "$W/paper"): $(first "$W/paper.err")"
+  else
+    res=$(awk -F, 'NR > 1 { n++; if ($10 == "ok") { k++; if (!($8 > 0)) neg++ } }
+                   END { if (n == 0 || k < 0.9 * n || neg > 0) print "rows " n+0 ", ok " k+0 ", non-positive zc " neg+0; else print "OK" }' "$W/paper.out")
+    if [ "$res" = OK ]; then pass; else fail "estimate --method paper front scene: $res"; fi
+    if [ "$(head -n 1 "$W/paper.out")" = "$HEADER" ]; then pass; else fail "estimate --method paper: header '$(first "$W/paper.out")'"; fi
+  fi
+else
+  fail "estimate --method paper: no simulated front scene"
+fi
+
+# ---------------------------------------------------------------------------
+# 3. Status words.
+S="$W/status"; mkdir -p "$S"
+# status_of FILE ID -> status word of that id (or "<missing>")
+status_of() { awk -F, -v id="$2" 'NR > 1 && $1 == id { sub(/\r$/, ""); print $10; f = 1 } END { if (!f) print "<missing>" }' "$1"; }
+# numbers_in_nonok FILE -> lines of non-ok rows holding a number
+numbers_in_nonok() {
+  awk -F, 'NR > 1 { sub(/\r$/, ""); if ($10 == "ok") next
+                     for (k = 3; k <= 9; k++) if ($k !~ /^[ \t]*$/ && tolower($k) !~ /^[ \t]*[-+]?nan[ \t]*$/) { print; break } }' "$1"
+}
+# expect_status NAME MOTION TRACKS ID WORD
+expect_status() {
+  local name=$1 m=$2 t=$3 id=$4 word=$5
+  run "$S/$name" estimate --camera "$XML" --rig "$RIG" --motion "$m" --tracks "$t"
+  if [ "$(rc_of "$S/$name")" -ne 0 ]; then
+    fail "status $name: exit $(rc_of "$S/$name"): $(first "$S/$name.err")"; return
+  fi
+  local got; got=$(status_of "$S/$name.out" "$id")
+  if [ "$got" = "$word" ]; then pass; else fail "status $name: id $id has status '$got', expected '$word'"; fi
+  local nn; nn=$(numbers_in_nonok "$S/$name.out")
+  if [ -z "$nn" ]; then pass; else fail "status $name: non-ok row holds numbers: $(echo "$nn" | head -n 1)"; fi
+}
+printf 'frame,x,y,z,heading,yaw\n0,0,0,0,0,0\n1,0,0,0.02,0,0\n' >"$S/motion_fwd.csv"
+printf 'frame,x,y,z,heading,yaw\n0,0.1,0,0.3,0.2,0.4\n1,0.1,0,0.3,0.2,0.4\n' >"$S/motion_still.csv"
+# too_few_frames: feature 5 seen once, feature 1 seen twice (normal)
+printf 'frame,id,u,v\n0,1,400.0,300.0\n1,1,401.0,300.8\n1,5,250.0,200.0\n' >"$S/tracks_few.csv"
+expect_status too_few_frames "$S/motion_fwd.csv" "$S/tracks_few.csv" 5 too_few_frames
+# no_motion: two identical motion rows
+printf 'frame,id,u,v\n0,1,400.0,300.0\n1,1,401.0,300.8\n' >"$S/tracks_still.csv"
+expect_status no_motion "$S/motion_still.csv" "$S/tracks_still.csv" 1 no_motion
+# degenerate: feature at the focus of expansion (principal point, front view, straight forward)
+printf 'frame,id,u,v\n0,3,319.2,241.4\n1,3,319.2,241.4\n' >"$S/tracks_foe.csv"
+expect_status degenerate "$S/motion_fwd.csv" "$S/tracks_foe.csv" 3 degenerate
+# behind: image motion toward the principal point while moving forward
+printf 'frame,id,u,v\n0,4,419.2,241.4\n1,4,417.2,241.4\n' >"$S/tracks_behind.csv"
+expect_status behind "$S/motion_fwd.csv" "$S/tracks_behind.csv" 4 behind
+# all four situations in one file (mixed with a normal feature) give the same words
+printf 'frame,id,u,v\n0,3,319.2,241.4\n1,3,319.2,241.4\n0,4,419.2,241.4\n1,4,417.2,241.4\n0,1,419.2,241.4\n1,1,421.2,241.4\n1,5,250,200\n' >"$S/tracks_mixed.csv"
+run "$S/mixed" estimate --camera "$XML" --rig "$RIG" --motion "$S/motion_fwd.csv" --tracks "$S/tracks_mixed.csv"
+got="$(status_of "$S/mixed.out" 1) $(status_of "$S/mixed.out" 3) $(status_of "$S/mixed.out" 4) $(status_of "$S/mixed.out" 5)"
+if [ "$(rc_of "$S/mixed")" -eq 0 ] && [ "$got" = "ok degenerate behind too_few_frames" ]; then pass
+else fail "status mixed file: exit $(rc_of "$S/mixed"), statuses of ids 1 3 4 5 '$got', expected 'ok degenerate behind too_few_frames'"; fi
+nn=$(numbers_in_nonok "$S/mixed.out")
+if [ -z "$nn" ]; then pass; else fail "status mixed: non-ok row holds numbers: $(echo "$nn" | head -n 1)"; fi
+# the ok feature of the mixed file (u-u0 = 100 -> 102 px, moving outward) is in front: zc > 0
+zc=$(awk -F, 'NR > 1 && $1 == 1 { print $8 }' "$S/mixed.out")
+if awk -v z="$zc" 'BEGIN { exit !(z + 0 > 0) }'; then pass; else fail "status mixed: ok feature 1 has zc '$zc'"; fi
+
+# ---------------------------------------------------------------------------
+# 4. Output columns, --out, digits, sigma.
+D="$W/sim_xml_oblique"
+if [ -s "$D/tracks.csv" ]; then
+  run "$W/o4" estimate --camera "$XML" --rig "$RIG" --motion "$D/motion.csv" --tracks "$D/tracks.csv"
+  if [ "$(head -n 1 "$W/o4.out" | tr -d '\r')" = "$HEADER" ] && [ "$(head -n 1 "$W/o4.out")" = "$HEADER" ]; then pass
+  else fail "output header is '$(first "$W/o4.out")', expected '$HEADER'"; fi
+  mkdir -p "$W/o4dir"
+  run "$W/o4f" estimate --camera "$XML" --rig "$RIG" --motion "$D/motion.csv" --tracks "$D/tracks.csv" --out "$W/o4dir/points.csv"
+  if [ "$(rc_of "$W/o4f")" -eq 0 ]; then pass; else fail "--out FILE: exit $(rc_of "$W/o4f")"; fi
+  if [ -f "$W/o4dir/points.csv" ]; then pass; else fail "--out FILE: file not written"; fi
+  if [ ! -s "$W/o4f.out" ]; then pass; else fail "--out FILE: stdout not empty: $(first "$W/o4f.out")"; fi
+  if [ -f "$W/o4dir/points.csv" ] && cmp -s "$W/o4dir/points.csv" "$W/o4.out"; then pass; else fail "--out FILE: file differs from standard output"; fi
+  left=$(ls -A "$W/o4dir" | grep -v -x points.csv | head -n 3 | tr '\n' ' ')
+  if [ -z "$left" ]; then pass; else fail "--out FILE: stray files next to the output: $left"; fi
+  # at least 12 significant digits in every number of ok rows (exact zero allowed)
+  res=$(awk -F, 'NR > 1 && $10 == "ok" {
+      for (k = 3; k <= 9; k++) {
+        s = $k; sub(/^[-+]/, "", s); sub(/[eE].*$/, "", s); gsub(/\./, "", s); sub(/^0+/, "", s)
+        if (s == "" ) continue
+        if (length(s) < 12) { print "column " k " value " $k " has " length(s) " significant digits"; exit }
+      } }' "$W/o4.out")
+  if [ -z "$res" ]; then pass; else fail "numbers with < 12 significant digits: $res"; fi
+  res=$(awk -F, 'NR > 1 && $10 == "ok" { n++; if (!($9 > 0)) { print "id " $1 " sigma_zc " $9; exit } } END { if (n == 0) print "no ok rows" }' "$W/o4.out")
+  if [ -z "$res" ]; then pass; else fail "sigma_zc not positive for ok rows: $res"; fi
+  # 10 fields on every row
+  res=$(awk -F, '{ sub(/\r$/, "") } NF != 10 { print NR ": " NF " fields"; exit }' "$W/o4.out")
+  if [ -z "$res" ]; then pass; else fail "output rows without 10 fields: $res"; fi
+else
+  fail "output columns: no simulated oblique scene"
+fi
+
+# ---------------------------------------------------------------------------
+# 5. Column order free, unknown columns ignored (motion and tracks).
+D="$W/sim_xml_turning"
+if [ -s "$D/tracks.csv" ]; then
+  awk -F, -v OFS=, '{ print $6, (NR == 1 ? "comment" : "x" NR), $4, $5, $1, $3, $2 }' "$D/motion.csv" >"$W/motion_perm.csv"
+  awk -F, -v OFS=, '{ print $4, $2, (NR == 1 ? "quality" : 0.5), $3, $1 }' "$D/tracks.csv" >"$W/tracks_perm.csv"
+  run "$W/c5a" estimate --camera "$XML" --rig "$RIG" --motion "$D/motion.csv" --tracks "$D/tracks.csv"
+  run "$W/c5b" estimate --camera "$XML" --rig "$RIG" --motion "$W/motion_perm.csv" --tracks "$D/tracks.csv"
+  run "$W/c5c" estimate --camera "$XML" --rig "$RIG" --motion "$D/motion.csv" --tracks "$W/tracks_perm.csv"
+  run "$W/c5d" estimate --camera "$XML" --rig "$RIG" --motion "$W/motion_perm.csv" --tracks "$W/tracks_perm.csv"
+  if [ "$(rc_of "$W/c5a")" -eq 0 ] && [ -s "$W/c5a.out" ]; then pass; else fail "column order: reference run failed: $(first "$W/c5a.err")"; fi
+  for v in b:motion c:tracks d:both; do
+    k=${v%%:*}; what=${v#*:}
+    if [ "$(rc_of "$W/c5$k")" -eq 0 ] && cmp -s "$W/c5a.out" "$W/c5$k.out"; then pass
+    else fail "column order/extra column in $what: exit $(rc_of "$W/c5$k"), output differs: $(first "$W/c5$k.err")"; fi
+  done
+else
+  fail "column order: no simulated turning scene"
+fi
+
+# ---------------------------------------------------------------------------
+# 6. Bad input.
+B="$W/bad"; mkdir -p "$B" "$B/outs"
+D="$W/sim_xml_oblique"
+M="$D/motion.csv"; T="$D/tracks.csv"
+: >"$B/empty.csv"
+echo 'frame,id,u,v' >"$B/tracks_header_only.csv"
+awk -F, -v OFS=, '{ print $1, $2, $3, $5, $6 }' "$M" >"$B/motion_no_z.csv"
+awk -F, -v OFS=, 'NR == 3 { $4 = "abc" } { print }' "$M" >"$B/motion_text.csv"
+awk -F, -v OFS=, 'NR == 3 { $2 = "nan" } { print }' "$M" >"$B/motion_nan.csv"
+awk -F, -v OFS=, 'NR == 3 { $2 = "inf" } { print }' "$M" >"$B/motion_inf.csv"
+awk -F, -v OFS=, 'NR == 3 { $3 = "1.5x" } { print }' "$M" >"$B/motion_trailing.csv"
+awk -F, -v OFS=, 'NR == 4 { $3 = "abc" } { print }' "$T" >"$B/tracks_text.csv"
+awk -F, -v OFS=, 'NR == 4 { $4 = "nan" } { print }' "$T" >"$B/tracks_nan.csv"
+awk -F, -v OFS=, 'NR == 4 { $4 = "-inf" } { print }' "$T" >"$B/tracks_inf.csv"
+awk '{ print } NR == 3 { print }' "$M" >"$B/motion_dup.csv"
+awk 'NR == 3 { keep = $0; next } { print } NR == 4 { print keep }' "$M" >"$B/motion_unsorted.csv"
+{ cat "$T"; echo '99,0,300.5,200.5'; } >"$B/tracks_unknown_frame.csv"
+printf 'this is not a camera\n{{{ ::: [\n' >"$B/garbage.yaml"
+printf 'this is not a camera\n<<<\n' >"$B/garbage.xml"
+head -c 4096 /dev/urandom >"$B/random.bin"
+awk '/cols: 4/ { sub(/cols: 4/, "cols: 3") } /-0.11042/ { sub(/, 0.00035/, "") } { print }' "$YML" >"$B/three_coeffs.yaml"
+echo 'something_else: [1, 2, 3]' >"$B/rig_no_offset.yaml"
+echo 'camera_offset: [-0.1503, 0.0]' >"$B/rig_two.yaml"
+
+# bad NAME [--no-out] ARGS... : non-zero exit < 128, one line on stderr, no output file.
+bad() {
+  local name=$1; shift
+  local useout=1
+  if [ "${1:-}" = "--no-out" ]; then useout=0; shift; fi
+  local out="$B/outs/$name.csv"
+  if [ $useout -eq 1 ]; then run "$B/$name" "$@" --out "$out"; else run "$B/$name" "$@"; fi
+  local rc; rc=$(rc_of "$B/$name")
+  local nl; nl=$(lines_of "$B/$name.err")
+  local msg=""
+  [ "$rc" -eq 0 ] && msg="$msg exit 0;"
+  [ "$rc" -ge 128 ] && msg="$msg exit $rc (crash);"
+  [ "$nl" -ne 1 ] && msg="$msg $nl lines on stderr;"
+  grep -q "[^[:space:]]" "$B/$name.err" || msg="$msg no reason on stderr;"
+  [ $useout -eq 1 ] && [ -e "$out" ] && msg="$msg output file created;"
+  if [ -z "$msg" ]; then pass; else fail "bad input $name:$msg stderr: $(first "$B/$name.err")"; fi
+}
+EST=(estimate --camera "$XML" --rig "$RIG")
+bad missing_camera estimate --camera "$B/nope.xml" --rig "$RIG" --motion "$M" --tracks "$T"
+bad missing_motion "${EST[@]}" --motion "$B/nope.csv" --tracks "$T"
+bad missing_tracks "${EST[@]}" --motion "$M" --tracks "$B/nope.csv"
+bad missing_rig estimate --camera "$XML" --rig "$B/nope.yaml" --motion "$M" --tracks "$T"
+bad empty_motion "${EST[@]}" --motion "$B/empty.csv" --tracks "$T"
+bad empty_tracks "${EST[@]}" --motion "$M" --tracks "$B/empty.csv"
+bad header_only_tracks "${EST[@]}" --motion "$M" --tracks "$B/tracks_header_only.csv"
+bad motion_no_z "${EST[@]}" --motion "$B/motion_no_z.csv" --tracks "$T"
+bad motion_text_number "${EST[@]}" --motion "$B/motion_text.csv" --tracks "$T"
+bad motion_trailing_garbage "${EST[@]}" --motion "$B/motion_trailing.csv" --tracks "$T"
+bad motion_nan "${EST[@]}" --motion "$B/motion_nan.csv" --tracks "$T"
+bad motion_inf "${EST[@]}" --motion "$B/motion_inf.csv" --tracks "$T"
+bad tracks_text_number "${EST[@]}" --motion "$M" --tracks "$B/tracks_text.csv"
+bad tracks_nan "${EST[@]}" --motion "$M" --tracks "$B/tracks_nan.csv"
+bad tracks_inf "${EST[@]}" --motion "$M" --tracks "$B/tracks_inf.csv"
+bad duplicated_frame "${EST[@]}" --motion "$B/motion_dup.csv" --tracks "$T"
+bad unsorted_frames "${EST[@]}" --motion "$B/motion_unsorted.csv" --tracks "$T"
+bad track_unknown_frame "${EST[@]}" --motion "$M" --tracks "$B/tracks_unknown_frame.csv"
+bad garbage_camera_yaml estimate --camera "$B/garbage.yaml" --rig "$RIG" --motion "$M" --tracks "$T"
+bad garbage_camera_xml estimate --camera "$B/garbage.xml" --rig "$RIG" --motion "$M" --tracks "$T"
+bad binary_camera estimate --camera "$B/random.bin" --rig "$RIG" --motion "$M" --tracks "$T"
+bad yaml_three_coeffs estimate --camera "$B/three_coeffs.yaml" --rig "$RIG" --motion "$M" --tracks "$T"
+bad unknown_camera_name "${EST[@]}" --camera-name nosuchcamera --motion "$M" --tracks "$T"
+bad rig_no_offset estimate --camera "$XML" --rig "$B/rig_no_offset.yaml" --motion "$M" --tracks "$T"
+bad rig_two_values estimate --camera "$XML" --rig "$B/rig_two.yaml" --motion "$M" --tracks "$T"
+bad unknown_option "${EST[@]}" --motion "$M" --tracks "$T" --no-such-option
+bad unknown_option_value "${EST[@]}" --motion "$M" --tracks "$T" --no-such-option 3
+bad unknown_subcommand --no-out frobnicate --camera "$XML"
+bad unknown_subcommand_out frobnicate --camera "$XML"
+bad unknown_method "${EST[@]}" --motion "$M" --tracks "$T" --method foo
+bad negative_sigma_px "${EST[@]}" --motion "$M" --tracks "$T" --sigma-px -1
+bad nan_sigma_px "${EST[@]}" --motion "$M" --tracks "$T" --sigma-px nan
+bad inf_sigma_odom "${EST[@]}" --motion "$M" --tracks "$T" --sigma-odom inf
+bad text_sigma_yaw "${EST[@]}" --motion "$M" --tracks "$T" --sigma-yaw abc
+bad binary_tracks "${EST[@]}" --motion "$M" --tracks "$B/random.bin"
+bad binary_motion "${EST[@]}" --motion "$B/random.bin" --tracks "$T"
+bad missing_tracks_option "${EST[@]}" --motion "$M"
+bad missing_camera_option estimate --rig "$RIG" --motion "$M" --tracks "$T"
+bad no_subcommand --no-out
+bad simulate_missing_out_dir --no-out simulate --camera "$XML" --rig "$RIG"
+bad simulate_missing_camera --no-out simulate --camera "$B/nope.xml" --rig "$RIG" --out-dir "$B/simdir"
+# --out into a folder that does not exist
+run "$B/out_nodir" "${EST[@]}" --motion "$M" --tracks "$T" --out "$B/no/such/dir/points.csv"
+rc=$(rc_of "$B/out_nodir"); nl=$(lines_of "$B/out_nodir.err")
+if [ "$rc" -ne 0 ] && [ "$rc" -lt 128 ] && [ "$nl" -eq 1 ] && [ ! -e "$B/no" ]; then pass
+else fail "bad input --out into missing folder: exit $rc, $nl lines on stderr: $(first "$B/out_nodir.err")"; fi
+left=$(ls -A "$B/outs" | head -n 3 | tr '\n' ' ')
+if [ -z "$left" ]; then pass; else fail "bad input: files left in the --out folder after failed runs: $left"; fi
+
+# ---------------------------------------------------------------------------
+# 7. --help.
+run "$W/h_top" --help
+if [ "$(rc_of "$W/h_top")" -eq 0 ] && [ -s "$W/h_top.out" ]; then pass; else fail "yawdepth --help: exit $(rc_of "$W/h_top")"; fi
+for sub in estimate error-analysis simulate; do
+  run "$W/h_$sub" "$sub" --help
+  if [ "$(rc_of "$W/h_$sub")" -eq 0 ] && [ -s "$W/h_$sub.out" ]; then pass; else fail "yawdepth $sub --help: exit $(rc_of "$W/h_$sub")"; fi
+  if grep -q -e "$sub" "$W/h_top.out"; then pass; else fail "yawdepth --help does not mention $sub"; fi
+done
+for opt in --camera --rig --motion --tracks --method --sigma-px --sigma-odom --sigma-heading --sigma-yaw --out; do
+  if grep -q -e "$opt\\b" "$W/h_estimate.out"; then pass; else fail "yawdepth estimate --help does not mention $opt"; fi
+done
+for m in paper exact; do
+  if grep -q -e "$m" "$W/h_estimate.out"; then pass; else fail "yawdepth estimate --help does not mention method $m"; fi
+done
+if grep -q -e '--paper' "$W/h_error-analysis.out"; then pass; else fail "yawdepth error-analysis --help does not mention --paper"; fi
+
+# ---------------------------------------------------------------------------
+# 8. error-analysis --paper.
+run "$W/ea" error-analysis --paper
+if [ "$(rc_of "$W/ea")" -eq 0 ]; then pass; else fail "error-analysis --paper: exit $(rc_of "$W/ea"): $(first "$W/ea.err")"; fi
+for s in '45.84 %' '25.42 %' '13.17 %' '18.17 %' '5.15 %' '5.30 %' '0.15 %' 0.1484 0.0742 0.0297 5.1333e-6; do
+  if grep -q -F -e "$s" "$W/ea.out"; then pass; else fail "error-analysis --paper output lacks '$s'"; fi
+done
+
+echo "$PASSED passed, $FAILED failed"
+[ "$FAILED" -eq 0 ]
