@@ -39,19 +39,21 @@ int main(int argc, char **argv)
     // published eq. (5), kept for comparison.
     yawdepth::TrackEstimatorOptions options;
     options.method = yawdepth::Method::Exact;
+    // sigma_zc is propagated from options.two_view.noise (default 0.3 px, 1 mm odometry per
+    // increment, 0.05 deg heading and yaw): set it to your sensors' noise.
 
     std::printf("%zu features, %zu motion rows, camera kx = %.1f px\n", tracks.size(), motion.samples.size(),
                 camera.kx());
-    std::printf("%4s %6s %10s %10s %-10s\n", "id", "frame", "Zc (m)", "sigma (mm)", "status");
+    std::printf("%4s %6s %10s %10s  %s\n", "id", "frame", "Zc (m)", "sigma (mm)", "status");
     std::size_t ok = 0;
     for (const yawdepth::Track &track : tracks) {
       const yawdepth::PointEstimate e = yawdepth::estimateTrack(camera, rig, motion.samples, track, options);
       if (e.ok()) {
         ++ok;
-        std::printf("%4ld %6ld %10.4f %10.2f %-10s\n", track.id, e.frame, e.c_P.z(), 1e3 * e.sigmaZ(),
+        std::printf("%4ld %6ld %10.4f %10.2f  %s\n", track.id, e.frame, e.c_P.z(), 1e3 * e.sigmaZ(),
                     yawdepth::toString(e.status));
       } else { // no numbers for an invalid estimate, only the reason
-        std::printf("%4ld %6ld %10s %10s %-10s\n", track.id, e.frame, "-", "-", yawdepth::toString(e.status));
+        std::printf("%4ld %6ld %10s %10s  %s\n", track.id, e.frame, "-", "-", yawdepth::toString(e.status));
       }
     }
     std::printf("%zu of %zu features have a valid depth\n", ok, tracks.size());

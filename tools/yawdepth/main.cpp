@@ -63,6 +63,21 @@ int main(int argc, char **argv)
   add(addErrorAnalysis);
   add(addSimulate);
 
+  // Name an unknown command instead of CLI11's generic "A subcommand is required".
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    std::string names;
+    for (const auto &c : commands) {
+      known = known || c.first->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + c.first->get_name();
+    }
+    if (!known) {
+      std::cerr << "yawdepth: error: unknown command '" << oneLine(argv[1]) << "' (expected one of " << names
+                << "; see yawdepth --help)\n";
+      return 2;
+    }
+  }
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp &e) {
