@@ -53,9 +53,14 @@ Runner addErrorAnalysis(CLI::App &app)
       "error-analysis",
       "First-order depth error of eq. (9) (the paper's Section 4): the paper's table with --paper, or your own case.");
   sub->add_flag("--paper", a->paper, "Print the paper's Section 4 table (computed, not stored)");
-  sub->add_option("--yaw", a->c.yaw, "Camera yaw theta (rad): 0 front view, 1.5708 side view")
-      ->check(Finite)
-      ->capture_default_str();
+  auto *yaw = sub->add_option("--yaw", a->c.yaw, "Camera yaw theta (rad): 0 front view, 1.5708 side view")
+                  ->check(Finite)
+                  ->capture_default_str();
+  sub->add_option_function<std::string>(
+         "--view", [a](const std::string &v) { a->c.yaw = v == "side" ? M_PI / 2 : v == "oblique" ? M_PI / 4 : 0.0; },
+         "Shorthand for --yaw: front (0), oblique (45 deg) or side (90 deg)")
+      ->check(CLI::IsMember({"front", "oblique", "side"}))
+      ->excludes(yaw);
   sub->add_option("--depth", a->c.depth, "Depth Z (m)")->check(Finite)->capture_default_str();
   sub->add_option("--u-offset", a->c.u_offset, "u_i - u0 (px)")->check(Finite)->capture_default_str();
   sub->add_option("--dz", a->c.dz, "Forward increment (m)")->check(Finite)->capture_default_str();
