@@ -1,4 +1,4 @@
-// Per-point cost of the two-view depth estimators (estimatePaper, estimateExact, each with and
+// Per-point cost of the `fused` filter update and of the two-view depth estimators (estimatePaper, estimateExact, each with and
 // without covariance) and of CameraModel::undistort, on a fixed set of ~1000 random, valid, noisy
 // two-view problems made with simulateScene() and the paper's camera and rig.
 //
@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 #include <yawdepth/camera/camera_model.h>
+#include <yawdepth/estimation/depth_filter.h>
 #include <yawdepth/estimation/two_view.h>
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
@@ -148,8 +149,108 @@ void BM_UndistortJacobian(benchmark::State &state)
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
 }
 
+// The `fused` filter's per-feature update: one DepthFilter::step() with an observation, the
+// increment model being shared by all features of a frame (computed once per frame, not timed here)
+// and the observation already undistorted (as a tracker delivers it).
+struct FilterProblem {
+  yawdepth::DepthFilter filter; // state before the timed step
+  yawdepth::IncrementModel inc;
+  Eigen::Vector2d m;
+  Eigen::Matrix2d cov;
+};
+
+std::vector<FilterProblem> makeFilterProblems(int steps_before)
+{
+  const Fixture &f = fixture();
+  std::vector<FilterProblem> out;
+  const yawdepth::NoiseModel noise{0.3, 1e-3, 0.05 * M_PI / 180.0, 0.05 * M_PI / 180.0};
+  yawdepth::DepthFilter::Options fo;
+  fo.noise = noise;
+  std::uint64_t seed = 1000;
+  while (out.size() < kProblemCount) {
+    for (double yaw : kYaws) {
+      yawdepth::SceneOptions opt;
+      opt.frames = steps_before + 2;
+      opt.points = 40;
+      opt.yaw = yaw;
+      opt.noise = noise;
+      opt.seed = seed++;
+      const yawdepth::Scene scene = yawdepth::simulateScene(f.camera, f.rig, opt);
+      std::vector<yawdepth::IncrementModel> inc;
+      for (std::size_t k = 0; k + 1 < scene.measured.size(); ++k)
+        inc.push_back(yawdepth::IncrementModel::between(f.rig, scene.measured[k], scene.measured[k + 1]));
+      for (const yawdepth::Track &track : scene.tracks) {
+        if (track.observations.size() != scene.measured.size())
+          continue;
+        yawdepth::DepthFilter filter(fo, f.camera.kx(), f.camera.ky());
+        bool ok = true;
+        for (std::size_t k = 0; k < track.observations.size() && ok; ++k) {
+          Eigen::Vector2d m;
+          Eigen::Matrix2d J;
+          ok = f.camera.undistort(Eigen::Vector2d(track.observations[k].u, track.observations[k].v), m, &J);
+          const Eigen::Matrix2d cov = noise.sigma_px * noise.sigma_px * J * J.transpose();
+          if (!ok)
+            break;
+          if (k == 0) {
+            filter.initialize(0, scene.measured[0].yaw, m, cov);
+          } else if (k + 1 < track.observations.size()) {
+            filter.step(inc[k - 1], &m, &cov);
+          } else {
+            out.push_back({filter, inc[k - 1], m, cov});
+          }
+        }
+        if (out.size() == kProblemCount)
+          return out;
+      }
+    }
+  }
+  return out;
+}
+
+void runFilterStep(benchmark::State &state, int steps_before)
+{
+  static std::vector<std::vector<FilterProblem>> cache(16);
+  std::vector<FilterProblem> &problems = cache.at(static_cast<std::size_t>(steps_before));
+  if (problems.empty())
+    problems = makeFilterProblems(steps_before);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    FilterProblem &p = problems[i];
+    yawdepth::DepthFilter filter = p.filter;
+    const auto u = filter.step(p.inc, &p.m, &p.cov);
+    benchmark::DoNotOptimize(u);
+    benchmark::DoNotOptimize(filter);
+    if (++i == problems.size())
+      i = 0;
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+
+// The first update after a feature appears (diffuse prior: the iterated update works hardest).
+void BM_FusedFirstUpdate(benchmark::State &state) { runFilterStep(state, 0); }
+// A steady-state update (the feature has been tracked for 8 frames).
+void BM_FusedUpdate(benchmark::State &state) { runFilterStep(state, 8); }
+
+// The shared per-frame work of `fused`: the increment model with its noise derivatives.
+void BM_IncrementModel(benchmark::State &state)
+{
+  const Fixture &f = fixture();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const Problem &p = f.problems[i];
+    yawdepth::IncrementModel inc = yawdepth::IncrementModel::between(f.rig, p.prev, p.cur);
+    benchmark::DoNotOptimize(inc);
+    if (++i == f.problems.size())
+      i = 0;
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+
 } // namespace
 
+BENCHMARK(BM_FusedFirstUpdate);
+BENCHMARK(BM_FusedUpdate);
+BENCHMARK(BM_IncrementModel);
 BENCHMARK(BM_EstimatePaper);
 BENCHMARK(BM_EstimatePaperCov);
 BENCHMARK(BM_EstimateExact);

@@ -4,15 +4,19 @@
 #include <iostream>
 #include <memory>
 #include <yawdepth/camera/camera_file.h>
+#include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/io/files.h>
+#include <yawdepth/refine/refine.h>
 
 namespace yawdepth::cli {
 
 namespace {
 
 struct EstimateArgs {
-  std::string camera, camera_name, rig, motion, tracks, out;
+  std::string camera, camera_name, rig, motion, tracks, out, outliers;
+  double robust_px = RefineOptions().robust_threshold_px;
+  double outlier_px = RefineOptions().outlier_threshold_px;
   std::string method = "exact";
   NoiseModel noise;
   GateOptions gates;
@@ -30,8 +34,10 @@ Runner addEstimate(CLI::App &app)
   sub->add_option("--motion", args->motion, "Motion log CSV (frame,x,y,z,heading,yaw)")->required();
   sub->add_option("--tracks", args->tracks, "Feature tracks CSV (frame,id,u,v)")->required();
   sub->add_option("--method", args->method,
-                  "paper: eq. (5) on the last increment as published; exact: finite-increment two-view form")
-      ->check(CLI::IsMember({"paper", "exact"}))
+                  "paper: eq. (5) on the last increment as published; exact: finite-increment two-view form (exact on "
+                  "noise-free data); fused: recursive filter over every frame; refine: joint MAP of every point with the "
+                  "motion (Ceres)")
+      ->check(CLI::IsMember({"paper", "exact", "fused", "refine"}))
       ->capture_default_str();
   sub->add_option("--sigma-px", args->noise.sigma_px, "Pixel noise (px)")->check(FiniteNonNegative)->capture_default_str();
   sub->add_option("--sigma-odom", args->noise.sigma_odom, "Odometry translation noise per increment, per axis (m)")
@@ -49,6 +55,15 @@ Runner addEstimate(CLI::App &app)
   sub->add_option("--min-parallax-px", args->gates.min_parallax_px, "Parallax below this is degenerate (px)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option("--robust-threshold-px", args->robust_px, "refine: scale of the robust loss (px)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--outlier-threshold-px", args->outlier_px,
+                  "refine: observations with a larger reprojection error are flagged as outliers (px)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--outliers", args->outliers,
+                  "fused/refine: also write the observations rejected as outliers (CSV frame,id,u,v)");
   sub->add_option("--out", args->out, "Output points CSV (default: standard output)");
 
   return [args]() {
@@ -61,14 +76,42 @@ Runner addEstimate(CLI::App &app)
     const std::vector<Track> tracks = readTracksCsv(args->tracks);
     checkTracksAgainstMotion(tracks, motion, args->tracks);
 
+    const bool refine = args->method == "refine";
+    if (refine && !refineAvailable())
+      throw Error("method refine is unavailable: this yawdepth was built without Ceres");
     TrackEstimatorOptions options;
-    options.method = methodFromString(args->method);
+    options.method = refine ? Method::Fused : methodFromString(args->method);
     options.two_view.noise = args->noise;
     options.two_view.gates = args->gates;
+    std::vector<std::vector<bool>> flags;
+    std::vector<PointEstimate> estimates = estimateTracks(camera, rig, motion.samples, tracks, options, &flags);
+    if (refine) {
+      RefineOptions ro;
+      ro.noise = args->noise;
+      ro.gates = args->gates;
+      ro.robust_threshold_px = args->robust_px;
+      ro.outlier_threshold_px = args->outlier_px;
+      RefineResult r = refineWindow(camera, rig, motion.samples, tracks, estimates, ro);
+      estimates = std::move(r.points);
+      flags = std::move(r.outliers);
+    }
+    if (!args->outliers.empty()) {
+      std::vector<Track> rejected;
+      for (std::size_t i = 0; i < tracks.size(); ++i) {
+        Track t;
+        t.id = tracks[i].id;
+        for (std::size_t k = 0; k < tracks[i].observations.size() && k < flags[i].size(); ++k)
+          if (flags[i][k])
+            t.observations.push_back(tracks[i].observations[k]);
+        if (!t.observations.empty())
+          rejected.push_back(t);
+      }
+      writeTracksCsv(args->outliers, rejected);
+    }
     std::vector<PointRow> rows;
     rows.reserve(tracks.size());
-    for (const Track &track : tracks)
-      rows.push_back({track.id, estimateTrack(camera, rig, motion.samples, track, options)});
+    for (std::size_t i = 0; i < tracks.size(); ++i)
+      rows.push_back({tracks[i].id, estimates[i]});
 
     if (args->out.empty() || args->out == "-")
       writePointsCsv(std::cout, rows);

@@ -1,6 +1,7 @@
 #include <yawdepth/estimation/track_estimator.h>
 
 #include <algorithm>
+#include <limits>
 #include <yawdepth/error.h>
 
 namespace yawdepth {
@@ -12,16 +13,18 @@ const char *toString(Method m)
     return "paper";
   case Method::Exact:
     return "exact";
+  case Method::Fused:
+    return "fused";
   }
   return "unknown";
 }
 
 Method methodFromString(const std::string &word)
 {
-  for (Method m : {Method::Paper, Method::Exact})
+  for (Method m : {Method::Paper, Method::Exact, Method::Fused})
     if (word == toString(m))
       return m;
-  throw Error("unknown method '" + word + "' (expected paper or exact)");
+  throw Error("unknown method '" + word + "' (expected paper, exact or fused)");
 }
 
 namespace {
@@ -37,9 +40,152 @@ long indexOfFrame(const std::vector<MotionSample> &motion, long frame)
 
 } // namespace
 
+namespace {
+
+void checkObservedFrames(const std::vector<MotionSample> &motion, const Track &track)
+{
+  long last = std::numeric_limits<long>::min();
+  for (const Observation &o : track.observations) {
+    if (indexOfFrame(motion, o.frame) < 0)
+      throw Error("feature " + std::to_string(track.id) + " is observed in frame " + std::to_string(o.frame) +
+                  ", which the motion log does not have");
+    if (o.frame <= last)
+      throw Error("feature " + std::to_string(track.id) + ": observations are not in increasing frame order");
+    last = o.frame;
+  }
+}
+
+std::vector<IncrementModel> incrementsOf(const YawRig &rig, const std::vector<MotionSample> &motion)
+{
+  std::vector<IncrementModel> inc;
+  inc.reserve(motion.size());
+  for (std::size_t i = 0; i + 1 < motion.size(); ++i)
+    inc.push_back(IncrementModel::between(rig, motion[i], motion[i + 1]));
+  return inc;
+}
+
+} // namespace
+
+PointEstimate runDepthFilter(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                             const std::vector<IncrementModel> &increments, const Track &track,
+                             const TrackEstimatorOptions &options, DepthFilter *filter_out,
+                             std::vector<bool> *outliers)
+{
+  if (outliers)
+    outliers->assign(track.observations.size(), false);
+  checkObservedFrames(motion, track);
+  if (increments.size() + 1 != motion.size())
+    throw Error("depth filter: increments do not match the motion log");
+  PointEstimate none;
+  none.frame = track.observations.empty() ? 0 : track.observations.back().frame;
+  if (track.observations.size() < 2) {
+    none.status = Status::TooFewFrames;
+    return none;
+  }
+  DepthFilter::Options fo = options.filter;
+  fo.noise = options.two_view.noise;
+  fo.gates = options.two_view.gates;
+  DepthFilter filter(fo, camera.kx(), camera.ky());
+  const double s2 = options.two_view.noise.sigma_px * options.two_view.noise.sigma_px;
+  auto undistort = [&](const Observation &o, Eigen::Vector2d &m, Eigen::Matrix2d &cov) {
+    Eigen::Matrix2d J;
+    if (!camera.undistort(Eigen::Vector2d(o.u, o.v), m, &J))
+      return false;
+    cov = s2 * J * J.transpose();
+    // A floor of round-off size keeps the update well defined for sigma_px = 0.
+    cov += 1e-24 * Eigen::Matrix2d::Identity();
+    return true;
+  };
+  const auto &obs = track.observations;
+  std::size_t next = 0;
+  long row = indexOfFrame(motion, obs.front().frame);
+  Eigen::Vector2d m;
+  Eigen::Matrix2d cov;
+  // Start at the first observation that can be undistorted.
+  while (next < obs.size() && !undistort(obs[next], m, cov))
+    ++next;
+  if (next == obs.size()) {
+    none.status = Status::UndistortFailed;
+    return none;
+  }
+  row = indexOfFrame(motion, obs[next].frame);
+  filter.initialize(obs[next].frame, motion[row].yaw, m, cov);
+  ++next;
+  const long last_row = indexOfFrame(motion, obs.back().frame);
+  for (; row < last_row; ++row) {
+    const IncrementModel &inc = increments[static_cast<std::size_t>(row)];
+    if (next < obs.size() && obs[next].frame == inc.frame_cur) {
+      const bool ok = undistort(obs[next], m, cov);
+      ++next;
+      if (ok) {
+        if (!filter.initialized())
+          filter.initialize(inc.frame_cur, inc.yaw_cur, m, cov);
+        else if (filter.step(inc, &m, &cov) == DepthFilter::Update::Outlier && outliers)
+          (*outliers)[next - 1] = true;
+        continue;
+      }
+    }
+    if (filter.initialized())
+      filter.step(inc);
+  }
+  PointEstimate e;
+  if (filter.initialized())
+    e = filter.estimate(rig);
+  else
+    e.status = Status::Behind;
+  e.frame = obs.back().frame;
+  // The log-depth state is positive by construction; image motion that only a point behind the
+  // camera explains is caught by the exact two-view form on the widest pair of observations.
+  if (e.ok()) {
+    TwoViewOptions tv = options.two_view;
+    tv.compute_covariance = false;
+    const long first_row = indexOfFrame(motion, obs.front().frame);
+    tv.increments = static_cast<int>(last_row - first_row);
+    const PointEstimate wide = estimateExact(camera, rig, motion[first_row], motion[last_row],
+                                             Eigen::Vector2d(obs.front().u, obs.front().v),
+                                             Eigen::Vector2d(obs.back().u, obs.back().v), tv);
+    if (wide.status == Status::Behind && filter.inliers() == static_cast<int>(obs.size())) {
+      PointEstimate behind;
+      behind.status = Status::Behind;
+      behind.frame = e.frame;
+      behind.parallax_px = e.parallax_px;
+      return behind;
+    }
+  }
+  if (filter_out)
+    *filter_out = filter;
+  return e;
+}
+
+std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRig &rig,
+                                          const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                          const TrackEstimatorOptions &options,
+                                          std::vector<std::vector<bool>> *outliers)
+{
+  std::vector<PointEstimate> out;
+  out.reserve(tracks.size());
+  if (outliers)
+    outliers->assign(tracks.size(), {});
+  if (options.method == Method::Fused) {
+    const std::vector<IncrementModel> inc = incrementsOf(rig, motion);
+    for (std::size_t i = 0; i < tracks.size(); ++i)
+      out.push_back(runDepthFilter(camera, rig, motion, inc, tracks[i], options, nullptr,
+                                   outliers ? &(*outliers)[i] : nullptr));
+  } else {
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      out.push_back(estimateTrack(camera, rig, motion, tracks[i], options));
+      if (outliers)
+        (*outliers)[i].assign(tracks[i].observations.size(), false);
+    }
+  }
+  return out;
+}
+
 PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                             const Track &track, const TrackEstimatorOptions &options)
 {
+  if (options.method == Method::Fused)
+    return runDepthFilter(camera, rig, motion, incrementsOf(rig, motion), track, options);
   const auto &obs = track.observations;
   PointEstimate none;
   none.frame = obs.empty() ? 0 : obs.back().frame;
@@ -63,6 +209,8 @@ PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const 
     return estimatePaper(camera, rig, motion[i_prev], motion[i_cur], uv_prev, uv_cur, tv);
   case Method::Exact:
     return estimateExact(camera, rig, motion[i_prev], motion[i_cur], uv_prev, uv_cur, tv);
+  case Method::Fused:
+    break;
   }
   throw Error("unknown method");
 }

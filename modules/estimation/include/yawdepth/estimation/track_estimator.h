@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
+#include <yawdepth/estimation/depth_filter.h>
 #include <yawdepth/estimation/two_view.h>
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
@@ -17,10 +18,11 @@ namespace yawdepth {
 /*! \brief Estimation methods (the `--method` words of `yawdepth estimate`). */
 enum class Method {
   Paper, //!< "paper": eq. (5)-(7) on the last increment, as published.
-  Exact  //!< "exact": finite-increment two-view form on the last increment, rotation compensated.
+  Exact, //!< "exact": finite-increment two-view form on the last increment, rotation compensated.
+  Fused  //!< "fused": recursive inverse-depth filter over every frame (DepthFilter).
 };
 
-/*! \brief "paper", "exact". */
+/*! \brief "paper", "exact", "fused". */
 const char *toString(Method m);
 /*! \brief Parse a method word; throws yawdepth::Error for an unknown one. */
 Method methodFromString(const std::string &word);
@@ -28,7 +30,8 @@ Method methodFromString(const std::string &word);
 /*! \brief Options of estimateTrack(). */
 struct TrackEstimatorOptions {
   Method method = Method::Exact;
-  TwoViewOptions two_view;
+  TwoViewOptions two_view;      //!< paper / exact (its noise and gates are also used by fused)
+  DepthFilter::Options filter;  //!< fused: prior, outlier gate, convergence (noise and gates come from two_view)
 };
 
 /*!
@@ -36,7 +39,8 @@ struct TrackEstimatorOptions {
 
   `paper` and `exact` use the last two observations of the track (the last increment the feature
   was seen across; when frames in between are missing, the odometry noise grows with the number
-  of motion-log rows spanned).
+  of motion-log rows spanned). `fused` runs a DepthFilter from the first observation through every
+  motion-log row to the last observation (predicting through rows where the feature is missing).
   \param motion Motion-log rows sorted by strictly increasing frame; every observed frame must be in
          it (throws yawdepth::Error otherwise).
   \return An estimate whose status says whether it is valid; `too_few_frames` for fewer than two
@@ -44,5 +48,26 @@ struct TrackEstimatorOptions {
 */
 PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                             const Track &track, const TrackEstimatorOptions &options = TrackEstimatorOptions());
+
+/*!
+  \brief Estimate every track (same order). Same as estimateTrack() on each, but computes each
+  motion increment once for all tracks.
+  \param outliers If not null, receives per track and per observation whether `fused` rejected it
+         as an outlier (all false for the other methods).
+*/
+std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRig &rig,
+                                          const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                          const TrackEstimatorOptions &options = TrackEstimatorOptions(),
+                                          std::vector<std::vector<bool>> *outliers = nullptr);
+
+/*!
+  \brief Run a DepthFilter along one track with precomputed increments (`increments[i]` goes from
+  motion row i to row i+1). Observations are undistorted with the camera; the pixel noise is
+  `options.two_view.noise.sigma_px` mapped through the undistortion Jacobian.
+*/
+PointEstimate runDepthFilter(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                             const std::vector<IncrementModel> &increments, const Track &track,
+                             const TrackEstimatorOptions &options, DepthFilter *filter_out = nullptr,
+                             std::vector<bool> *outliers = nullptr);
 
 } // namespace yawdepth

@@ -1,0 +1,278 @@
+#include <yawdepth/estimation/depth_filter.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <unsupported/Eigen/AutoDiff>
+#include <yawdepth/error.h>
+
+namespace yawdepth {
+
+namespace {
+
+constexpr int kNoise = 6; // d_x, d_y, d_z, heading, yaw_prev, yaw_cur
+using Vec6 = Eigen::Matrix<double, kNoise, 1>;
+using AD6 = Eigen::AutoDiffScalar<Vec6>;
+
+// Joint variable of one step: w = (x, y, lambda, e_prev, d_x, d_y, d_z, heading, e_cur), lambda = log(1/Z).
+constexpr int kW = 9;
+using Vec9 = Eigen::Matrix<double, kW, 1>;
+using Mat9 = Eigen::Matrix<double, kW, kW>;
+using Mat49 = Eigen::Matrix<double, 4, kW>;
+// Index of each increment-noise input (IncrementModel order) in w.
+constexpr int kNoiseInW[kNoise] = {4, 5, 6, 7, 3, 8};
+
+/* Prediction s' = g(w) through the increment, and its Jacobian (first order in the noise, which
+   is exact at zero noise and accurate to O(sigma^2) ~ 1e-6 around it). Returns false when the
+   point would be at or behind the new camera's plane. */
+bool predict(const IncrementModel &inc, const Vec9 &w, Eigen::Vector4d &s, Mat49 *G)
+{
+  Eigen::Matrix3d R = inc.R;
+  Eigen::Vector3d t = inc.t;
+  for (int j = 0; j < kNoise; ++j) {
+    const double n = w(kNoiseInW[j]);
+    if (n != 0.0) {
+      R += n * inc.dR[j];
+      t += n * inc.dt[j];
+    }
+  }
+  const Eigen::Vector3d m(w(0), w(1), 1.0);
+  if (!(std::abs(w(2)) < 40.0)) // depth beyond e^40: no longer a number we can carry
+    return false;
+  const double rho = std::exp(w(2));
+  const Eigen::Vector3d q = R * m + rho * t;
+  if (!(q.z() > 1e-9))
+    return false;
+  const double iq = 1.0 / q.z();
+  s << q.x() * iq, q.y() * iq, w(2) - std::log(q.z()), w(8);
+  if (G) {
+    Eigen::Matrix<double, 3, kW> dq;
+    dq.col(0) = R.col(0);
+    dq.col(1) = R.col(1);
+    dq.col(2) = rho * t;
+    for (int j = 0; j < kNoise; ++j)
+      dq.col(kNoiseInW[j]) = inc.dR[j] * m + rho * inc.dt[j];
+    G->row(0) = (dq.row(0) - s(0) * dq.row(2)) * iq;
+    G->row(1) = (dq.row(1) - s(1) * dq.row(2)) * iq;
+    G->row(2) = -iq * dq.row(2);
+    (*G)(2, 2) += 1.0;
+    G->row(3).setZero();
+    (*G)(3, 8) = 1.0;
+  }
+  return true;
+}
+
+} // namespace
+
+IncrementModel IncrementModel::between(const YawRig &rig, const MotionSample &prev, const MotionSample &cur)
+{
+  IncrementPerturbation<AD6> p;
+  for (int i = 0; i < 3; ++i)
+    p.d_translation(i) = AD6(0.0, kNoise, i);
+  p.d_heading = AD6(0.0, kNoise, 3);
+  p.d_yaw_prev = AD6(0.0, kNoise, 4);
+  p.d_yaw_cur = AD6(0.0, kNoise, 5);
+  Eigen::Matrix<AD6, 3, 3> R;
+  Eigen::Matrix<AD6, 3, 1> t;
+  relativeMotion<AD6>(rig.cameraOffset(), prev, cur, p, R, t);
+  IncrementModel inc;
+  for (int j = 0; j < kNoise; ++j) {
+    inc.dR[j].setZero();
+    inc.dt[j].setZero();
+  }
+  for (int r = 0; r < 3; ++r) {
+    inc.t(r) = t(r).value();
+    for (int j = 0; j < kNoise; ++j)
+      inc.dt[j](r) = t(r).derivatives().size() ? t(r).derivatives()(j) : 0.0;
+    for (int c = 0; c < 3; ++c) {
+      inc.R(r, c) = R(r, c).value();
+      for (int j = 0; j < kNoise; ++j)
+        inc.dR[j](r, c) = R(r, c).derivatives().size() ? R(r, c).derivatives()(j) : 0.0;
+    }
+  }
+  inc.frame_prev = prev.frame;
+  inc.frame_cur = cur.frame;
+  inc.yaw_cur = cur.yaw;
+  return inc;
+}
+
+DepthFilter::DepthFilter(const Options &options, double kx, double ky) : o_(options), kx_(kx), ky_(ky)
+{
+  o_.noise.validate();
+  o_.gates.validate();
+  if (!(kx > 0) || !(ky > 0) || !std::isfinite(kx) || !std::isfinite(ky))
+    throw Error("depth filter: focal lengths must be finite and positive");
+  if (!(o_.prior_depth > 0) || !(o_.prior_log_depth_sigma > 0) || !std::isfinite(o_.prior_depth) ||
+      !std::isfinite(o_.prior_log_depth_sigma))
+    throw Error("depth filter: the depth prior must be finite and positive, with a positive sigma");
+  if (!(o_.outlier_chi2 > 0) || o_.max_consecutive_outliers < 1 || o_.max_iterations < 1)
+    throw Error("depth filter: outlier gate and iteration counts must be positive");
+}
+
+void DepthFilter::initialize(long frame, double yaw, const Eigen::Vector2d &m, const Eigen::Matrix2d &m_cov)
+{
+  if (!m.allFinite() || !m_cov.allFinite())
+    throw Error("depth filter: non-finite observation");
+  initialized_ = true;
+  frame_ = frame;
+  yaw_ = yaw;
+  s_ << m.x(), m.y(), -std::log(o_.prior_depth), 0.0;
+  P_.setZero();
+  P_.topLeftCorner<2, 2>() = m_cov;
+  P_(2, 2) = o_.prior_log_depth_sigma * o_.prior_log_depth_sigma;
+  P_(3, 3) = o_.noise.sigma_yaw * o_.noise.sigma_yaw;
+  inliers_ = 1;
+  outliers_ = 0;
+  consecutive_outliers_ = 0;
+  anchor_bearing_ = Eigen::Vector3d(m.x(), m.y(), 1.0);
+  anchor_centre_.setZero();
+  parallax_px_ = 0;
+  baseline_ = 0;
+}
+
+DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Vector2d *m, const Eigen::Matrix2d *m_cov)
+{
+  if (!initialized_)
+    throw Error("depth filter: step() before initialize()");
+  if (inc.frame_prev != frame_)
+    throw Error("depth filter: increment starts at frame " + std::to_string(inc.frame_prev) + ", the filter is at frame " +
+                std::to_string(frame_));
+  if (m && (!m_cov || !m->allFinite() || !m_cov->allFinite()))
+    throw Error("depth filter: an observation needs a finite point and covariance");
+
+  // Track geometry since the first observation (for the gates).
+  anchor_bearing_ = inc.R * anchor_bearing_;
+  anchor_centre_ = inc.R * anchor_centre_ + inc.t;
+  baseline_ = std::max(baseline_, anchor_centre_.norm());
+
+  // Prior of the joint variable w = (state, increment noise): block diagonal, the state block is
+  // P_ and the noise block the diagonal q. Products with it are done by blocks.
+  Vec9 mu;
+  mu << s_, Eigen::Matrix<double, 5, 1>::Zero();
+  const double so2 = o_.noise.sigma_odom * o_.noise.sigma_odom;
+  Eigen::Matrix<double, 5, 1> q;
+  q << so2, so2, so2, o_.noise.sigma_heading * o_.noise.sigma_heading, o_.noise.sigma_yaw * o_.noise.sigma_yaw;
+  // G Pw G^T for a 4x9 G.
+  auto propagate = [&](const Mat49 &G) -> Eigen::Matrix4d {
+    const Eigen::Matrix4d Gs = G.leftCols<4>();
+    const Eigen::Matrix<double, 4, 5> Gn = G.rightCols<5>();
+    return Gs * P_ * Gs.transpose() + Gn * q.asDiagonal() * Gn.transpose();
+  };
+
+  Eigen::Vector4d s_new;
+  Mat49 G;
+  const bool can_predict = predict(inc, mu, s_new, &G);
+  frame_ = inc.frame_cur;
+  yaw_ = inc.yaw_cur;
+
+  auto restartAt = [&](const Eigen::Vector2d &mm, const Eigen::Matrix2d &cov) {
+    initialize(inc.frame_cur, inc.yaw_cur, mm, cov);
+    return Update::Restarted;
+  };
+  auto predictOnly = [&]() {
+    s_ = s_new;
+    P_ = propagate(G);
+    P_ = 0.5 * (P_ + P_.transpose());
+  };
+
+  if (!can_predict) // the estimate put the point behind the new camera: start again if we can
+    return m ? restartAt(*m, *m_cov) : (initialized_ = false, Update::PredictOnly);
+  if (!m) {
+    predictOnly();
+    return Update::PredictOnly;
+  }
+
+  // Iterated EKF on w: the measurement h(w) is the first two components of g(w).
+  Vec9 w = mu;
+  for (int it = 0; it < o_.max_iterations; ++it) {
+    const Eigen::Matrix<double, 2, kW> H = G.topRows<2>();
+    Eigen::Matrix<double, kW, 2> PHt;
+    PHt.topRows<4>() = P_ * H.leftCols<4>().transpose();
+    PHt.bottomRows<5>() = q.asDiagonal() * H.rightCols<5>().transpose();
+    const Eigen::Matrix2d S = H * PHt + *m_cov;
+    const double det = S.determinant();
+    if (!(det > 0) || !std::isfinite(det))
+      return restartAt(*m, *m_cov);
+    const Eigen::Matrix2d S_inv = S.inverse();
+    const Eigen::Vector2d nu = *m - s_new.head<2>() - H * (mu - w);
+    if (it == 0 && !(nu.dot(S_inv * nu) <= o_.outlier_chi2)) {
+      ++outliers_;
+      if (++consecutive_outliers_ >= o_.max_consecutive_outliers)
+        return restartAt(*m, *m_cov);
+      predictOnly();
+      return Update::Outlier;
+    }
+    const Vec9 w_next = mu + PHt * (S_inv * nu);
+    const double change = std::abs(w_next(2) - w(2));
+    w = w_next;
+    if (!predict(inc, w, s_new, &G))
+      return restartAt(*m, *m_cov);
+    if (change <= 1e-9 * (1.0 + std::abs(w(2))))
+      break;
+  }
+  // Posterior: the predicted state s' = g(w) linearised at the estimate has covariance
+  // M = G Pw G^T, and the observation is linear in s' (its first two components), so the update
+  // is a linear Kalman update of M, in Joseph form (stays positive semi-definite when the
+  // observation is far more precise than the prediction). The mean is the iterated one.
+  const Eigen::Matrix4d M = propagate(G);
+  const Eigen::Matrix2d S = M.topLeftCorner<2, 2>() + *m_cov;
+  const Eigen::Matrix<double, 4, 2> K = M.leftCols<2>() * S.inverse();
+  Eigen::Matrix4d IKC = Eigen::Matrix4d::Identity();
+  IKC.leftCols<2>() -= K;
+  P_ = IKC * M * IKC.transpose() + K * (*m_cov) * K.transpose();
+  P_ = 0.5 * (P_ + P_.transpose());
+  s_ = s_new;
+  ++inliers_;
+  consecutive_outliers_ = 0;
+
+  // Rotation-compensated parallax of this observation against the first one.
+  if (anchor_bearing_.z() > 1e-12)
+    parallax_px_ = std::max(parallax_px_, std::hypot(kx_ * (m->x() - anchor_bearing_.x() / anchor_bearing_.z()),
+                                                     ky_ * (m->y() - anchor_bearing_.y() / anchor_bearing_.z())));
+  else
+    parallax_px_ = std::numeric_limits<double>::infinity();
+  return Update::Inlier;
+}
+
+bool DepthFilter::converged() const
+{
+  const PointEstimate e = estimate(YawRig());
+  return e.ok() && e.sigmaZ() < o_.converged_relative_sigma * e.c_P.z();
+}
+
+PointEstimate DepthFilter::estimate(const YawRig &rig) const
+{
+  PointEstimate e;
+  e.frame = frame_;
+  e.parallax_px = parallax_px_;
+  if (!initialized_ || inliers_ < 2) {
+    e.status = Status::TooFewFrames;
+    return e;
+  }
+  if (!(baseline_ >= o_.gates.min_baseline)) {
+    e.status = Status::NoMotion;
+    return e;
+  }
+  if (!(parallax_px_ >= o_.gates.min_parallax_px)) {
+    e.status = Status::Degenerate;
+    return e;
+  }
+  const double Z = std::exp(-s_(2));
+  if (!P_.allFinite() || !(P_(2, 2) >= 0) || !std::isfinite(Z)) { // numerical breakdown
+    e.status = Status::Degenerate;
+    return e;
+  }
+  e.status = Status::Ok;
+  e.c_P = Eigen::Vector3d(s_(0) * Z, s_(1) * Z, Z);
+  // d(X, Y, Z)/d(x, y, lambda), lambda = -log Z
+  Eigen::Matrix3d J;
+  J << Z, 0, -s_(0) * Z, 0, Z, -s_(1) * Z, 0, 0, -Z;
+  e.c_cov = J * P_.topLeftCorner<3, 3>() * J.transpose();
+  // Vision frame with the filter's estimate of the current yaw (reading + estimated error).
+  e.v_P = rotY(yaw_ + s_(3)) * (e.c_P + rig.cameraOffset());
+  return e;
+}
+
+} // namespace yawdepth

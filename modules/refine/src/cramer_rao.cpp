@@ -1,0 +1,108 @@
+// depthCramerRao(): the Fisher information of the refine model at the truth (Eigen only, no Ceres).
+#include "information.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <yawdepth/error.h>
+#include <yawdepth/refine/refine.h>
+
+namespace yawdepth {
+
+using namespace refine_detail;
+
+std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &truth,
+                                   const std::vector<Track> &tracks, const std::vector<Eigen::Vector3d> &w_points,
+                                   const NoiseModel &noise, bool joint)
+{
+  noise.validate();
+  if (w_points.size() != tracks.size())
+    throw Error("depthCramerRao: one true point per track is needed");
+  if (truth.empty())
+    throw Error("depthCramerRao: the motion log is empty");
+  for (std::size_t i = 1; i < truth.size(); ++i)
+    if (!(truth[i].frame > truth[i - 1].frame))
+      throw Error("depthCramerRao: motion-log frames must be strictly increasing");
+  auto rowOf = [&](long frame) {
+    const auto it = std::lower_bound(truth.begin(), truth.end(), frame,
+                                     [](const MotionSample &s, long f) { return s.frame < f; });
+    if (it == truth.end() || it->frame != frame)
+      throw Error("depthCramerRao: frame " + std::to_string(frame) + " is not in the motion log");
+    return static_cast<int>(it - truth.begin());
+  };
+
+  Model m;
+  const Eigen::Vector3d t0 = rig.cameraOffset();
+  std::copy(t0.data(), t0.data() + 3, m.t0);
+  m.poses_free = noise.sigma_odom > 0 || noise.sigma_heading > 0;
+  m.yaws_free = noise.sigma_yaw > 0;
+  m.inv_sigma_yaw = m.yaws_free ? 1.0 / noise.sigma_yaw : 0.0;
+  for (const MotionSample &s : truth) {
+    m.poses.push_back({s.x, s.y, s.z, s.heading});
+    m.yaws.push_back(s.yaw);
+  }
+  for (std::size_t r = 1; r < truth.size(); ++r)
+    m.odometry.push_back(measuredIncrement(truth[r - 1], truth[r], noise));
+
+  std::vector<double> out(tracks.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<int> point_of_track(tracks.size(), -1);
+  for (std::size_t t = 0; t < tracks.size(); ++t) {
+    const Track &track = tracks[t];
+    if (track.observations.size() < 2)
+      continue;
+    const int ra = rowOf(track.observations.front().frame);
+    const int rk = rowOf(track.observations.back().frame);
+    // The true point anchored in its first camera frame.
+    Eigen::Matrix3d Ra;
+    Eigen::Vector3d ca;
+    cameraInWorld(m.poses[ra].data(), m.yaws[ra], t0, Ra, ca);
+    const Eigen::Vector3d Pa = Ra.transpose() * (w_points[t] - ca);
+    if (!(Pa.z() > 0))
+      continue;
+    std::vector<ModelObservation> obs;
+    bool valid = true;
+    for (const Observation &ob : track.observations) {
+      const int row = rowOf(ob.frame);
+      Eigen::Matrix3d R;
+      Eigen::Vector3d c;
+      cameraInWorld(m.poses[row].data(), m.yaws[row], t0, R, c);
+      const Eigen::Vector3d P = R.transpose() * (w_points[t] - c);
+      if (!(P.z() > 0)) {
+        valid = false;
+        break;
+      }
+      // Noise of the observed pixel mapped to normalised coordinates at the true pixel.
+      const Eigen::Vector2d mt = P.head<2>() / P.z();
+      Eigen::Matrix2d Jd;
+      camera.distortNormalized(mt, &Jd);
+      const Eigen::Matrix2d K = Eigen::Vector2d(camera.kx(), camera.ky()).asDiagonal();
+      const Eigen::Matrix2d J = (K * Jd).inverse(); // d(x, y) / d(u, v)
+      ModelObservation mo;
+      mo.point = static_cast<int>(m.points.size());
+      mo.row = row;
+      mo.w = whitenObservation(mt, J, noise.sigma_px);
+      obs.push_back(mo);
+    }
+    if (!valid)
+      continue;
+    point_of_track[t] = static_cast<int>(m.points.size());
+    m.points.push_back({Pa.x() / Pa.z(), Pa.y() / Pa.z(), 1.0 / Pa.z()});
+    m.anchor_row.push_back(ra);
+    m.report_row.push_back(rk);
+    m.observations.insert(m.observations.end(), obs.begin(), obs.end());
+  }
+
+  std::vector<Eigen::Matrix3d> cov;
+  std::vector<char> ok;
+  pointCovariances(m, joint, cov, ok);
+  for (std::size_t t = 0; t < tracks.size(); ++t) {
+    const int p = point_of_track[t];
+    if (p >= 0 && ok[p])
+      out[t] = std::sqrt(std::max(cov[p](2, 2), 0.0));
+  }
+  return out;
+}
+
+} // namespace yawdepth

@@ -1,0 +1,580 @@
+// refineWindow() with Ceres: MAP refinement of the points with the odometry and yaw readings.
+#include "information.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <ceres/ceres.h>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <yawdepth/error.h>
+#include <yawdepth/estimation/two_view.h>
+#include <yawdepth/refine/refine.h>
+
+namespace yawdepth {
+
+using namespace refine_detail;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// ---------------------------------------------------------------------------------------------
+// Cost functors (automatic derivatives; the model itself is in refine_model.h).
+
+/* Reprojection of a point anchored in another frame.
+   Parameter blocks: frame_a[5] = (x, y, z [m], heading [rad], yaw [rad]) of the anchor frame (the
+   track's first observation): its vision-frame pose in the world and its camera yaw; frame_k[5]
+   the same for the observing frame; point[3] = (alpha, beta [-], rho [1/m]).
+   Residual[2]: whitened normalised reprojection error (units of sigma_px). */
+struct ReprojectionCost {
+  ReprojectionCost(const WhitenedObservation &w, const double *t0) : w_(w), t0_{t0[0], t0[1], t0[2]} {}
+  template <typename T> bool operator()(const T *frame_a, const T *frame_k, const T *point, T *r) const
+  {
+    return reprojectionResidual(frame_a, frame_a + 4, frame_k, frame_k + 4, point, t0_, w_, r);
+  }
+  static ceres::CostFunction *Create(const WhitenedObservation &w, const double *t0)
+  {
+    return new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 5, 5, 3>(new ReprojectionCost(w, t0));
+  }
+  WhitenedObservation w_;
+  double t0_[3];
+};
+
+/* The observation in the anchor frame itself. Parameter block: point[3] = (alpha, beta, rho).
+   Residual[2]: whitened (alpha, beta) - m (units of sigma_px). */
+struct AnchorCost {
+  explicit AnchorCost(const WhitenedObservation &w) : w_(w) {}
+  template <typename T> bool operator()(const T *point, T *r) const
+  {
+    anchorResidual(point, w_, r);
+    return true;
+  }
+  static ceres::CostFunction *Create(const WhitenedObservation &w)
+  {
+    return new ceres::AutoDiffCostFunction<AnchorCost, 2, 3>(new AnchorCost(w));
+  }
+  WhitenedObservation w_;
+};
+
+/* Odometry increment prior. Parameter blocks: frame_prev[5], frame_cur[5] = (x, y, z [m],
+   heading [rad], yaw [rad], the yaw unused here). Residual[4]: (estimated - measured) increment,
+   translation in the earlier vision frame over sigma_odom, heading change over sigma_heading. */
+struct OdometryCost {
+  explicit OdometryCost(const OdometryMeasurement &o) : o_(o) {}
+  template <typename T> bool operator()(const T *frame_prev, const T *frame_cur, T *r) const
+  {
+    odometryResidual(frame_prev, frame_cur, o_, r);
+    return true;
+  }
+  static ceres::CostFunction *Create(const OdometryMeasurement &o)
+  {
+    return new ceres::AutoDiffCostFunction<OdometryCost, 4, 5, 5>(new OdometryCost(o));
+  }
+  OdometryMeasurement o_;
+};
+
+/* Yaw reading prior. Parameter block: frame[5] = (x, y, z, heading, yaw), only the yaw [rad]
+   used. Residual[1]: (yaw - reading) / sigma_yaw. */
+struct YawCost {
+  YawCost(double measured, double inv_sigma) : measured_(measured), inv_sigma_(inv_sigma) {}
+  template <typename T> bool operator()(const T *frame, T *r) const
+  {
+    yawResidual(frame + 4, measured_, inv_sigma_, r);
+    return true;
+  }
+  static ceres::CostFunction *Create(double measured, double inv_sigma)
+  {
+    return new ceres::AutoDiffCostFunction<YawCost, 1, 5>(new YawCost(measured, inv_sigma));
+  }
+  double measured_, inv_sigma_;
+};
+
+// ---------------------------------------------------------------------------------------------
+
+struct TrackData {
+  std::vector<int> rows;
+  std::vector<Eigen::Vector2d> uv;
+  std::vector<WhitenedObservation> w;
+  std::vector<bool> outlier;
+  int anchor_row = 0, report_row = 0;
+  Status status = Status::TooFewFrames;
+  bool active = false; // in the optimisation
+  double parallax = kNaN;
+  std::array<double, 3> point{{0, 0, 1}};
+};
+
+/* Parameters of the motion: one block per motion-log row, (x, y, z, heading, yaw) (m, rad); one
+   block per row rather than a pose and a yaw block keeps the Schur complement's block count low. */
+struct State {
+  std::vector<std::array<double, 5>> frames;
+};
+
+class Refiner {
+public:
+  Refiner(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+          const std::vector<Track> &tracks, const std::vector<PointEstimate> &initial, const RefineOptions &options)
+      : camera_(camera), motion_(motion), tracks_(tracks), initial_(initial), o_(options), t0v_(rig.cameraOffset()),
+        rig_(rig)
+  {
+    std::copy(t0v_.data(), t0v_.data() + 3, t0_);
+  }
+
+  RefineResult run();
+
+private:
+  int rowOf(long frame) const;
+  void prepare();
+  void initialise();
+  void gate(TrackData &t, bool inliers_only) const;
+  bool candidateScore(const TrackData &t, const std::array<double, 3> &p, double &score) const;
+  bool anchorFromCamera(const TrackData &t, int row, const Eigen::Vector3d &c_P, std::array<double, 3> &p) const;
+  ceres::Solver::Summary solve(bool robust, bool &solved);
+  void flagOutliers();
+  Eigen::Vector3d cameraPoint(const TrackData &t, int row) const;
+  double pixelError(const TrackData &t, std::size_t j) const;
+
+  const CameraModel &camera_;
+  const std::vector<MotionSample> &motion_;
+  const std::vector<Track> &tracks_;
+  const std::vector<PointEstimate> &initial_;
+  const RefineOptions &o_;
+  Eigen::Vector3d t0v_;
+  const YawRig &rig_;
+  double t0_[3];
+  bool poses_free_ = false, yaws_free_ = false;
+  State state_;
+  std::vector<OdometryMeasurement> odometry_;
+  std::vector<TrackData> data_;
+};
+
+int Refiner::rowOf(long frame) const
+{
+  const auto it = std::lower_bound(motion_.begin(), motion_.end(), frame,
+                                   [](const MotionSample &s, long f) { return s.frame < f; });
+  if (it == motion_.end() || it->frame != frame)
+    throw Error("refine: frame " + std::to_string(frame) + " is not in the motion log");
+  return static_cast<int>(it - motion_.begin());
+}
+
+/* Camera-frame point of a track at a row, with the current state. */
+Eigen::Vector3d Refiner::cameraPoint(const TrackData &t, int row) const
+{
+  double q[3];
+  anchoredPoint(state_.frames[t.anchor_row].data(), (state_.frames[t.anchor_row].data() + 4), state_.frames[row].data(),
+                (state_.frames[row].data() + 4), t.point.data(), t0_, q);
+  return Eigen::Vector3d(q[0], q[1], q[2]) / t.point[2];
+}
+
+/* Reprojection error of observation j in observed (distorted) pixels; infinite behind the camera. */
+double Refiner::pixelError(const TrackData &t, std::size_t j) const
+{
+  double q[3];
+  anchoredPoint(state_.frames[t.anchor_row].data(), (state_.frames[t.anchor_row].data() + 4), state_.frames[t.rows[j]].data(),
+                state_.frames[t.rows[j]].data() + 4, t.point.data(), t0_, q);
+  if (!(q[2] > 0))
+    return kInf;
+  const Eigen::Vector2d uv = camera_.project(Eigen::Vector2d(q[0] / q[2], q[1] / q[2]));
+  return (uv - t.uv[j]).norm();
+}
+
+void Refiner::prepare()
+{
+  if (motion_.empty())
+    throw Error("refine: the motion log is empty");
+  for (std::size_t i = 1; i < motion_.size(); ++i)
+    if (!(motion_[i].frame > motion_[i - 1].frame))
+      throw Error("refine: motion-log frames must be strictly increasing");
+  if (!initial_.empty() && initial_.size() != tracks_.size())
+    throw Error("refine: one initial estimate per track is needed (or none)");
+
+  const NoiseModel &n = o_.noise;
+  poses_free_ = n.sigma_odom > 0 || n.sigma_heading > 0;
+  yaws_free_ = n.sigma_yaw > 0;
+  for (const MotionSample &s : motion_) {
+    state_.frames.push_back({s.x, s.y, s.z, s.heading, s.yaw});
+  }
+  for (std::size_t r = 1; r < motion_.size(); ++r)
+    odometry_.push_back(measuredIncrement(motion_[r - 1], motion_[r], n));
+
+  data_.resize(tracks_.size());
+  for (std::size_t i = 0; i < tracks_.size(); ++i) {
+    const Track &tr = tracks_[i];
+    TrackData &t = data_[i];
+    t.outlier.assign(tr.observations.size(), false);
+    bool undistorted = true;
+    for (std::size_t j = 0; j < tr.observations.size(); ++j) {
+      const Observation &ob = tr.observations[j];
+      const int row = rowOf(ob.frame);
+      if (j > 0 && !(row > t.rows.back()))
+        throw Error("refine: track " + std::to_string(tr.id) + " has observations out of frame order");
+      t.rows.push_back(row);
+      t.uv.emplace_back(ob.u, ob.v);
+      Eigen::Vector2d m;
+      Eigen::Matrix2d J;
+      if (!std::isfinite(ob.u) || !std::isfinite(ob.v) || !camera_.undistort(t.uv.back(), m, &J)) {
+        undistorted = false;
+        t.w.emplace_back();
+        continue;
+      }
+      t.w.push_back(whitenObservation(m, J, n.sigma_px));
+    }
+    if (tr.observations.size() < 2) {
+      t.status = Status::TooFewFrames;
+      continue;
+    }
+    t.anchor_row = t.rows.front();
+    t.report_row = t.rows.back();
+    if (!undistorted) {
+      t.status = Status::UndistortFailed;
+      continue;
+    }
+    t.status = Status::Ok;
+    gate(t, false);
+    t.active = t.status == Status::Ok;
+  }
+}
+
+/* The no_motion and degenerate gates, on the inliers (or every observation) with the current state. */
+void Refiner::gate(TrackData &t, bool inliers_only) const
+{
+  std::vector<std::size_t> use;
+  for (std::size_t j = 0; j < t.rows.size(); ++j)
+    if (!inliers_only || !t.outlier[j])
+      use.push_back(j);
+  if (use.size() < 2) {
+    t.status = Status::TooFewFrames;
+    return;
+  }
+  const std::size_t j0 = use.front();
+  Eigen::Matrix3d R0, R;
+  Eigen::Vector3d c0, c;
+  cameraInWorld(state_.frames[t.rows[j0]].data(), state_.frames[t.rows[j0]][4], t0v_, R0, c0);
+  cameraInWorld(state_.frames[t.rows[use.back()]].data(), state_.frames[t.rows[use.back()]][4], t0v_, R, c);
+  if (!((c - c0).norm() >= o_.gates.min_baseline)) {
+    t.status = Status::NoMotion;
+    return;
+  }
+  const Eigen::Vector3d b0(t.w[j0].m[0], t.w[j0].m[1], 1.0);
+  double parallax = 0;
+  for (std::size_t u = 1; u < use.size(); ++u) {
+    const std::size_t j = use[u];
+    cameraInWorld(state_.frames[t.rows[j]].data(), state_.frames[t.rows[j]][4], t0v_, R, c);
+    const Eigen::Vector3d r = R.transpose() * (R0 * b0);
+    const double p = r.z() > 1e-12 ? std::hypot(camera_.kx() * (t.w[j].m[0] - r.x() / r.z()),
+                                                camera_.ky() * (t.w[j].m[1] - r.y() / r.z()))
+                                   : kInf;
+    parallax = std::max(parallax, p);
+  }
+  t.parallax = parallax;
+  if (!(parallax >= o_.gates.min_parallax_px))
+    t.status = Status::Degenerate;
+}
+
+bool Refiner::anchorFromCamera(const TrackData &t, int row, const Eigen::Vector3d &c_P, std::array<double, 3> &p) const
+{
+  Eigen::Matrix3d Rk, Ra;
+  Eigen::Vector3d ck, ca;
+  cameraInWorld(state_.frames[row].data(), state_.frames[row][4], t0v_, Rk, ck);
+  cameraInWorld(state_.frames[t.anchor_row].data(), state_.frames[t.anchor_row][4], t0v_, Ra, ca);
+  const Eigen::Vector3d Pa = Ra.transpose() * (Rk * c_P + ck - ca);
+  if (!(Pa.z() > 0) || !Pa.allFinite())
+    return false;
+  p = {Pa.x() / Pa.z(), Pa.y() / Pa.z(), 1.0 / Pa.z()};
+  return true;
+}
+
+/* Robust score of a candidate point against every observation (lower is better); false when the
+   candidate is behind the camera in some frame. */
+bool Refiner::candidateScore(const TrackData &t, const std::array<double, 3> &p, double &score) const
+{
+  constexpr double tau2 = 3.0 * 3.0; // px^2
+  score = 0;
+  for (std::size_t j = 0; j < t.rows.size(); ++j) {
+    double q[3];
+    anchoredPoint(state_.frames[t.anchor_row].data(), (state_.frames[t.anchor_row].data() + 4), state_.frames[t.rows[j]].data(),
+                  state_.frames[t.rows[j]].data() + 4, p.data(), t0_, q);
+    if (!(q[2] > 0) || !(p[2] > 0))
+      return false;
+    const double ex = camera_.kx() * (q[0] / q[2] - t.w[j].m[0]);
+    const double ey = camera_.ky() * (q[1] / q[2] - t.w[j].m[1]);
+    score += std::log1p((ex * ex + ey * ey) / tau2);
+  }
+  return std::isfinite(score);
+}
+
+/* Initial points: the given estimate, `exact` on pairs of first/last observations, or the median
+   depth of the others, whichever explains the observations best (robust to a gross error in the
+   first or last observation). */
+void Refiner::initialise()
+{
+  TwoViewOptions tv;
+  tv.noise = o_.noise;
+  tv.gates = o_.gates;
+  tv.compute_covariance = false;
+  std::vector<double> depths;
+  std::vector<char> have(data_.size(), 0);
+  for (std::size_t i = 0; i < data_.size(); ++i) {
+    TrackData &t = data_[i];
+    if (!t.active)
+      continue;
+    double best = kInf;
+    auto consider = [&](const std::array<double, 3> &p) {
+      double s;
+      if (candidateScore(t, p, s) && s < best) {
+        best = s;
+        t.point = p;
+      }
+    };
+    std::array<double, 3> p;
+    if (!initial_.empty() && initial_[i].ok() && initial_[i].c_P.allFinite()) {
+      const auto it = std::lower_bound(motion_.begin(), motion_.end(), initial_[i].frame,
+                                       [](const MotionSample &s, long f) { return s.frame < f; });
+      if (it != motion_.end() && it->frame == initial_[i].frame &&
+          anchorFromCamera(t, static_cast<int>(it - motion_.begin()), initial_[i].c_P, p))
+        consider(p);
+    }
+    const std::size_t n = t.rows.size();
+    const std::size_t firsts[2] = {0, 1}, lasts[2] = {n - 1, n - 2};
+    for (std::size_t a : firsts)
+      for (std::size_t b : lasts) {
+        if (!(b > a))
+          continue;
+        tv.increments = t.rows[b] - t.rows[a];
+        const PointEstimate e = estimateExact(camera_, rig_, motion_[t.rows[a]], motion_[t.rows[b]], t.uv[a], t.uv[b], tv);
+        if (e.ok() && anchorFromCamera(t, t.rows[b], e.c_P, p))
+          consider(p);
+      }
+    if (best < kInf) {
+      have[i] = 1;
+      depths.push_back(1.0 / t.point[2]);
+    }
+  }
+  double median = 1.0;
+  if (!depths.empty()) {
+    std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+    median = depths[depths.size() / 2];
+  }
+  for (std::size_t i = 0; i < data_.size(); ++i) {
+    TrackData &t = data_[i];
+    if (!t.active || have[i])
+      continue;
+    double best = kInf, s;
+    std::array<double, 3> p;
+    for (std::size_t j : {std::size_t(0), t.rows.size() - 1}) {
+      const Eigen::Vector3d c_P = median * Eigen::Vector3d(t.w[j].m[0], t.w[j].m[1], 1.0);
+      if (anchorFromCamera(t, t.rows[j], c_P, p) && candidateScore(t, p, s) && s < best) {
+        best = s;
+        t.point = p;
+      }
+    }
+    if (!(best < kInf)) {
+      t.status = Status::Behind;
+      t.active = false;
+    }
+  }
+}
+
+ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
+{
+  ceres::Problem problem;
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  const int rows = static_cast<int>(state_.frames.size());
+  for (int r = 0; r < rows; ++r) {
+    double *f = state_.frames[r].data();
+    problem.AddParameterBlock(f, 5);
+    ordering->AddElementToGroup(f, 1);
+    // Known parts: frame 0's pose (the gauge), every pose or yaw whose noise is not modelled.
+    std::vector<int> known;
+    if (r == 0 || !poses_free_)
+      for (int j = 0; j < 4; ++j)
+        known.push_back(j);
+    if (!yaws_free_)
+      known.push_back(4);
+    if (known.size() == 5)
+      problem.SetParameterBlockConstant(f);
+    else if (!known.empty())
+      problem.SetManifold(f, new ceres::SubsetManifold(5, known));
+  }
+  if (poses_free_)
+    for (int r = 1; r < rows; ++r)
+      problem.AddResidualBlock(OdometryCost::Create(odometry_[r - 1]), nullptr, state_.frames[r - 1].data(),
+                               state_.frames[r].data());
+  if (yaws_free_)
+    for (int r = 0; r < rows; ++r)
+      problem.AddResidualBlock(YawCost::Create(motion_[r].yaw, 1.0 / o_.noise.sigma_yaw), nullptr,
+                               state_.frames[r].data());
+
+  const double scale = o_.robust_threshold_px / std::max(o_.noise.sigma_px, kMinSigmaPx);
+  int observations = 0;
+  for (TrackData &t : data_) {
+    if (!t.active)
+      continue;
+    problem.AddParameterBlock(t.point.data(), 3);
+    ordering->AddElementToGroup(t.point.data(), 0);
+    const int a = t.anchor_row;
+    for (std::size_t j = 0; j < t.rows.size(); ++j) {
+      if (t.outlier[j])
+        continue;
+      ceres::LossFunction *loss = robust ? new ceres::CauchyLoss(scale) : nullptr;
+      const int k = t.rows[j];
+      if (k == a)
+        problem.AddResidualBlock(AnchorCost::Create(t.w[j]), loss, t.point.data());
+      else
+        problem.AddResidualBlock(ReprojectionCost::Create(t.w[j], t0_), loss, state_.frames[a].data(),
+                                 state_.frames[k].data(), t.point.data());
+      ++observations;
+    }
+  }
+  ceres::Solver::Summary summary;
+  solved = observations > 0;
+  if (!solved)
+    return summary;
+
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_SCHUR;
+  const int motion_parameters = (poses_free_ ? 4 * (rows - 1) : 0) + (yaws_free_ ? rows : 0);
+  if (motion_parameters > 400 && ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE))
+    so.linear_solver_type = ceres::SPARSE_SCHUR;
+  so.linear_solver_ordering = ordering;
+  so.max_num_iterations = o_.max_iterations;
+  so.num_threads = std::max(1, o_.threads);
+  // The robust solve only has to separate gross errors from inliers; its tail converges slowly
+  // (Cauchy weights) and is not needed. The final solve stops when the cost changes by less than
+  // 1e-7 of itself: a parameter error of order 1e-3 sigma, far below the noise.
+  so.function_tolerance = robust ? 1e-4 : 1e-7;
+  so.gradient_tolerance = 1e-10;
+  so.parameter_tolerance = robust ? 1e-6 : 1e-8;
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  ceres::Solve(so, &problem, &summary);
+  return summary;
+}
+
+void Refiner::flagOutliers()
+{
+  for (TrackData &t : data_) {
+    if (!t.active)
+      continue;
+    int inliers = 0;
+    for (std::size_t j = 0; j < t.rows.size(); ++j) {
+      t.outlier[j] = !(pixelError(t, j) <= o_.outlier_threshold_px);
+      inliers += t.outlier[j] ? 0 : 1;
+    }
+    if (inliers < 2) {
+      t.status = Status::TooFewFrames;
+      t.active = false;
+    }
+  }
+}
+
+RefineResult Refiner::run()
+{
+  o_.noise.validate();
+  o_.gates.validate();
+  if (!(o_.robust_threshold_px > 0) || !(o_.outlier_threshold_px > 0) || o_.max_iterations < 0)
+    throw Error("refine: the robust and outlier thresholds must be positive, max_iterations non-negative");
+  prepare();
+  initialise();
+
+  RefineResult result;
+  result.available = true;
+  bool solved = false;
+  const ceres::Solver::Summary robust = solve(true, solved);
+  if (solved)
+    result.iterations += robust.num_successful_steps + robust.num_unsuccessful_steps;
+  flagOutliers();
+  const ceres::Solver::Summary final_summary = solve(false, solved);
+
+  if (solved) {
+    result.iterations += final_summary.num_successful_steps + final_summary.num_unsuccessful_steps;
+    result.initial_cost = final_summary.initial_cost;
+    result.final_cost = final_summary.final_cost;
+    result.converged = final_summary.termination_type == ceres::CONVERGENCE;
+  }
+
+  // Gates on the refined motion and inliers.
+  for (TrackData &t : data_) {
+    if (!t.active)
+      continue;
+    gate(t, true);
+    if (t.status == Status::Ok && (!(t.point[2] > 0) || !(cameraPoint(t, t.report_row).z() > 0)))
+      t.status = Status::Behind;
+  }
+
+  // Covariance of every point in the final problem.
+  std::vector<Eigen::Matrix3d> cov;
+  std::vector<int> index(data_.size(), -1);
+  if (o_.compute_covariance) {
+    Model m;
+    std::copy(t0_, t0_ + 3, m.t0);
+    for (const auto &f : state_.frames) {
+      m.poses.push_back({f[0], f[1], f[2], f[3]});
+      m.yaws.push_back(f[4]);
+    }
+    m.odometry = odometry_;
+    m.poses_free = poses_free_;
+    m.yaws_free = yaws_free_;
+    m.inv_sigma_yaw = yaws_free_ ? 1.0 / o_.noise.sigma_yaw : 0.0;
+    for (std::size_t i = 0; i < data_.size(); ++i) {
+      const TrackData &t = data_[i];
+      if (!t.active)
+        continue;
+      index[i] = static_cast<int>(m.points.size());
+      for (std::size_t j = 0; j < t.rows.size(); ++j)
+        if (!t.outlier[j])
+          m.observations.push_back({index[i], t.rows[j], t.w[j]});
+      m.points.push_back(t.point);
+      m.anchor_row.push_back(t.anchor_row);
+      m.report_row.push_back(t.report_row);
+    }
+    std::vector<char> ok;
+    pointCovariances(m, true, cov, ok);
+    for (std::size_t i = 0; i < data_.size(); ++i)
+      if (index[i] >= 0 && !ok[index[i]] && data_[i].status == Status::Ok)
+        data_[i].status = Status::Degenerate;
+  }
+
+  result.points.resize(data_.size());
+  result.outliers.resize(data_.size());
+  for (std::size_t i = 0; i < data_.size(); ++i) {
+    const TrackData &t = data_[i];
+    PointEstimate &e = result.points[i];
+    e.status = t.status;
+    e.frame = tracks_[i].observations.empty() ? 0 : tracks_[i].observations.back().frame;
+    e.parallax_px = t.parallax;
+    result.outliers[i] = t.outlier;
+    if (t.status != Status::Ok)
+      continue;
+    e.c_P = cameraPoint(t, t.report_row);
+    e.v_P = rotY(state_.frames[t.report_row][4]) * (e.c_P + t0v_);
+    if (index[i] >= 0)
+      e.c_cov = cov[index[i]];
+  }
+  result.motion = motion_;
+  for (std::size_t r = 0; r < motion_.size(); ++r) {
+    result.motion[r].x = state_.frames[r][0];
+    result.motion[r].y = state_.frames[r][1];
+    result.motion[r].z = state_.frames[r][2];
+    result.motion[r].heading = state_.frames[r][3];
+    result.motion[r].yaw = state_.frames[r][4];
+  }
+  return result;
+}
+
+} // namespace
+
+bool refineAvailable() { return true; }
+
+RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                          const std::vector<Track> &tracks, const std::vector<PointEstimate> &initial,
+                          const RefineOptions &options)
+{
+  Refiner refiner(camera, rig, motion, tracks, initial, options);
+  return refiner.run();
+}
+
+} // namespace yawdepth

@@ -1,0 +1,141 @@
+#pragma once
+/*
+  Private to yawdepth::refine: the measurement model of `refine`, templated on the scalar type so
+  that the same code runs with double, ceres::Jet (the solver's automatic derivatives) and
+  Eigen::AutoDiffScalar (the information matrix and the Cramér–Rao bound, which must not need
+  Ceres). Nothing here depends on Ceres.
+
+  Parameter blocks and units:
+  - pose[4]  = (x, y, z, heading): the vision frame in the world, wMv = [Ry(heading) | (x, y, z)]
+               (m, m, m, rad);
+  - yaw[1]   = camera yaw relative to the vision frame (rad); wMc = wMv [Ry(yaw) | Ry(yaw) t0],
+               so the camera's world rotation is Ry(heading + yaw) and its centre
+               p + Ry(heading + yaw) t0;
+  - point[3] = (alpha, beta, rho): anchored inverse depth in the camera frame of the track's first
+               observation, P_a = (alpha, beta, 1) / rho (-, -, 1/m).
+  Residuals are whitened (dimensionless, in units of their sigma).
+*/
+#include <cmath>
+
+namespace yawdepth {
+namespace refine_detail {
+
+/*! out = Ry(a) v, with c = cos a, s = sin a. */
+template <typename T> inline void rotateY(const T &c, const T &s, const T *v, T *out)
+{
+  out[0] = c * v[0] + s * v[2];
+  out[1] = v[1];
+  out[2] = c * v[2] - s * v[0];
+}
+
+/*! out = Ry(a)^T v, with c = cos a, s = sin a. */
+template <typename T> inline void rotateYT(const T &c, const T &s, const T *v, T *out)
+{
+  out[0] = c * v[0] - s * v[2];
+  out[1] = v[1];
+  out[2] = c * v[2] + s * v[0];
+}
+
+/*!
+  rho times the point in the camera frame of frame k, for a point anchored in frame a:
+  \f[ q = R_k^T \left[ R_a \big((\alpha, \beta, 1) + \rho t_0\big) + \rho (p_a - p_k) \right] - \rho t_0,
+      \quad R = R_y(\text{heading} + \text{yaw}) \f]
+  (division-free, so a point at infinity, rho = 0, is regular). The projection is q_xy / q_z and
+  the camera-frame point q / rho. With k = a it returns (alpha, beta, 1).
+*/
+template <typename T>
+void anchoredPoint(const T *pose_a, const T *yaw_a, const T *pose_k, const T *yaw_k, const T *point,
+                   const double *t0, T *q)
+{
+  using std::cos;
+  using std::sin;
+  const T phi_a = pose_a[3] + yaw_a[0];
+  const T phi_k = pose_k[3] + yaw_k[0];
+  const T ca = cos(phi_a), sa = sin(phi_a), ck = cos(phi_k), sk = sin(phi_k);
+  const T rho = point[2];
+  const T v[3] = {point[0] + rho * t0[0], point[1] + rho * t0[1], T(1) + rho * t0[2]};
+  T w[3];
+  rotateY(ca, sa, v, w);
+  for (int i = 0; i < 3; ++i)
+    w[i] += rho * (pose_a[i] - pose_k[i]);
+  rotateYT(ck, sk, w, q);
+  for (int i = 0; i < 3; ++i)
+    q[i] -= rho * t0[i];
+}
+
+/*!
+  An observation prepared for the model: the undistorted normalised point m and the upper
+  triangular square root S of its information, S^T S = (J diag(sigma_px^2) J^T)^-1 with
+  J = d(x, y)/d(u, v) the undistortion Jacobian, so S (m_proj - m) is in units of sigma_px.
+*/
+struct WhitenedObservation {
+  double m[2] = {0, 0};
+  double s00 = 1, s01 = 0, s11 = 1;
+};
+
+template <typename T> inline void whiten(const WhitenedObservation &o, const T &ex, const T &ey, T *r)
+{
+  r[0] = o.s00 * ex + o.s01 * ey;
+  r[1] = o.s11 * ey;
+}
+
+/*!
+  Reprojection residual of an observation in frame k of a point anchored in frame a != k.
+  Returns false when the point is not in front of the camera (q_z <= 0).
+*/
+template <typename T>
+bool reprojectionResidual(const T *pose_a, const T *yaw_a, const T *pose_k, const T *yaw_k, const T *point,
+                          const double *t0, const WhitenedObservation &o, T *r)
+{
+  T q[3];
+  anchoredPoint(pose_a, yaw_a, pose_k, yaw_k, point, t0, q);
+  if (!(q[2] > T(0))) {
+    r[0] = T(0);
+    r[1] = T(0);
+    return false;
+  }
+  const T ex = q[0] / q[2] - o.m[0];
+  const T ey = q[1] / q[2] - o.m[1];
+  whiten(o, ex, ey, r);
+  return true;
+}
+
+/*! Residual of the observation in the anchor frame itself: (alpha, beta) against m. */
+template <typename T> void anchorResidual(const T *point, const WhitenedObservation &o, T *r)
+{
+  whiten(o, T(point[0] - o.m[0]), T(point[1] - o.m[1]), r);
+}
+
+/*!
+  A measured odometry increment between consecutive motion-log rows: d = Ry(h_prev)^T (p_cur -
+  p_prev) (m, in the earlier vision frame) and dh = h_cur - h_prev (rad), with the inverse sigmas.
+*/
+struct OdometryMeasurement {
+  double d[3] = {0, 0, 0};
+  double dh = 0;
+  double inv_sigma_t = 1, inv_sigma_h = 1;
+};
+
+/*! Residual[4]: (estimated - measured) increment, whitened. */
+template <typename T>
+void odometryResidual(const T *pose_prev, const T *pose_cur, const OdometryMeasurement &o, T *r)
+{
+  using std::cos;
+  using std::sin;
+  const T c = cos(pose_prev[3]), s = sin(pose_prev[3]);
+  const T dp[3] = {pose_cur[0] - pose_prev[0], pose_cur[1] - pose_prev[1], pose_cur[2] - pose_prev[2]};
+  T d[3];
+  rotateYT(c, s, dp, d);
+  for (int i = 0; i < 3; ++i)
+    r[i] = (d[i] - o.d[i]) * o.inv_sigma_t;
+  r[3] = (pose_cur[3] - pose_prev[3] - o.dh) * o.inv_sigma_h;
+}
+
+/*! Residual[1]: (estimated - measured) yaw, whitened. */
+template <typename T> void yawResidual(const T *yaw, double measured, double inv_sigma, T *r)
+{
+  r[0] = (yaw[0] - measured) * inv_sigma;
+}
+
+} // namespace refine_detail
+} // namespace yawdepth
