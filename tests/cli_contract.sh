@@ -157,6 +157,38 @@ else
 fi
 
 # ---------------------------------------------------------------------------
+# 2b. fused and refine: on noise-free data with a tiny noise model they agree with the truth
+# (not to round-off: they are statistical estimators with a diffuse prior), and on noisy data
+# they run, report ok rows and write the --outliers file.
+TINY=(--sigma-px 1e-4 --sigma-odom 1e-8 --sigma-heading 1e-9 --sigma-yaw 1e-9)
+for m in fused refine; do
+  for name in side turning; do
+    D="$W/sim_yaml_$name"
+    [ -s "$D/tracks.csv" ] || { fail "estimate $m: no simulated $name scene"; continue; }
+    E="$W/nf_${m}_$name"
+    run "$E" estimate --method "$m" "${TINY[@]}" --camera "$YML" --rig "$RIG" --motion "$D/motion_truth.csv" --tracks "$D/tracks.csv"
+    if [ "$(rc_of "$E")" -ne 0 ]; then fail "estimate $m noise-free $name: exit $(rc_of "$E"): $(first "$E.err")"; continue; fi
+    res=$(compare_points "$E.out" "$D/truth.csv" 1e-4 0.9)
+    case $res in
+      OK*) pass ;;
+      *) fail "estimate $m noise-free $name: $(echo "$res" | head -n 3 | tr '\n' ';')" ;;
+    esac
+  done
+  N="$W/noisy_$m"
+  run "$N.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$N" --points 20 --yaw 1.2 \
+      --sigma-px 0.3 --sigma-odom 0.001 --sigma-heading 0.00087 --sigma-yaw 0.00087 --seed 11
+  run "$N.est" estimate --method "$m" --camera "$YML" --rig "$RIG" --motion "$N/motion.csv" --tracks "$N/tracks.csv" \
+      --out "$N/points.csv" --outliers "$N/outliers.csv"
+  if [ "$(rc_of "$N.est")" -eq 0 ] && [ -s "$N/points.csv" ] && [ -s "$N/outliers.csv" ] &&
+     [ "$(head -n 1 "$N/outliers.csv" | tr -d '\r')" = "frame,id,u,v" ] &&
+     [ "$(awk -F, 'NR > 1 && $10 == "ok" && $9 > 0 { k++ } END { print k+0 }' "$N/points.csv")" -ge 15 ]; then
+    pass
+  else
+    fail "estimate $m on noisy data: exit $(rc_of "$N.est"): $(first "$N.est.err")"
+  fi
+done
+
+# ---------------------------------------------------------------------------
 # 3. Status words.
 S="$W/status"; mkdir -p "$S"
 # status_of FILE ID -> status word of that id (or "<missing>")
@@ -360,7 +392,7 @@ done
 for opt in --camera --rig --motion --tracks --method --sigma-px --sigma-odom --sigma-heading --sigma-yaw --out; do
   if grep -q -e "$opt\\b" "$W/h_estimate.out"; then pass; else fail "yawdepth estimate --help does not mention $opt"; fi
 done
-for m in paper exact; do
+for m in paper exact fused refine; do
   if grep -q -e "$m" "$W/h_estimate.out"; then pass; else fail "yawdepth estimate --help does not mention method $m"; fi
 done
 if grep -q -e '--paper' "$W/h_error-analysis.out"; then pass; else fail "yawdepth error-analysis --help does not mention --paper"; fi
