@@ -498,3 +498,18 @@ TEST_CASE("camera: saveCameraYaml round trip", "[camera][file]") {
   }
   REQUIRE_THROWS_AS(yawdepth::saveCameraYaml(tmp.file("no_such_dir/x.yaml"), cams[0].cam), yawdepth::Error);
 }
+
+// Inputs that once crashed fuzz_camera_file (tests/data/regress/camera_file/): each is rejected
+// with a one-line yawdepth::Error, never anything else.
+TEST_CASE("camera file: fuzzer regressions are rejected cleanly", "[camera][file][regress]") {
+  const std::string dir = std::string(YAWDEPTH_TEST_DATA_DIR) + "/regress/camera_file/";
+  // A stray byte before `rows`' value made OpenCV size the matrix at 48 GB.
+  requireRejected(dir + "huge_matrix_rows.yaml", "", "camera_matrix is not a matrix");
+  std::size_t n = 0;
+  for (const auto &entry : std::filesystem::directory_iterator(dir)) {
+    ++n;
+    for (const char *name : {"", "paper"})
+      requireRejected(entry.path().string(), name, "");
+  }
+  REQUIRE(n >= 1);
+}

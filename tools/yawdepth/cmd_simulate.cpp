@@ -1,11 +1,19 @@
-// `yawdepth simulate`: a synthetic sequence with known truth (motion log, tracks, true points).
+// `yawdepth simulate`: a synthetic sequence with known truth. Random 3D points (tracks only), or a
+// rendered chessboard / AprilTag board (images named in motion.csv, plus tracks of the true
+// feature positions).
 #include "commands.h"
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
+#include <yawdepth/features/pattern.h>
 #include <yawdepth/io/files.h>
+#include <yawdepth/render/renderer.h>
 #include <yawdepth/simulation/scene.h>
 
 namespace yawdepth::cli {
@@ -15,7 +23,36 @@ namespace {
 struct SimulateArgs {
   std::string camera, camera_name, rig, out_dir;
   SceneOptions scene;
+  // Board mode.
+  std::string pattern;
+  double board_distance = 0.62, board_tilt = 0.0, board_offset_x = 0.0, board_offset_y = 0.0;
+  std::string tags = "2x2";
+  double tag_gap = -1;
+  RenderOptions render;
 };
+
+/* Pose of the board in the world: facing the first camera, its pattern centred on the optical
+   axis at `distance`, turned by `tilt` about the board's vertical axis. */
+Eigen::Isometry3d boardPose(const YawRig &rig, const MotionSample &first, const BoardLayout &board, const SimulateArgs &a)
+{
+  // Centre of the features (not of the margin).
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
+  for (const auto &f : board.features()) {
+    lo = lo.cwiseMin(f.second);
+    hi = hi.cwiseMax(f.second);
+  }
+  const Eigen::Vector3d centre = 0.5 * (lo + hi);
+  Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity();
+  cMb.linear() = rotY(a.board_tilt);
+  cMb.translation() = Eigen::Vector3d(a.board_offset_x, a.board_offset_y, a.board_distance) - cMb.linear() * centre;
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  fromVisp(wMc(rig, first), R, t);
+  Eigen::Isometry3d wMc0 = Eigen::Isometry3d::Identity();
+  wMc0.linear() = R;
+  wMc0.translation() = t;
+  return wMc0 * cMb;
+}
 
 } // namespace
 
@@ -23,8 +60,9 @@ Runner addSimulate(CLI::App &app)
 {
   auto a = std::make_shared<SimulateArgs>();
   CLI::App *sub = app.add_subcommand(
-      "simulate", "Make a synthetic sequence with known truth: motion.csv (dead-reckoned), motion_truth.csv, "
-                  "tracks.csv and truth.csv (true points in the points format) in --out-dir.");
+      "simulate", "Make a synthetic sequence with known truth in --out-dir: motion.csv (dead-reckoned), "
+                  "motion_truth.csv, tracks.csv and truth.csv (true points in the points format); with --pattern, "
+                  "also the rendered images (frame_NNNN.png, named in motion.csv).");
   sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file");
   sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset)")->required();
@@ -38,7 +76,9 @@ Runner addSimulate(CLI::App &app)
   sub->add_option("--yaw-rate", s.yaw_rate, "Yaw change per frame (rad)")->check(Finite)->capture_default_str();
   sub->add_option("--heading", s.heading, "Robot heading at the first frame (rad)")->check(Finite)->capture_default_str();
   sub->add_option("--turn-rate", s.turn_rate, "Heading change per frame (rad)")->check(Finite)->capture_default_str();
-  sub->add_option("--points", s.points, "Number of 3D points")->check(CLI::Range(0, 10000000))->capture_default_str();
+  sub->add_option("--points", s.points, "Number of random 3D points (without --pattern)")
+      ->check(CLI::Range(0, 10000000))
+      ->capture_default_str();
   sub->add_option("--min-depth", s.min_depth, "Nearest depth in the first frame (m)")->check(Finite)->capture_default_str();
   sub->add_option("--max-depth", s.max_depth, "Farthest depth in the first frame (m)")->check(Finite)->capture_default_str();
   sub->add_option("--sigma-px", s.noise.sigma_px, "Pixel noise added to tracks (px)")->check(FiniteNonNegative)->capture_default_str();
@@ -50,38 +90,134 @@ Runner addSimulate(CLI::App &app)
       ->capture_default_str();
   sub->add_option("--sigma-yaw", s.noise.sigma_yaw, "Noise of each yaw reading (rad)")->check(FiniteNonNegative)->capture_default_str();
   sub->add_option("--seed", s.seed, "Random seed")->capture_default_str();
+  // Board mode.
+  sub->add_option("--pattern", a->pattern,
+                  "Render a board instead of random points: chessboard:COLSxROWS:SQUARE or apriltag:FAMILY:SIZE");
+  sub->add_option("--board-distance", a->board_distance, "Board centre along the first camera's optical axis (m)")
+      ->check(Finite)
+      ->capture_default_str();
+  sub->add_option("--board-tilt", a->board_tilt, "Board turned about its vertical axis (rad)")->check(Finite)->capture_default_str();
+  sub->add_option("--board-offset-x", a->board_offset_x, "Board centre offset along the first camera's X (m)")
+      ->check(Finite)
+      ->capture_default_str();
+  sub->add_option("--board-offset-y", a->board_offset_y, "Board centre offset along the first camera's Y (m)")
+      ->check(Finite)
+      ->capture_default_str();
+  sub->add_option("--tags", a->tags, "AprilTag board: COLSxROWS tags")->capture_default_str();
+  sub->add_option("--tag-gap", a->tag_gap, "AprilTag board: gap between tags (m; default a quarter tag)")->check(Finite);
+  sub->add_option("--blur", a->render.blur_sigma_px, "Optical blur, Gaussian sigma (px)")->check(FiniteNonNegative)->capture_default_str();
+  sub->add_option("--image-noise", a->render.noise_sigma, "Sensor noise, Gaussian sigma (gray levels)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--supersampling", a->render.supersampling, "Anti-aliasing samples per pixel side")
+      ->check(CLI::Range(1, 32))
+      ->capture_default_str();
 
   return [a]() {
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
     const RigFile rig_file = readRigFile(a->rig);
     const YawRig rig(rig_file.camera_offset);
-    const Scene scene = simulateScene(camera, rig, a->scene);
+    const bool board_mode = !a->pattern.empty();
+    SceneOptions so = a->scene;
+    if (board_mode)
+      so.points = 0;
+    const Scene scene = simulateScene(camera, rig, so);
 
     std::error_code ec;
     std::filesystem::create_directories(a->out_dir, ec);
     if (ec)
       throw Error(a->out_dir + ": cannot create folder: " + ec.message());
     const std::filesystem::path dir(a->out_dir);
+
+    std::vector<long> ids;
+    std::vector<Eigen::Vector3d> w_points;
+    std::vector<Track> tracks = scene.tracks;
     MotionLog measured, truth;
     measured.samples = scene.measured;
     truth.samples = scene.truth;
+
+    if (board_mode) {
+      BoardLayout board;
+      board.pattern = PatternSpec::parse(a->pattern);
+      if (board.pattern.kind == PatternSpec::Kind::AprilTag) {
+        int tx = 0, ty = 0;
+        char x = 0;
+        if (std::sscanf(a->tags.c_str(), "%d%c%d", &tx, &x, &ty) != 3 || x != 'x' || tx < 1 || ty < 1 || tx > 50 ||
+            ty > 50)
+          throw Error("--tags must be COLSxROWS with 1..50 tags each, not '" + a->tags + "'");
+        board.tags_x = tx;
+        board.tags_y = ty;
+        board.gap = a->tag_gap >= 0 ? a->tag_gap : 0.25 * board.pattern.tag_size;
+      }
+      if (camera.width() == 0 || camera.height() == 0)
+        throw Error(a->camera + ": the camera file has no image size (image_width, image_height): cannot render");
+      const Eigen::Isometry3d wMb = boardPose(rig, scene.truth.front(), board, *a);
+      for (const auto &f : board.features()) {
+        ids.push_back(f.first);
+        w_points.push_back(wMb * f.second);
+      }
+      // Images.
+      for (std::size_t k = 0; k < scene.truth.size(); ++k) {
+        RenderOptions ro = a->render;
+        ro.seed = a->scene.seed * 1000003ULL + k;
+        const cv::Mat img = renderBoard(camera, rig, scene.truth[k], board, wMb, ro);
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%04zu.png", k);
+        const std::string path = (dir / name).string();
+        if (!cv::imwrite(path, img))
+          throw Error(path + ": cannot write the image");
+        measured.images.push_back(path);
+        truth.images.push_back(path);
+      }
+      // Tracks of the true feature positions (with --sigma-px noise), like a perfect detector.
+      std::mt19937_64 rng(a->scene.seed + 17);
+      std::normal_distribution<double> g(0.0, 1.0);
+      tracks.clear();
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        Track t;
+        t.id = ids[i];
+        for (std::size_t k = 0; k < scene.truth.size(); ++k) {
+          Eigen::Matrix3d R;
+          Eigen::Vector3d tt;
+          fromVisp(wMc(rig, scene.truth[k]).inverse(), R, tt);
+          const Eigen::Vector3d c = R * w_points[i] + tt;
+          if (!(c.z() > 1e-6))
+            continue;
+          const Eigen::Vector2d uv = camera.project(c.head<2>() / c.z());
+          if (!(uv.x() >= 0 && uv.y() >= 0 && uv.x() <= camera.width() - 1.0 && uv.y() <= camera.height() - 1.0))
+            continue;
+          t.observations.push_back({scene.truth[k].frame, uv.x() + so.noise.sigma_px * g(rng),
+                                    uv.y() + so.noise.sigma_px * g(rng)});
+        }
+        tracks.push_back(t);
+      }
+    } else {
+      for (std::size_t i = 0; i < scene.w_points.size(); ++i) {
+        ids.push_back(static_cast<long>(i));
+        w_points.push_back(scene.w_points[i]);
+      }
+    }
     writeMotionCsv((dir / "motion.csv").string(), measured);
     writeMotionCsv((dir / "motion_truth.csv").string(), truth);
-    writeTracksCsv((dir / "tracks.csv").string(), scene.tracks);
+    writeTracksCsv((dir / "tracks.csv").string(), tracks);
 
     std::vector<PointRow> rows;
-    for (const Track &t : scene.tracks) {
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      const Track &t = tracks[i];
       if (t.observations.empty())
         continue;
       const long frame = t.observations.back().frame;
       std::size_t index = 0;
       while (scene.truth[index].frame != frame)
         ++index;
+      Eigen::Matrix3d R;
+      Eigen::Vector3d tt;
+      fromVisp(wMc(rig, scene.truth[index]).inverse(), R, tt);
       PointRow row;
       row.id = t.id;
       row.estimate.status = Status::Ok;
       row.estimate.frame = frame;
-      row.estimate.c_P = scene.cameraPoint(rig, t.id, index);
+      row.estimate.c_P = R * w_points[i] + tt;
       row.estimate.v_P = rotY(scene.truth[index].yaw) * (row.estimate.c_P + rig.cameraOffset());
       row.estimate.c_cov.setZero();
       rows.push_back(row);

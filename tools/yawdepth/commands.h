@@ -12,6 +12,7 @@ using Runner = std::function<int()>;
 Runner addEstimate(CLI::App &app);
 Runner addErrorAnalysis(CLI::App &app);
 Runner addSimulate(CLI::App &app);
+Runner addMeasure(CLI::App &app);
 
 /*! \brief CLI11 validator: a finite number (rejects nan and inf). */
 extern const CLI::Validator Finite;

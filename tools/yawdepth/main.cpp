@@ -60,6 +60,7 @@ int main(int argc, char **argv)
     commands.emplace_back(app.get_subcommands({}).at(before), std::move(r));
   };
   add(addEstimate);
+  add(addMeasure);
   add(addErrorAnalysis);
   add(addSimulate);
 

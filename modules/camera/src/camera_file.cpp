@@ -266,11 +266,22 @@ CameraModel loadVispXml(const std::string &path, const std::string &text, const 
   }
 }
 
+/*! \brief Largest number of rows or columns of a matrix in a camera file (at most 3x3 or 1x8). */
+constexpr int kMaxMatrixSide = 16;
+
 /*! \brief Numbers of an OpenCV matrix node (map `!!opencv-matrix`), a sequence, or a scalar. */
 std::vector<double> readNumbers(const cv::FileNode &node, const std::string &path, const std::string &key,
                                 int &rows, int &cols) {
   std::vector<double> v;
   if (node.isMap()) {
+    // Checked before OpenCV sizes the matrix from `rows` and `cols`: a corrupt size (a stray
+    // byte before the number) made cv::FileNode >> cv::Mat ask for 48 GB (found by fuzzing).
+    const cv::FileNode rn = node["rows"], cn = node["cols"];
+    if (!rn.isInt() || !cn.isInt())
+      throw Error(path + ": " + key + " is not a matrix (no integer rows and cols)");
+    const int nr = static_cast<int>(rn), nc = static_cast<int>(cn);
+    if (nr < 0 || nc < 0 || nr > kMaxMatrixSide || nc > kMaxMatrixSide)
+      throw Error(path + ": " + key + " has a bad size " + std::to_string(nr) + "x" + std::to_string(nc));
     cv::Mat m;
     node >> m;
     if (m.empty()) {
@@ -287,8 +298,7 @@ std::vector<double> readNumbers(const cv::FileNode &node, const std::string &pat
       for (int c = 0; c < md.cols; ++c)
         v.push_back(md.at<double>(r, c));
   } else if (node.isSeq()) {
-    for (auto it = node.begin(); it != node.end(); ++it) {
-      const cv::FileNode e = *it;
+    for (const cv::FileNode e : node) {
       if (!e.isInt() && !e.isReal())
         throw Error(path + ": " + key + " must hold numbers only");
       v.push_back(static_cast<double>(e));
@@ -374,7 +384,7 @@ Format detectFormat(const std::string &text) {
   const std::string nc = stripXmlComments(t);
   if (t.rfind("%YAML", 0) == 0)
     return Format::OpenCvYaml;
-  if (t.rfind("<", 0) == 0) {
+  if (t.rfind('<', 0) == 0) {
     if (findTag(nc, "opencv_storage") != std::string::npos)
       return Format::OpenCvXml;
     if (findTag(nc, "root") != std::string::npos && findTag(nc, "camera") != std::string::npos)

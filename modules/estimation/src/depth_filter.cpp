@@ -107,7 +107,7 @@ DepthFilter::DepthFilter(const Options &options, double kx, double ky) : o_(opti
   if (!(o_.prior_depth > 0) || !(o_.prior_log_depth_sigma > 0) || !std::isfinite(o_.prior_depth) ||
       !std::isfinite(o_.prior_log_depth_sigma))
     throw Error("depth filter: the depth prior must be finite and positive, with a positive sigma");
-  if (!(o_.outlier_chi2 > 0) || o_.max_consecutive_outliers < 1 || o_.max_iterations < 1)
+  if (!(o_.outlier_chi2 > 0) || o_.max_consecutive_outliers < 1 || o_.max_iterations < 1 || !(o_.max_log_depth_sigma > 0))
     throw Error("depth filter: outlier gate and iteration counts must be positive");
 }
 
@@ -132,7 +132,36 @@ void DepthFilter::initialize(long frame, double yaw, const Eigen::Vector2d &m, c
   baseline_ = 0;
 }
 
-DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Vector2d *m, const Eigen::Matrix2d *m_cov)
+IncrementPrior DepthFilter::defaultPrior() const
+{
+  IncrementPrior p;
+  const double so2 = o_.noise.sigma_odom * o_.noise.sigma_odom;
+  p.mean.setZero();
+  p.cov.setZero();
+  p.cov.diagonal() << so2, so2, so2, o_.noise.sigma_heading * o_.noise.sigma_heading, o_.noise.sigma_yaw * o_.noise.sigma_yaw;
+  return p;
+}
+
+bool DepthFilter::linearize(const IncrementModel &inc, const Eigen::Vector2d &m, const Eigen::Matrix2d &m_cov,
+                            Eigen::Vector2d &nu, Eigen::Matrix2d &R_state, Eigen::Matrix<double, 2, 5> &H_n) const
+{
+  if (!initialized_ || inc.frame_prev != frame_)
+    return false;
+  Vec9 mu;
+  mu << s_, Eigen::Matrix<double, 5, 1>::Zero();
+  Eigen::Vector4d s_new;
+  Mat49 G;
+  if (!predict(inc, mu, s_new, &G))
+    return false;
+  const Eigen::Matrix<double, 2, 4> Hs = G.topLeftCorner<2, 4>();
+  H_n = G.topRightCorner<2, 5>();
+  nu = m - s_new.head<2>();
+  R_state = Hs * P_ * Hs.transpose() + m_cov;
+  return nu.allFinite() && R_state.allFinite();
+}
+
+DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Vector2d *m, const Eigen::Matrix2d *m_cov,
+                                      const IncrementPrior *prior)
 {
   if (!initialized_)
     throw Error("depth filter: step() before initialize()");
@@ -148,17 +177,19 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
   baseline_ = std::max(baseline_, anchor_centre_.norm());
 
   // Prior of the joint variable w = (state, increment noise): block diagonal, the state block is
-  // P_ and the noise block the diagonal q. Products with it are done by blocks.
+  // P_ and the noise block Q (the noise model, or what other features told about this increment).
+  // Products with it are done by blocks.
+  const IncrementPrior np = prior ? *prior : defaultPrior();
+  if (!np.mean.allFinite() || !np.cov.allFinite())
+    throw Error("depth filter: non-finite increment prior");
   Vec9 mu;
-  mu << s_, Eigen::Matrix<double, 5, 1>::Zero();
-  const double so2 = o_.noise.sigma_odom * o_.noise.sigma_odom;
-  Eigen::Matrix<double, 5, 1> q;
-  q << so2, so2, so2, o_.noise.sigma_heading * o_.noise.sigma_heading, o_.noise.sigma_yaw * o_.noise.sigma_yaw;
+  mu << s_, np.mean;
+  const Eigen::Matrix<double, 5, 5> &Q = np.cov;
   // G Pw G^T for a 4x9 G.
   auto propagate = [&](const Mat49 &G) -> Eigen::Matrix4d {
     const Eigen::Matrix4d Gs = G.leftCols<4>();
     const Eigen::Matrix<double, 4, 5> Gn = G.rightCols<5>();
-    return Gs * P_ * Gs.transpose() + Gn * q.asDiagonal() * Gn.transpose();
+    return Gs * P_ * Gs.transpose() + Gn * Q * Gn.transpose();
   };
 
   Eigen::Vector4d s_new;
@@ -190,14 +221,16 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
     const Eigen::Matrix<double, 2, kW> H = G.topRows<2>();
     Eigen::Matrix<double, kW, 2> PHt;
     PHt.topRows<4>() = P_ * H.leftCols<4>().transpose();
-    PHt.bottomRows<5>() = q.asDiagonal() * H.rightCols<5>().transpose();
+    PHt.bottomRows<5>() = Q * H.rightCols<5>().transpose();
     const Eigen::Matrix2d S = H * PHt + *m_cov;
     const double det = S.determinant();
     if (!(det > 0) || !std::isfinite(det))
       return restartAt(*m, *m_cov);
     const Eigen::Matrix2d S_inv = S.inverse();
     const Eigen::Vector2d nu = *m - s_new.head<2>() - H * (mu - w);
-    if (it == 0 && !(nu.dot(S_inv * nu) <= o_.outlier_chi2)) {
+    // The gate needs a prediction to test against: the first update after a (re)start comes from
+    // the diffuse depth prior, whose linearisation cannot judge it.
+    if (it == 0 && inliers_ >= 2 && !(nu.dot(S_inv * nu) <= o_.outlier_chi2)) {
       ++outliers_;
       if (++consecutive_outliers_ >= o_.max_consecutive_outliers)
         return restartAt(*m, *m_cov);
@@ -261,6 +294,11 @@ PointEstimate DepthFilter::estimate(const YawRig &rig) const
   }
   const double Z = std::exp(-s_(2));
   if (!P_.allFinite() || !(P_(2, 2) >= 0) || !std::isfinite(Z)) { // numerical breakdown
+    e.status = Status::Degenerate;
+    return e;
+  }
+  // Depth not resolved: the data leave it uncertain by more than a factor e^max at 1 sigma.
+  if (!(std::sqrt(P_(2, 2)) <= o_.max_log_depth_sigma)) {
     e.status = Status::Degenerate;
     return e;
   }

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <map>
 #include <yawdepth/error.h>
+#include <yawdepth/estimation/fused_estimator.h>
 
 namespace yawdepth {
 
@@ -62,6 +64,38 @@ std::vector<IncrementModel> incrementsOf(const YawRig &rig, const std::vector<Mo
   for (std::size_t i = 0; i + 1 < motion.size(); ++i)
     inc.push_back(IncrementModel::between(rig, motion[i], motion[i + 1]));
   return inc;
+}
+
+} // namespace
+
+namespace {
+
+/* The log-depth state is positive by construction; image motion that only a point behind the
+   camera explains is caught by the exact two-view form on the widest pair of observations. Only
+   when the filter itself did not resolve the depth well: near the focus of expansion that sign
+   flips with noise, and a confident filter has seen consistent positive depth. */
+PointEstimate checkBehind(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                          const Track &track, const DepthFilter &filter, const TrackEstimatorOptions &options,
+                          const PointEstimate &e)
+{
+  if (!(e.ok() || e.status == Status::Degenerate) || !filter.initialized() || filter.inliers() < 2 ||
+      !(filter.logDepthSigma() > 0.3))
+    return e;
+  const auto &obs = track.observations;
+  TwoViewOptions tv = options.two_view;
+  tv.compute_covariance = false;
+  const long first_row = indexOfFrame(motion, obs.front().frame), last_row = indexOfFrame(motion, obs.back().frame);
+  tv.increments = static_cast<int>(last_row - first_row);
+  const PointEstimate wide =
+      estimateExact(camera, rig, motion[first_row], motion[last_row], Eigen::Vector2d(obs.front().u, obs.front().v),
+                    Eigen::Vector2d(obs.back().u, obs.back().v), tv);
+  if (wide.status != Status::Behind)
+    return e;
+  PointEstimate behind;
+  behind.status = Status::Behind;
+  behind.frame = e.frame;
+  behind.parallax_px = e.parallax_px;
+  return behind;
 }
 
 } // namespace
@@ -134,24 +168,7 @@ PointEstimate runDepthFilter(const CameraModel &camera, const YawRig &rig, const
   else
     e.status = Status::Behind;
   e.frame = obs.back().frame;
-  // The log-depth state is positive by construction; image motion that only a point behind the
-  // camera explains is caught by the exact two-view form on the widest pair of observations.
-  if (e.ok()) {
-    TwoViewOptions tv = options.two_view;
-    tv.compute_covariance = false;
-    const long first_row = indexOfFrame(motion, obs.front().frame);
-    tv.increments = static_cast<int>(last_row - first_row);
-    const PointEstimate wide = estimateExact(camera, rig, motion[first_row], motion[last_row],
-                                             Eigen::Vector2d(obs.front().u, obs.front().v),
-                                             Eigen::Vector2d(obs.back().u, obs.back().v), tv);
-    if (wide.status == Status::Behind && filter.inliers() == static_cast<int>(obs.size())) {
-      PointEstimate behind;
-      behind.status = Status::Behind;
-      behind.frame = e.frame;
-      behind.parallax_px = e.parallax_px;
-      return behind;
-    }
-  }
+  e = checkBehind(camera, rig, motion, track, filter, options, e);
   if (filter_out)
     *filter_out = filter;
   return e;
@@ -167,10 +184,63 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
   if (outliers)
     outliers->assign(tracks.size(), {});
   if (options.method == Method::Fused) {
-    const std::vector<IncrementModel> inc = incrementsOf(rig, motion);
-    for (std::size_t i = 0; i < tracks.size(); ++i)
-      out.push_back(runDepthFilter(camera, rig, motion, inc, tracks[i], options, nullptr,
-                                   outliers ? &(*outliers)[i] : nullptr));
+    // Frame by frame, all features together (FusedEstimator), each track's estimate taken at its
+    // last observation.
+    out.assign(tracks.size(), PointEstimate());
+    if (outliers)
+      for (std::size_t i = 0; i < tracks.size(); ++i)
+        (*outliers)[i].assign(tracks[i].observations.size(), false);
+    std::map<long, std::vector<std::pair<std::size_t, std::size_t>>> by_frame; // frame -> (track, obs)
+    std::map<long, std::vector<std::size_t>> ending;                          // frame -> tracks ending there
+    long first = std::numeric_limits<long>::max(), last = std::numeric_limits<long>::min();
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      checkObservedFrames(motion, tracks[i]);
+      const auto &obs = tracks[i].observations;
+      out[i].frame = obs.empty() ? 0 : obs.back().frame;
+      out[i].status = Status::TooFewFrames;
+      if (obs.size() < 2)
+        continue;
+      for (std::size_t k = 0; k < obs.size(); ++k)
+        by_frame[obs[k].frame].emplace_back(i, k);
+      ending[obs.back().frame].push_back(i);
+      first = std::min(first, obs.front().frame);
+      last = std::max(last, obs.back().frame);
+    }
+    if (by_frame.empty())
+      return out;
+    FusedOptions fo;
+    fo.filter = options.filter;
+    fo.filter.noise = options.two_view.noise;
+    fo.filter.gates = options.two_view.gates;
+    fo.sigma_px = options.two_view.noise.sigma_px;
+    fo.max_missing_frames = std::numeric_limits<int>::max() / 2; // tracks are dropped at their last frame
+    FusedEstimator fused(camera, rig, fo);
+    for (long r = indexOfFrame(motion, first); r <= indexOfFrame(motion, last); ++r) {
+      const MotionSample &row = motion[static_cast<std::size_t>(r)];
+      std::vector<FrameObservation> fobs;
+      const auto bf = by_frame.find(row.frame);
+      if (bf != by_frame.end())
+        for (const auto &[ti, k] : bf->second)
+          fobs.push_back({tracks[ti].id, tracks[ti].observations[k].u, tracks[ti].observations[k].v});
+      const auto results = fused.addFrame(row, fobs);
+      if (outliers && bf != by_frame.end())
+        for (std::size_t j = 0; j < results.size(); ++j)
+          if (results[j].update == DepthFilter::Update::Outlier)
+            (*outliers)[bf->second[j].first][bf->second[j].second] = true;
+      const auto en = ending.find(row.frame);
+      if (en == ending.end())
+        continue;
+      for (std::size_t ti : en->second) {
+        const DepthFilter *f = fused.filter(tracks[ti].id);
+        if (f) {
+          out[ti] = checkBehind(camera, rig, motion, tracks[ti], *f, options, f->estimate(rig));
+        } else {
+          out[ti].status = Status::UndistortFailed;
+        }
+        out[ti].frame = row.frame;
+        fused.remove(tracks[ti].id);
+      }
+    }
   } else {
     for (std::size_t i = 0; i < tracks.size(); ++i) {
       out.push_back(estimateTrack(camera, rig, motion, tracks[i], options));

@@ -16,6 +16,7 @@ namespace yawdepth {
 */
 class Error : public std::runtime_error {
 public:
+  /*! \param what The one-line message. */
   explicit Error(const std::string &what) : std::runtime_error(what) {}
 };
 

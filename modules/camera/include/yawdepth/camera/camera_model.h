@@ -21,9 +21,18 @@
 
 namespace yawdepth {
 
+/*!
+  \brief A camera's intrinsics and lens distortion (see the file's description), built from ViSP
+  parameters, from OpenCV/Brown coefficients, or by loadCameraFile().
+*/
 class CameraModel {
 public:
-  enum class Distortion { None, Brown, ViSP };
+  /*! \brief The distortion model. */
+  enum class Distortion {
+    None,  //!< Pinhole, no distortion.
+    Brown, //!< OpenCV's model, k1 k2 p1 p2 k3 k4 k5 k6.
+    ViSP   //!< ViSP's kud model (x_d = x (1 + kud r^2)).
+  };
 
   /*! \brief An identity-like default camera (px = py = 1, u0 = v0 = 0, no distortion). */
   CameraModel();
@@ -37,26 +46,29 @@ public:
     \brief OpenCV/Brown camera.
     \param fx, fy Focal lengths in pixels (\f$k_x, k_y\f$). \param u0, v0 Principal point.
     \param coeffs 0, 4, 5 or 8 coefficients in OpenCV order. Throws yawdepth::Error otherwise.
+    \param width, height Image size in pixels (0 when unknown).
   */
   static CameraModel brown(double fx, double fy, double u0, double v0, const std::vector<double> &coeffs,
                            unsigned width = 0, unsigned height = 0);
 
+  /*! \brief The distortion model. */
   Distortion distortion() const { return model_; }
   /*! \brief The pinhole part as ViSP parameters (perspectiveProjWithoutDistortion), or the ViSP
       kud/kdu model when distortion() is ViSP. */
   const vpCameraParameters &parameters() const { return cam_; }
-  double kx() const { return kx_; }
-  double ky() const { return ky_; }
-  double u0() const { return u0_; }
-  double v0() const { return v0_; }
-  unsigned width() const { return width_; }
-  unsigned height() const { return height_; }
+  double kx() const { return kx_; }         //!< Focal length along u, in pixels (ViSP's px).
+  double ky() const { return ky_; }         //!< Focal length along v, in pixels (ViSP's py).
+  double u0() const { return u0_; }         //!< Principal point, u (pixels).
+  double v0() const { return v0_; }         //!< Principal point, v (pixels).
+  unsigned width() const { return width_; }   //!< Image width in pixels (0 when unknown).
+  unsigned height() const { return height_; } //!< Image height in pixels (0 when unknown).
   /*! \brief Brown coefficients, always 8 (k1 k2 p1 p2 k3 k4 k5 k6), zero-padded. For the ViSP
       model these are the equivalent Brown coefficients (k1 = kud, the others 0); all zero for None. */
   const std::vector<double> &brownCoefficients() const { return coeffs_; }
 
   /*!
     \brief Distort a normalised point: \f$ (x, y) \mapsto (x_d, y_d) \f$.
+    \param m Normalised (undistorted) point (x, y).
     \param J If not null, receives \f$ \partial (x_d,y_d) / \partial (x,y) \f$.
   */
   Eigen::Vector2d distortNormalized(const Eigen::Vector2d &m, Eigen::Matrix2d *J = nullptr) const;

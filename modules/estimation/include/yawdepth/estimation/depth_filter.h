@@ -53,6 +53,16 @@ struct IncrementModel {
   static IncrementModel between(const YawRig &rig, const MotionSample &prev, const MotionSample &cur);
 };
 
+/*!
+  \brief A Gaussian prior on one increment's noise (d_x, d_y, d_z, heading, yaw of the later frame),
+  the quantities the filter estimates along with the feature at each step. By default zero mean
+  with the noise model's variances; FusedEstimator replaces it by what the other features observed.
+*/
+struct IncrementPrior {
+  Eigen::Matrix<double, 5, 1> mean = Eigen::Matrix<double, 5, 1>::Zero();
+  Eigen::Matrix<double, 5, 5> cov = Eigen::Matrix<double, 5, 5>::Zero();
+};
+
 /*! \brief Options of DepthFilter. */
 struct DepthFilterOptions {
   NoiseModel noise;                     //!< Odometry and yaw noise (pixel noise comes with each observation).
@@ -63,6 +73,9 @@ struct DepthFilterOptions {
   int max_consecutive_outliers = 3;     //!< Restart after this many rejections in a row.
   double converged_relative_sigma = 0.05; //!< converged() when sigma(Z)/Z falls below this.
   int max_iterations = 10;              //!< Iterated-EKF iterations per update at most (1 = plain EKF); stops when converged.
+  /*! Above this 1-sigma of log-depth the estimate is `degenerate`: the depth is not resolved
+      (1.0: uncertain by a factor e = 2.7 either way; typical of features near the focus of expansion). */
+  double max_log_depth_sigma = 1.0;
 };
 
 /*! \brief Recursive log-inverse-depth filter for one feature (the `fused` method). */
@@ -91,7 +104,20 @@ public:
     \return What happened to the observation. Throws yawdepth::Error when not initialised or when
             `inc` does not start at the filter's frame.
   */
-  Update step(const IncrementModel &inc, const Eigen::Vector2d *m = nullptr, const Eigen::Matrix2d *m_cov = nullptr);
+  Update step(const IncrementModel &inc, const Eigen::Vector2d *m = nullptr, const Eigen::Matrix2d *m_cov = nullptr,
+              const IncrementPrior *prior = nullptr);
+
+  /*! \brief The noise model's prior on an increment (zero mean). */
+  IncrementPrior defaultPrior() const;
+
+  /*!
+    \brief Linearise the next observation at the prediction (zero increment noise): its innovation
+    `nu`, the innovation covariance from the state and pixel noise `R_state`, and the Jacobian
+    `H_n` of the predicted point with respect to the increment noise. What FusedEstimator needs to
+    estimate the shared increment noise from every feature. False when not possible.
+  */
+  bool linearize(const IncrementModel &inc, const Eigen::Vector2d &m, const Eigen::Matrix2d &m_cov, Eigen::Vector2d &nu,
+                 Eigen::Matrix2d &R_state, Eigen::Matrix<double, 2, 5> &H_n) const;
 
   /*! \brief The point at the filter's current frame, with status (see the class description). */
   PointEstimate estimate(const YawRig &rig) const;

@@ -44,7 +44,9 @@ template <typename T> Eigen::Matrix<T, 3, 3> rotY(const T &angle)
 */
 struct MotionSample {
   long frame = 0;       //!< Frame number, as in the motion log.
-  double x = 0, y = 0, z = 0; //!< Position of the vision-frame origin in the world (m).
+  double x = 0;         //!< Position of the vision-frame origin in the world: X (m).
+  double y = 0;         //!< Position of the vision-frame origin in the world: Y (m).
+  double z = 0;         //!< Position of the vision-frame origin in the world: Z (m).
   double heading = 0;   //!< Robot heading about +Y (rad).
   double yaw = 0;       //!< Camera yaw relative to the vision frame (rad).
 };
@@ -134,13 +136,14 @@ void relativeMotion(const Eigen::Vector3d &v_t0, const MotionSample &prev, const
   const T dh = T(cur.heading - prev.heading) + p.d_heading;
   const T yp = T(prev.yaw) + p.d_yaw_prev;
   const T yc = T(cur.yaw) + p.d_yaw_cur;
-  const Eigen::Matrix<T, 3, 1> t0 = v_t0.cast<T>();
+  const Eigen::Matrix<T, 3, 1> t0(T(v_t0.x()), T(v_t0.y()), T(v_t0.z()));
   R = rotY<T>(yp - dh - yc);
   t = rotY<T>(yc).transpose() * (rotY<T>(dh).transpose() * (rotY<T>(yp) * t0 - d)) - t0;
 }
 
-/*! \brief Convert between Eigen and ViSP homogeneous matrices. */
+/*! \brief The ViSP homogeneous matrix `[R | t]`. */
 vpHomogeneousMatrix toVisp(const Eigen::Matrix3d &R, const Eigen::Vector3d &t);
+/*! \brief The rotation `R` and translation `t` of a ViSP homogeneous matrix `M = [R | t]`. */
 void fromVisp(const vpHomogeneousMatrix &M, Eigen::Matrix3d &R, Eigen::Vector3d &t);
 
 } // namespace yawdepth

@@ -63,8 +63,8 @@ void checkTracksAgainstMotion(const std::vector<Track> &tracks, const MotionLog 
 
 /*! \brief One output row: a feature id and its estimate. */
 struct PointRow {
-  long id = 0;
-  PointEstimate estimate;
+  long id = 0;             //!< Feature id, as in the tracks file.
+  PointEstimate estimate;  //!< Its estimate at the last frame in which it was observed.
 };
 
 /*!

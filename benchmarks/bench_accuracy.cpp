@@ -1,0 +1,627 @@
+/*
+  bench_accuracy: accuracy of every yawdepth method against the Cramer-Rao lower bound and
+  against OpenCV's two-view triangulation, on seeded synthetic scenes with the paper's camera.
+
+  A plain program that prints plain-text tables (paste them into a README as they are):
+    bench_accuracy [--trials N] [--seed S] [--quick]
+  --trials N  trials per scene (default 200); every trial draws new points and new noise.
+  --seed S    base seed (default 1); trial t of scene s uses seed S + 100000 s + t.
+  --quick     40 trials.
+
+  What it measures (see the printed header for the details):
+  1. Depth zc of every point at its last observed frame, by paper / exact / fused / refine and by
+     cv::triangulatePoints on the first and last observation with the measured motion; RMSE,
+     RMSE normalised by the joint and by the per-point Cramer-Rao bound, and 2-sigma coverage.
+  2. The same scenes with 5 % gross outliers: refine's and fused's RMSE against the bound of the
+     clean tracks, and their outlier recall and precision.
+  3. Speed of refineWindow (30 points x 10 frames) and of fused per feature update.
+*/
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <map>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/estimation/track_estimator.h>
+#include <yawdepth/estimation/types.h>
+#include <yawdepth/geometry/rig.h>
+#include <yawdepth/refine/refine.h>
+#include <yawdepth/simulation/scene.h>
+
+using namespace yawdepth;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr double kGross = 10.0; // a "gross" error: |e| above this many per-point CRLBs
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0)
+{
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+enum MethodIndex { kPaper = 0, kExact, kFused, kRefine, kOpenCV, kMethods };
+const char *const kMethodNames[kMethods] = {"paper", "exact", "fused", "refine", "opencv"};
+
+struct SceneSpec {
+  double yaw_deg;
+  double turn_deg; // heading change per frame
+  std::string name() const
+  {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "yaw %2.0f deg, %s", yaw_deg, turn_deg == 0 ? "straight" : "turning 1 deg/frame");
+    return buf;
+  }
+  std::string shortName() const
+  {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "yaw %2.0f %s", yaw_deg, turn_deg == 0 ? "straight" : "turning");
+    return buf;
+  }
+};
+
+/*! Error statistics of one method over the points used. */
+struct Acc {
+  long n = 0;                 // points used
+  double se = 0;              // sum of e^2 (m^2)
+  double sum_e = 0;           // sum of e (m)
+  double sn_joint = 0;        // sum of (e / crlb_joint)^2
+  double sn_pp = 0;           // sum of (e / crlb_per_point)^2
+  long covered = 0;           // |e| <= 2 sigma
+  long not_ok = 0;            // points with >= 2 observations the method did not report ok
+  long gross = 0;             // |e| > 10 per-point CRLB
+  std::vector<double> abs_e;  // |e| of every point used (m), for the median
+  void add(double e, double crlb_joint, double crlb_pp, double sigma)
+  {
+    ++n;
+    abs_e.push_back(std::abs(e));
+    if (std::abs(e) > kGross * crlb_pp)
+      ++gross;
+    se += e * e;
+    sum_e += e;
+    sn_joint += (e / crlb_joint) * (e / crlb_joint);
+    sn_pp += (e / crlb_pp) * (e / crlb_pp);
+    if (std::isfinite(sigma) && std::abs(e) <= 2 * sigma)
+      ++covered;
+  }
+  void merge(const Acc &o)
+  {
+    n += o.n;
+    se += o.se;
+    sum_e += o.sum_e;
+    sn_joint += o.sn_joint;
+    sn_pp += o.sn_pp;
+    covered += o.covered;
+    not_ok += o.not_ok;
+    gross += o.gross;
+    abs_e.insert(abs_e.end(), o.abs_e.begin(), o.abs_e.end());
+  }
+  double medianAbs() const
+  {
+    if (abs_e.empty())
+      return NAN;
+    std::vector<double> v = abs_e;
+    const std::size_t h = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(h), v.end());
+    return v[h];
+  }
+  double rmse() const { return n ? std::sqrt(se / n) : NAN; }
+  double bias() const { return n ? sum_e / n : NAN; }
+  double ratioJoint() const { return n ? std::sqrt(sn_joint / n) : NAN; }
+  double ratioPP() const { return n ? std::sqrt(sn_pp / n) : NAN; }
+  double coverage() const { return n ? double(covered) / n : NAN; }
+};
+
+/*! Clean-scene statistics of one scene (or pooled). */
+struct CleanStats {
+  long points = 0, few_obs = 0, no_bound = 0, used = 0;
+  double crlb_joint_sq = 0, crlb_pp_sq = 0; // sums over used points
+  std::array<Acc, kMethods> acc;
+  void merge(const CleanStats &o)
+  {
+    points += o.points;
+    few_obs += o.few_obs;
+    no_bound += o.no_bound;
+    used += o.used;
+    crlb_joint_sq += o.crlb_joint_sq;
+    crlb_pp_sq += o.crlb_pp_sq;
+    for (int m = 0; m < kMethods; ++m)
+      acc[m].merge(o.acc[m]);
+  }
+};
+
+/*! Outlier-scene statistics (fused and refine). */
+struct OutlierStats {
+  long points = 0, used = 0, corrupted = 0;
+  std::array<Acc, 2> acc;                  // 0 fused, 1 refine
+  std::array<long, 2> tp{{0, 0}}, fp{{0, 0}}; // flagged and corrupted / flagged and clean
+  void merge(const OutlierStats &o)
+  {
+    points += o.points;
+    used += o.used;
+    corrupted += o.corrupted;
+    for (int m = 0; m < 2; ++m) {
+      acc[m].merge(o.acc[m]);
+      tp[m] += o.tp[m];
+      fp[m] += o.fp[m];
+    }
+  }
+};
+
+/*! Depth zc at the last observation by cv::triangulatePoints from the first and last observation,
+    with projection matrices from the measured motion; NaN when it fails. */
+std::vector<double> triangulateOpenCV(const CameraModel &camera, const YawRig &rig,
+                                      const std::vector<MotionSample> &measured, const std::map<long, std::size_t> &row,
+                                      const std::vector<Track> &tracks)
+{
+  std::vector<double> zc(tracks.size(), NAN);
+  auto projection = [&](long frame, Eigen::Matrix3d &R, Eigen::Vector3d &t) {
+    // cMw = (wMv vMc(yaw))^-1 from the measured row; identity K (normalised points).
+    fromVisp(wMc(rig, measured.at(row.at(frame))).inverse(), R, t);
+    cv::Matx34d P;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j)
+        P(i, j) = R(i, j);
+      P(i, 3) = t(i);
+    }
+    return P;
+  };
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const auto &obs = tracks[i].observations;
+    if (obs.size() < 2)
+      continue;
+    Eigen::Vector2d m1, m2;
+    if (!camera.undistort(Eigen::Vector2d(obs.front().u, obs.front().v), m1) ||
+        !camera.undistort(Eigen::Vector2d(obs.back().u, obs.back().v), m2))
+      continue;
+    Eigen::Matrix3d R1, R2;
+    Eigen::Vector3d t1, t2;
+    const cv::Matx34d P1 = projection(obs.front().frame, R1, t1);
+    const cv::Matx34d P2 = projection(obs.back().frame, R2, t2);
+    cv::Mat p1 = (cv::Mat_<double>(2, 1) << m1.x(), m1.y());
+    cv::Mat p2 = (cv::Mat_<double>(2, 1) << m2.x(), m2.y());
+    cv::Mat X;
+    cv::triangulatePoints(cv::Mat(P1), cv::Mat(P2), p1, p2, X);
+    X.convertTo(X, CV_64F);
+    const double w = X.at<double>(3, 0);
+    if (!(std::abs(w) > 0))
+      continue;
+    const Eigen::Vector3d w_P(X.at<double>(0, 0) / w, X.at<double>(1, 0) / w, X.at<double>(2, 0) / w);
+    const Eigen::Vector3d c1 = R1 * w_P + t1, c2 = R2 * w_P + t2;
+    if (std::isfinite(c2.z()) && c1.z() > 0 && c2.z() > 0) // cheirality, as "ok"
+      zc[i] = c2.z();
+  }
+  return zc;
+}
+
+/*! Replace `fraction` of all observations by gross errors of 10 to 50 px in a random direction
+    (kept inside the image). Returns per track, per observation, whether it was corrupted. */
+std::vector<std::vector<bool>> corrupt(std::vector<Track> &tracks, double fraction, double width, double height,
+                                       std::mt19937_64 &rng)
+{
+  std::vector<std::vector<bool>> truth(tracks.size());
+  std::vector<std::pair<std::size_t, std::size_t>> all;
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    truth[i].assign(tracks[i].observations.size(), false);
+    for (std::size_t j = 0; j < tracks[i].observations.size(); ++j)
+      all.emplace_back(i, j);
+  }
+  std::shuffle(all.begin(), all.end(), rng);
+  const std::size_t count = static_cast<std::size_t>(std::lround(fraction * static_cast<double>(all.size())));
+  std::uniform_real_distribution<double> mag(10.0, 50.0), ang(0.0, 2 * M_PI);
+  for (std::size_t k = 0; k < count && k < all.size(); ++k) {
+    Observation &ob = tracks[all[k].first].observations[all[k].second];
+    const double r = mag(rng);
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      const double a = ang(rng);
+      const double u = ob.u + r * std::cos(a), v = ob.v + r * std::sin(a);
+      if (u >= 0 && u <= width - 1 && v >= 0 && v <= height - 1) {
+        ob.u = u;
+        ob.v = v;
+        truth[all[k].first][all[k].second] = true;
+        break;
+      }
+    }
+  }
+  return truth;
+}
+
+void countFlags(const std::vector<std::vector<bool>> &flags, const std::vector<std::vector<bool>> &truth, long &tp,
+                long &fp)
+{
+  for (std::size_t i = 0; i < truth.size() && i < flags.size(); ++i)
+    for (std::size_t j = 0; j < truth[i].size() && j < flags[i].size(); ++j)
+      if (flags[i][j]) {
+        if (truth[i][j])
+          ++tp;
+        else
+          ++fp;
+      }
+}
+
+std::string fmt(const char *f, double v)
+{
+  if (!std::isfinite(v))
+    return "-";
+  char buf[64];
+  if (std::abs(v) >= 1e5)
+    std::snprintf(buf, sizeof buf, "%.2e", v);
+  else
+    std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+void printRule(int width) { std::printf("%s\n", std::string(static_cast<std::size_t>(width), '-').c_str()); }
+
+void printCleanTable(const std::string &title, const CleanStats &s, long trials, bool refine_ok)
+{
+  std::printf("\n%s\n", title.c_str());
+  std::printf("  %ld trials, %ld points: %ld used (every method ok, >= 2 observations), %ld with < 2 observations,\n"
+              "  %ld without a finite bound. CRLB of zc (RMS over used points): joint %.2f mm, per-point %.2f mm.\n",
+              trials, s.points, s.used, s.few_obs, s.no_bound, s.used ? 1e3 * std::sqrt(s.crlb_joint_sq / s.used) : NAN,
+              s.used ? 1e3 * std::sqrt(s.crlb_pp_sq / s.used) : NAN);
+  const int W = 94;
+  printRule(W);
+  std::printf("%-8s %8s %10s %9s %9s %10s %10s %7s %9s\n", "method", "not ok", "RMSE zc", "median", "bias",
+              "RMSE/CRLB", "RMSE/CRLB", "gross", "2-sigma");
+  std::printf("%-8s %8s %10s %9s %9s %10s %10s %7s %9s\n", "", "(points)", "(mm)", "|e| (mm)", "(mm)", "joint",
+              "per-point", "(pts)", "coverage");
+  printRule(W);
+  for (int m = 0; m < kMethods; ++m) {
+    const Acc &a = s.acc[m];
+    if (m == kRefine && !refine_ok) {
+      std::printf("%-8s %s\n", kMethodNames[m], "refine: unavailable");
+      continue;
+    }
+    const bool has_sigma = m != kOpenCV;
+    std::printf("%-8s %8ld %10s %9s %9s %10s %10s %7ld %9s\n", kMethodNames[m], a.not_ok,
+                fmt("%.2f", 1e3 * a.rmse()).c_str(), fmt("%.2f", 1e3 * a.medianAbs()).c_str(),
+                fmt("%+.2f", 1e3 * a.bias()).c_str(), fmt("%.3f", a.ratioJoint()).c_str(),
+                fmt("%.3f", a.ratioPP()).c_str(), a.gross, has_sigma ? fmt("%.3f", a.coverage()).c_str() : "-");
+  }
+  printRule(W);
+}
+
+void usage(const char *argv0)
+{
+  std::fprintf(stderr, "usage: %s [--trials N] [--seed S] [--quick]\n", argv0);
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+  long trials = 200;
+  std::uint64_t seed = 1;
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--trials" && i + 1 < argc) {
+      trials = std::strtol(argv[++i], nullptr, 10);
+    } else if (a == "--seed" && i + 1 < argc) {
+      seed = std::strtoull(argv[++i], nullptr, 10);
+    } else if (a == "--quick") {
+      quick = true;
+    } else if (a == "--help" || a == "-h") {
+      usage(argv[0]);
+      return 0;
+    } else {
+      usage(argv[0]);
+      return 2;
+    }
+  }
+  if (quick)
+    trials = 40;
+  if (trials < 1) {
+    std::fprintf(stderr, "bench_accuracy: --trials must be >= 1\n");
+    return 2;
+  }
+
+  const CameraModel camera =
+      CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
+  const YawRig rig(Eigen::Vector3d(-0.1503, 0, 0));
+  const NoiseModel noise{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg};
+  const std::vector<SceneSpec> specs = {{0, 0}, {45, 0}, {90, 0}, {0, 1}, {45, 1}, {90, 1}};
+  const double outlier_fraction = 0.05;
+  const bool refine_ok = refineAvailable();
+
+  std::printf("yawdepth accuracy benchmark: depth zc of each point at its last observed frame\n");
+  std::printf("================================================================================\n");
+  std::printf("Methods: paper (eq. 5, last increment), exact (two-view, last increment), fused (per-feature\n"
+              "  filter over all frames), refine (joint MAP of points + motion, initialised with fused),\n"
+              "  opencv (cv::triangulatePoints on the first and last observation, measured motion).\n");
+  std::printf("Scenes: paper's camera (fx 1734.1, fy 1734.5, u0 319.2, v0 241.4, Brown distortion, 640x480),\n"
+              "  rig offset (-0.1503, 0, 0) m; yaw 0/45/90 deg x straight / turning 1 deg per frame;\n"
+              "  10 frames, 0.02 m forward per frame; 30 points, depth 0.5 to 3 m in the first frame.\n");
+  std::printf("Noise (simulation = estimators' model): pixels 0.3 px, odometry 1 mm per axis per increment,\n"
+              "  heading 0.05 deg per increment, yaw reading 0.05 deg.\n");
+  std::printf("Bound: CRLB of zc from depthCramerRao at the truth; joint = all points + motion (the bound\n"
+              "  for refine), per-point = one point + motion (the bound for per-feature methods).\n"
+              "  RMSE/CRLB = sqrt(mean((e/crlb)^2)); 1.0 means the bound is reached. 2-sigma coverage =\n"
+              "  fraction of points with |e| <= 2 sigma_zc (the method's own covariance).\n");
+  std::printf("Points of one trial share the motion noise, hence many trials: %ld per scene; trial t of scene s\n"
+              "  (s = 0..5 in the order of the tables) uses seed %llu + 100000 s + t.\n",
+              trials, static_cast<unsigned long long>(seed));
+  std::printf("Reproduce: cmake -S . -B build-acc -DYAWDEPTH_BUILD_TESTS=OFF -DYAWDEPTH_BUILD_EXAMPLES=OFF &&\n"
+              "  cmake --build build-acc --target bench_accuracy && build-acc/benchmarks/bench_accuracy --trials %ld --seed %llu\n",
+              trials, static_cast<unsigned long long>(seed));
+  std::printf("refine: %s\n", refine_ok ? "available (Ceres)" : "unavailable (built without Ceres)");
+  std::fflush(stdout);
+
+  TrackEstimatorOptions opt;
+  opt.two_view.noise = noise;
+  opt.filter.noise = noise;
+  RefineOptions ropt;
+  ropt.noise = noise;
+
+  const auto t_start = Clock::now();
+  std::vector<CleanStats> clean(specs.size());
+  std::vector<OutlierStats> dirty(specs.size());
+  std::vector<double> refine_ms;
+  double fused_ms = 0;
+  long fused_obs = 0;
+  long refine_errors = 0;
+
+  for (std::size_t si = 0; si < specs.size(); ++si) {
+    SceneOptions so;
+    so.frames = 10;
+    so.step = 0.02;
+    so.yaw = specs[si].yaw_deg * kDeg;
+    so.turn_rate = specs[si].turn_deg * kDeg;
+    so.points = 30;
+    so.min_depth = 0.5;
+    so.max_depth = 3.0;
+    so.noise = noise;
+    CleanStats &cs = clean[si];
+    OutlierStats &os = dirty[si];
+
+    for (long trial = 0; trial < trials; ++trial) {
+      so.seed = seed + 100000ULL * si + static_cast<std::uint64_t>(trial);
+      const Scene scene = simulateScene(camera, rig, so);
+      std::map<long, std::size_t> row;
+      for (std::size_t k = 0; k < scene.truth.size(); ++k)
+        row[scene.truth[k].frame] = k;
+      const std::size_t n = scene.tracks.size();
+
+      const std::vector<double> crlb_joint =
+          depthCramerRao(camera, rig, scene.truth, scene.tracks, scene.w_points, noise, true);
+      const std::vector<double> crlb_pp =
+          depthCramerRao(camera, rig, scene.truth, scene.tracks, scene.w_points, noise, false);
+
+      // True zc at each track's last observation.
+      std::vector<double> z_true(n, NAN);
+      for (std::size_t i = 0; i < n; ++i)
+        if (!scene.tracks[i].observations.empty())
+          z_true[i] = scene.cameraPoint(rig, scene.tracks[i].id, row.at(scene.tracks[i].observations.back().frame)).z();
+
+      // ---- Clean scene: every method.
+      std::array<std::vector<double>, kMethods> z, sig;
+      for (int m = 0; m < kMethods; ++m) {
+        z[m].assign(n, NAN);
+        sig[m].assign(n, NAN);
+      }
+      auto take = [&](int m, const std::vector<PointEstimate> &est) {
+        for (std::size_t i = 0; i < n && i < est.size(); ++i)
+          if (est[i].ok()) {
+            z[m][i] = est[i].c_P.z();
+            sig[m][i] = est[i].sigmaZ();
+          }
+      };
+      opt.method = Method::Paper;
+      take(kPaper, estimateTracks(camera, rig, scene.measured, scene.tracks, opt));
+      opt.method = Method::Exact;
+      take(kExact, estimateTracks(camera, rig, scene.measured, scene.tracks, opt));
+      opt.method = Method::Fused;
+      auto t0 = Clock::now();
+      const std::vector<PointEstimate> fused = estimateTracks(camera, rig, scene.measured, scene.tracks, opt);
+      fused_ms += msSince(t0);
+      for (const Track &tr : scene.tracks)
+        fused_obs += static_cast<long>(tr.observations.size());
+      take(kFused, fused);
+      if (refine_ok) {
+        try {
+          t0 = Clock::now();
+          const RefineResult rr = refineWindow(camera, rig, scene.measured, scene.tracks, fused, ropt);
+          refine_ms.push_back(msSince(t0));
+          take(kRefine, rr.points);
+        } catch (const std::exception &e) {
+          if (refine_errors++ == 0)
+            std::fprintf(stderr, "refine threw: %s\n", e.what());
+        }
+      }
+      z[kOpenCV] = triangulateOpenCV(camera, rig, scene.measured, row, scene.tracks);
+
+      for (std::size_t i = 0; i < n; ++i) {
+        ++cs.points;
+        if (scene.tracks[i].observations.size() < 2) {
+          ++cs.few_obs;
+          continue;
+        }
+        bool all_ok = true;
+        for (int m = 0; m < kMethods; ++m) {
+          if (m == kRefine && !refine_ok)
+            continue;
+          if (!std::isfinite(z[m][i])) {
+            ++cs.acc[m].not_ok;
+            all_ok = false;
+          }
+        }
+        if (!all_ok)
+          continue;
+        if (!(std::isfinite(crlb_joint[i]) && crlb_joint[i] > 0 && std::isfinite(crlb_pp[i]) && crlb_pp[i] > 0)) {
+          ++cs.no_bound;
+          continue;
+        }
+        ++cs.used;
+        cs.crlb_joint_sq += crlb_joint[i] * crlb_joint[i];
+        cs.crlb_pp_sq += crlb_pp[i] * crlb_pp[i];
+        for (int m = 0; m < kMethods; ++m)
+          if (std::isfinite(z[m][i]))
+            cs.acc[m].add(z[m][i] - z_true[i], crlb_joint[i], crlb_pp[i], sig[m][i]);
+      }
+
+      // ---- Same scene with 5 % gross outliers: fused and refine.
+      std::vector<Track> tracks = scene.tracks;
+      std::mt19937_64 rng(so.seed * 0x9E3779B97F4A7C15ULL + 12345);
+      const std::vector<std::vector<bool>> corrupted =
+          corrupt(tracks, outlier_fraction, camera.width(), camera.height(), rng);
+      for (const auto &c : corrupted)
+        os.corrupted += std::count(c.begin(), c.end(), true);
+      opt.method = Method::Fused;
+      std::vector<std::vector<bool>> fused_flags;
+      const std::vector<PointEstimate> fused_o = estimateTracks(camera, rig, scene.measured, tracks, opt, &fused_flags);
+      countFlags(fused_flags, corrupted, os.tp[0], os.fp[0]);
+      std::vector<PointEstimate> refine_o(n);
+      if (refine_ok) {
+        try {
+          const RefineResult rr = refineWindow(camera, rig, scene.measured, tracks, fused_o, ropt);
+          refine_o = rr.points;
+          countFlags(rr.outliers, corrupted, os.tp[1], os.fp[1]);
+        } catch (const std::exception &e) {
+          if (refine_errors++ == 0)
+            std::fprintf(stderr, "refine threw: %s\n", e.what());
+        }
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        ++os.points;
+        if (tracks[i].observations.size() < 2)
+          continue;
+        const bool f_ok = fused_o[i].ok(), r_ok = !refine_ok || refine_o[i].ok();
+        if (!f_ok)
+          ++os.acc[0].not_ok;
+        if (!r_ok)
+          ++os.acc[1].not_ok;
+        if (!f_ok || !r_ok)
+          continue;
+        if (!(std::isfinite(crlb_joint[i]) && crlb_joint[i] > 0 && std::isfinite(crlb_pp[i]) && crlb_pp[i] > 0))
+          continue;
+        ++os.used;
+        os.acc[0].add(fused_o[i].c_P.z() - z_true[i], crlb_joint[i], crlb_pp[i], fused_o[i].sigmaZ());
+        if (refine_ok)
+          os.acc[1].add(refine_o[i].c_P.z() - z_true[i], crlb_joint[i], crlb_pp[i], refine_o[i].sigmaZ());
+      }
+    }
+  }
+  const double total_s = msSince(t_start) / 1e3;
+
+  // ---- Tables.
+  std::printf("\n1. CLEAN SCENES: depth zc at the last observed frame\n");
+  std::printf("   not ok = points (>= 2 observations) the method did not report ok; each is excluded for all methods.\n"
+              "   gross = points with |e| > %.0f x their per-point CRLB (they dominate an RMSE; the median does not).\n",
+              kGross);
+  CleanStats pooled;
+  for (std::size_t si = 0; si < specs.size(); ++si) {
+    printCleanTable("Scene: " + specs[si].name(), clean[si], trials, refine_ok);
+    pooled.merge(clean[si]);
+  }
+  printCleanTable("Pooled over the six scenes (normalised squared errors pooled)", pooled, trials, refine_ok);
+
+  // Compact summary: RMSE/CRLB(joint) per scene and method.
+  {
+    std::printf("\nSummary: RMSE zc (mm) [RMSE/CRLB joint] per scene\n");
+    const int W = 16 + 21 * kMethods;
+    printRule(W);
+    std::printf("%-16s", "scene");
+    for (int m = 0; m < kMethods; ++m)
+      std::printf(" %20s", kMethodNames[m]);
+    std::printf("\n");
+    printRule(W);
+    auto row = [&](const std::string &name, const CleanStats &s) {
+      std::printf("%-16s", name.c_str());
+      for (int m = 0; m < kMethods; ++m) {
+        if (m == kRefine && !refine_ok) {
+          std::printf(" %20s", "unavailable");
+          continue;
+        }
+        const std::string cell =
+            fmt("%.2f", 1e3 * s.acc[m].rmse()) + " [" + fmt("%.2f", s.acc[m].ratioJoint()) + "]";
+        std::printf(" %20s", cell.c_str());
+      }
+      std::printf("\n");
+    };
+    for (std::size_t si = 0; si < specs.size(); ++si)
+      row(specs[si].shortName(), clean[si]);
+    printRule(W);
+    row("pooled", pooled);
+    printRule(W);
+  }
+
+  // ---- Outliers.
+  {
+    std::printf("\n2. OUTLIER SCENES: the same six scenes, %.0f %% of observations moved by 10 to 50 px in a random\n"
+                "   direction (inside the image). Bound: CRLB of the clean tracks (inlier CRLB).\n"
+                "   recall = corrupted observations flagged / corrupted; precision = flagged and corrupted / flagged.\n",
+                100 * outlier_fraction);
+    OutlierStats op;
+    for (const auto &o : dirty)
+      op.merge(o);
+    const int W = 112;
+    printRule(W);
+    std::printf("%-16s %-7s %7s %10s %9s %10s %10s %6s %9s %7s %9s\n", "scene", "method", "not ok", "RMSE zc", "median",
+                "RMSE/CRLB", "RMSE/CRLB", "gross", "2-sigma", "outlier", "outlier");
+    std::printf("%-16s %-7s %7s %10s %9s %10s %10s %6s %9s %7s %9s\n", "", "", "(pts)", "(mm)", "|e| (mm)", "joint",
+                "per-point", "(pts)", "coverage", "recall", "precision");
+    printRule(W);
+    auto rows = [&](const std::string &name, const OutlierStats &s) {
+      for (int m = 0; m < 2; ++m) {
+        const char *mname = m == 0 ? "fused" : "refine";
+        if (m == 1 && !refine_ok) {
+          std::printf("%-16s %-7s %s\n", "", mname, "refine: unavailable");
+          continue;
+        }
+        const Acc &a = s.acc[m];
+        const double recall = s.corrupted ? double(s.tp[m]) / s.corrupted : NAN;
+        const long flagged = s.tp[m] + s.fp[m];
+        const double precision = flagged ? double(s.tp[m]) / flagged : NAN;
+        std::printf("%-16s %-7s %7ld %10s %9s %10s %10s %6ld %9s %7s %9s\n", m == 0 ? name.c_str() : "", mname,
+                    a.not_ok, fmt("%.2f", 1e3 * a.rmse()).c_str(), fmt("%.2f", 1e3 * a.medianAbs()).c_str(),
+                    fmt("%.3f", a.ratioJoint()).c_str(), fmt("%.3f", a.ratioPP()).c_str(), a.gross,
+                    fmt("%.3f", a.coverage()).c_str(), fmt("%.3f", recall).c_str(), fmt("%.3f", precision).c_str());
+      }
+    };
+    for (std::size_t si = 0; si < specs.size(); ++si)
+      rows(specs[si].shortName(), dirty[si]);
+    printRule(W);
+    rows("pooled", op);
+    printRule(W);
+    std::printf("  pooled: %ld points, %ld used (fused and refine ok, >= 2 observations), %ld corrupted observations.\n",
+                op.points, op.used, op.corrupted);
+  }
+
+  // ---- Speed.
+  {
+    std::printf("\n3. SPEED (one thread, this machine)\n");
+    if (refine_ok && !refine_ms.empty()) {
+      std::vector<double> t = refine_ms;
+      std::sort(t.begin(), t.end());
+      const double median =
+          t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
+      std::printf("  refineWindow, 30 points x 10 frames, default RefineOptions (%zu runs): min %.2f ms, median %.2f ms\n",
+                  t.size(), t.front(), median);
+    } else {
+      std::printf("  refineWindow: refine: unavailable\n");
+    }
+    std::printf("  fused (estimateTracks, Method::Fused): %.2f us per feature update (%ld observations)\n",
+                fused_obs ? 1e3 * fused_ms / fused_obs : NAN, fused_obs);
+    if (refine_errors)
+      std::printf("  refineWindow threw %ld times (counted as not ok)\n", refine_errors);
+    std::printf("\nTotal run time: %.1f s (%ld trials x %zu scenes, clean and with outliers)\n", total_s, trials,
+                specs.size());
+  }
+  return 0;
+}

@@ -1,0 +1,599 @@
+/*!
+  \file detector.cpp
+  \brief Chessboard corners (OpenCV detection, own sub-pixel refinement, stable ids) and AprilTags
+  (ViSP's vpDetectorAprilTag), with failure reasons.
+*/
+#include <yawdepth/features/detector.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <visp3/core/vpImage.h>
+#include <visp3/core/vpImageConvert.h>
+#include <visp3/detection/vpDetectorAprilTag.h>
+#include <yawdepth/error.h>
+
+namespace yawdepth {
+
+// ---------------------------------------------------------------------------------------------
+// Sub-pixel refinement of X-junctions
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+/*!
+  The image of an X-junction (two straight edges through the corner q, diagonal quadrants of the
+  same colour) blurred by any point-symmetric PSF is even about q: I(q + d) = I(q - d). Perspective
+  keeps the edges straight, so this holds under any pose up to the neighbouring corners. The two
+  iterative methods below use Gaussian weights centred on the current estimate over the pixel grid
+  (no resampling, hence no interpolation bias): their fixed point satisfies a condition that is odd
+  about q and vanishes at the true corner.
+*/
+struct RefineContext {
+  cv::Mat f;      //!< image as float
+  cv::Mat gx, gy; //!< gradients (Sobel 3x3 / 8), only for Gradient
+};
+
+/*!
+  \brief Gaussian window sigma (px). Larger windows average the per-pixel errors (noise, the
+  renderer's or sensor's sampling) better; the window (2.5 sigma) must stay clear of the
+  neighbouring corners, where the X-junction's symmetry ends.
+*/
+double windowSigma(double spacing_px, int window) {
+  if (window > 0)
+    return std::max(0.8, window / 2.5);
+  return std::clamp(0.25 * spacing_px, 1.0, 10.0);
+}
+
+/*! \brief One corner by iterated gradient orthogonality; false when it fails. */
+bool refineGradient(const RefineContext &c, cv::Point2d &q, double sigma) {
+  const int R = static_cast<int>(std::ceil(2.5 * sigma));
+  const double inv2s2 = 1.0 / (2 * sigma * sigma);
+  cv::Point2d p = q;
+  for (int it = 0; it < 50; ++it) {
+    const int cx = static_cast<int>(std::lround(p.x)), cy = static_cast<int>(std::lround(p.y));
+    const int x0 = std::max(cx - R, 1), x1 = std::min(cx + R, c.f.cols - 2);
+    const int y0 = std::max(cy - R, 1), y1 = std::min(cy + R, c.f.rows - 2);
+    if (x0 > x1 || y0 > y1)
+      return false;
+    double a = 0, b = 0, d = 0, bx = 0, by = 0;
+    for (int y = y0; y <= y1; ++y) {
+      const float *gxr = c.gx.ptr<float>(y), *gyr = c.gy.ptr<float>(y);
+      const double dy = y - p.y;
+      for (int x = x0; x <= x1; ++x) {
+        const double dx = x - p.x;
+        const double w = std::exp(-(dx * dx + dy * dy) * inv2s2);
+        const double gxx = gxr[x] * gxr[x] * w, gxy = gxr[x] * gyr[x] * w, gyy = gyr[x] * gyr[x] * w;
+        a += gxx;
+        b += gxy;
+        d += gyy;
+        // relative to p for conditioning
+        bx += gxx * dx + gxy * dy;
+        by += gxy * dx + gyy * dy;
+      }
+    }
+    const double det = a * d - b * b;
+    if (!(det > 1e-12 * (a + d) * (a + d)))
+      return false;
+    const double sx = (d * bx - b * by) / det, sy = (a * by - b * bx) / det;
+    p.x += sx;
+    p.y += sy;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y))
+      return false;
+    if (sx * sx + sy * sy < 1e-10)
+      break;
+  }
+  q = p;
+  return true;
+}
+
+/*! \brief One corner by an iterated Gaussian-weighted quadratic (saddle) fit; false when it fails. */
+bool refineSaddle(const RefineContext &c, cv::Point2d &q, double sigma) {
+  const int R = static_cast<int>(std::ceil(2.5 * sigma));
+  const double inv2s2 = 1.0 / (2 * sigma * sigma);
+  cv::Point2d p = q;
+  for (int it = 0; it < 50; ++it) {
+    const int cx = static_cast<int>(std::lround(p.x)), cy = static_cast<int>(std::lround(p.y));
+    const int x0 = std::max(cx - R, 0), x1 = std::min(cx + R, c.f.cols - 1);
+    const int y0 = std::max(cy - R, 0), y1 = std::min(cy + R, c.f.rows - 1);
+    if (x0 > x1 || y0 > y1)
+      return false;
+    cv::Matx<double, 6, 6> N = cv::Matx<double, 6, 6>::zeros();
+    cv::Matx<double, 6, 1> rhs = cv::Matx<double, 6, 1>::zeros();
+    for (int y = y0; y <= y1; ++y) {
+      const float *fr = c.f.ptr<float>(y);
+      const double dy = y - p.y;
+      for (int x = x0; x <= x1; ++x) {
+        const double dx = x - p.x;
+        const double w = std::exp(-(dx * dx + dy * dy) * inv2s2);
+        const double phi[6] = {1, dx, dy, dx * dx, dx * dy, dy * dy};
+        for (int i = 0; i < 6; ++i) {
+          rhs(i) += w * phi[i] * fr[x];
+          for (int j = i; j < 6; ++j)
+            N(i, j) += w * phi[i] * phi[j];
+        }
+      }
+    }
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < i; ++j)
+        N(i, j) = N(j, i);
+    cv::Matx<double, 6, 1> a;
+    if (!cv::solve(N, rhs, a, cv::DECOMP_CHOLESKY))
+      return false;
+    const double h00 = 2 * a(3), h01 = a(4), h11 = 2 * a(5);
+    const double det = h00 * h11 - h01 * h01;
+    if (!(det < 0)) // not a saddle
+      return false;
+    const double sx = -(h11 * a(1) - h01 * a(2)) / det, sy = -(h00 * a(2) - h01 * a(1)) / det;
+    // Damp large steps: the quadratic model is only local.
+    const double step = std::hypot(sx, sy), lim = 0.5 * sigma;
+    const double k = step > lim ? lim / step : 1.0;
+    p.x += k * sx;
+    p.y += k * sy;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y))
+      return false;
+    if (step < 1e-5)
+      break;
+  }
+  q = p;
+  return true;
+}
+
+} // namespace
+
+void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corners, double spacing_px,
+                             CornerRefinement method, int window) {
+  if (method == CornerRefinement::None || corners.empty())
+    return;
+  if (gray.empty() || gray.type() != CV_8UC1)
+    throw Error("refineChessboardCorners: an 8-bit grayscale image is needed");
+  if (!(spacing_px > 0) || !std::isfinite(spacing_px))
+    throw Error("refineChessboardCorners: the corner spacing must be > 0");
+  const double max_move = 0.25 * spacing_px;
+  if (method == CornerRefinement::OpenCV) {
+    const int half = window > 0 ? window : std::clamp(static_cast<int>(std::lround(0.4 * spacing_px)), 2, 15);
+    std::vector<cv::Point2f> pts;
+    for (const auto &p : corners)
+      pts.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+    cv::cornerSubPix(gray, pts, cv::Size(half, half), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      if (std::hypot(pts[i].x - corners[i].x, pts[i].y - corners[i].y) <= max_move)
+        corners[i] = cv::Point2d(pts[i].x, pts[i].y);
+    return;
+  }
+  RefineContext c;
+  gray.convertTo(c.f, CV_32F);
+  const double sigma = windowSigma(spacing_px, window);
+  if (method == CornerRefinement::Gradient) {
+    // Sobel 3x3 (Scharr and plain central differences measured the same).
+    cv::Sobel(c.f, c.gx, CV_32F, 1, 0, 3, 1.0 / 8);
+    cv::Sobel(c.f, c.gy, CV_32F, 0, 1, 3, 1.0 / 8);
+  }
+  for (auto &p : corners) {
+    cv::Point2d q = p;
+    const bool ok = method == CornerRefinement::Gradient ? refineGradient(c, q, sigma) : refineSaddle(c, q, sigma);
+    if (ok && std::hypot(q.x - p.x, q.y - p.y) <= max_move)
+      p = q;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Detector
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+vpDetectorAprilTag::vpAprilTagFamily vispFamily(const std::string &family) {
+  const std::string f = normalizeAprilTagFamily(family);
+  if (f == "36h11")
+    return vpDetectorAprilTag::TAG_36h11;
+  if (f == "25h9")
+    return vpDetectorAprilTag::TAG_25h9;
+  if (f == "16h5")
+    return vpDetectorAprilTag::TAG_16h5;
+  if (f == "circle21h7")
+    return vpDetectorAprilTag::TAG_CIRCLE21h7;
+#if defined(VISP_HAVE_APRILTAG_BIG_FAMILY)
+  if (f == "circle49h12")
+    return vpDetectorAprilTag::TAG_CIRCLE49h12;
+  if (f == "custom48h12")
+    return vpDetectorAprilTag::TAG_CUSTOM48h12;
+  if (f == "standard41h12")
+    return vpDetectorAprilTag::TAG_STANDARD41h12;
+  if (f == "standard52h13")
+    return vpDetectorAprilTag::TAG_STANDARD52h13;
+#else
+  if (f == "circle49h12" || f == "custom48h12" || f == "standard41h12" || f == "standard52h13")
+    throw Error("apriltag: family '" + family +
+                "' needs ViSP built with the big AprilTag families (VISP_HAVE_APRILTAG_BIG_FAMILY); "
+                "this ViSP has 36h11, 25h9, 16h5 and circle21h7");
+#endif
+  throw Error("apriltag: family '" + family + "' is not supported by ViSP's detector");
+}
+
+/*! \brief Tag id from ViSP's message, e.g. "36h11 id: 7"; -1 when absent. */
+long tagIdFromMessage(const std::string &msg) {
+  const std::size_t k = msg.find("id:");
+  if (k == std::string::npos)
+    return -1;
+  std::istringstream s(msg.substr(k + 3));
+  long id = -1;
+  if (!(s >> id) || id < 0)
+    return -1;
+  return id;
+}
+
+/*! \brief A labelling of the detected grid: board (row, col) of detected (r, c). */
+struct GridMap {
+  bool transpose = false, flip_r = false, flip_c = false;
+};
+
+} // namespace
+
+struct PatternDetector::Impl {
+  PatternSpec pattern;
+  DetectorOptions options;
+  std::unique_ptr<vpDetectorAprilTag> apriltag;
+  std::map<long, cv::Point2d> previous; //!< last chessboard detection, id -> pixel
+  CameraModel camera;                   //!< for the AprilTag centre (diagonals on undistorted corners)
+  bool camera_ok = false;
+
+  FrameDetection detectChessboard(const cv::Mat &gray, long frame);
+  FrameDetection detectAprilTag(const cv::Mat &gray, long frame);
+};
+
+PatternDetector::PatternDetector(const PatternSpec &pattern, const DetectorOptions &options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->pattern = pattern;
+  impl_->options = options;
+  if (!(options.apriltag_decimate >= 1) || !std::isfinite(options.apriltag_decimate))
+    throw Error("detector: the AprilTag decimation must be >= 1");
+  if (options.threads < 1)
+    throw Error("detector: threads must be >= 1");
+  if (options.subpixel_window < 0)
+    throw Error("detector: the sub-pixel window must be >= 0");
+  if (pattern.kind == PatternSpec::Kind::Chessboard) {
+    if (pattern.cols < 3 || pattern.rows < 3 || !(pattern.square > 0))
+      throw Error("detector: invalid chessboard pattern " + pattern.toString());
+  } else {
+    impl_->apriltag = std::make_unique<vpDetectorAprilTag>(vispFamily(pattern.family));
+    impl_->apriltag->setAprilTagQuadDecimate(static_cast<float>(options.apriltag_decimate));
+    impl_->apriltag->setAprilTagNbThreads(options.threads);
+    impl_->apriltag->setAprilTagRefineEdges(true);
+  }
+}
+
+void PatternDetector::setCamera(const CameraModel &camera) {
+  impl_->camera = camera;
+  impl_->camera_ok = true;
+}
+
+PatternDetector::~PatternDetector() = default;
+PatternDetector::PatternDetector(PatternDetector &&) noexcept = default;
+PatternDetector &PatternDetector::operator=(PatternDetector &&) noexcept = default;
+
+FrameDetection PatternDetector::detect(const cv::Mat &image, long frame) {
+  FrameDetection out;
+  out.frame = frame;
+  try {
+    if (image.empty()) {
+      out.reason = "empty image";
+      return out;
+    }
+    if (image.depth() != CV_8U) {
+      out.reason = "unsupported image type (8-bit grayscale or colour expected)";
+      return out;
+    }
+    cv::Mat gray;
+    if (image.channels() == 1)
+      gray = image;
+    else if (image.channels() == 3)
+      cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+    else if (image.channels() == 4)
+      cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+    else {
+      out.reason = "unsupported number of channels (" + std::to_string(image.channels()) + ")";
+      return out;
+    }
+    if (gray.cols < 8 || gray.rows < 8) {
+      out.reason = "image too small (" + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) + ")";
+      return out;
+    }
+    if (impl_->pattern.kind == PatternSpec::Kind::Chessboard)
+      return impl_->detectChessboard(gray, frame);
+    return impl_->detectAprilTag(gray, frame);
+  } catch (const cv::Exception &e) {
+    out.found = false;
+    out.features.clear();
+    out.reason = std::string("OpenCV error: ") + e.err;
+  } catch (const std::exception &e) {
+    out.found = false;
+    out.features.clear();
+    out.reason = std::string("detection error: ") + e.what();
+  } catch (...) {
+    out.found = false;
+    out.features.clear();
+    out.reason = "detection error";
+  }
+  return out;
+}
+
+FrameDetection PatternDetector::Impl::detectChessboard(const cv::Mat &gray, long frame) {
+  FrameDetection out;
+  out.frame = frame;
+  const int cols = pattern.cols, rows = pattern.rows;
+  const std::string name = "chessboard " + std::to_string(cols) + "x" + std::to_string(rows);
+
+  // 1. Detection. `None` reports the sector-based detector's own accurate estimate; otherwise the
+  // classic detector (fast) and then the sector-based one (robust) only locate the corners.
+  std::vector<cv::Point2f> found;
+  const cv::Size size(cols, rows);
+  bool ok = false, classic = false;
+  if (options.subpixel && options.refinement != CornerRefinement::None) {
+    ok = cv::findChessboardCorners(gray, size, found, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+    classic = ok;
+    if (!ok)
+      ok = cv::findChessboardCornersSB(gray, size, found, cv::CALIB_CB_NORMALIZE_IMAGE);
+  } else {
+    ok = cv::findChessboardCornersSB(gray, size, found, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_ACCURACY);
+  }
+  if (!ok)
+    ok = cv::findChessboardCornersSB(gray, size, found,
+                                     cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
+  if (!ok || found.size() != static_cast<std::size_t>(cols * rows)) {
+    out.reason = name + " not found";
+    return out;
+  }
+  std::vector<cv::Point2d> det(found.begin(), found.end()); // detected grid, r * cols + c
+
+  // Corner spacing (px): smallest neighbour distance.
+  double spacing = std::numeric_limits<double>::infinity();
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      const cv::Point2d p = det[r * cols + c];
+      if (c + 1 < cols)
+        spacing = std::min(spacing, cv::norm(det[r * cols + c + 1] - p));
+      if (r + 1 < rows)
+        spacing = std::min(spacing, cv::norm(det[(r + 1) * cols + c] - p));
+    }
+  if (!(spacing > 2.0)) {
+    out.reason = name + ": corners closer than 2 px";
+    return out;
+  }
+
+  // 2. Sub-pixel refinement, each corner on its own.
+  if (options.subpixel) {
+    const CornerRefinement method = options.refinement;
+    // The iterative methods need a start within about a pixel: cornerSubPix first.
+    if (classic || method == CornerRefinement::Gradient || method == CornerRefinement::Saddle)
+      refineChessboardCorners(gray, det, spacing, CornerRefinement::OpenCV, options.subpixel_window);
+    if (method != CornerRefinement::OpenCV)
+      refineChessboardCorners(gray, det, spacing, method, options.subpixel_window);
+  }
+
+  // 3. Ids in the board's own grid. Candidates: the grid symmetries (4, or 8 for a square board)
+  // that keep the board's handedness (seen from the front, board X then Y turn clockwise in the
+  // image), then the square colours: board square (a, b) is black iff a + b is even.
+  auto detAt = [&](int r, int c) { return det[r * cols + c]; };
+  std::vector<GridMap> candidates;
+  for (int t = 0; t < (cols == rows ? 2 : 1); ++t)
+    for (int fr = 0; fr < 2; ++fr)
+      for (int fc = 0; fc < 2; ++fc)
+        candidates.push_back(GridMap{t == 1, fr == 1, fc == 1});
+  // detected (r, c) of board (R, C) under a map
+  auto detOf = [&](const GridMap &m, int R, int C, int &r, int &c) {
+    int a = R, b = C; // in the (possibly transposed) detected grid
+    if (m.transpose)
+      std::swap(a, b);
+    r = m.flip_r ? rows - 1 - a : a;
+    c = m.flip_c ? cols - 1 - b : b;
+  };
+  auto boardPixel = [&](const GridMap &m, int R, int C) {
+    int r = 0, c = 0;
+    detOf(m, R, C, r, c);
+    return detAt(r, c);
+  };
+  cv::Mat fgray;
+  gray.convertTo(fgray, CV_32F);
+  auto sample = [&](cv::Point2d p) {
+    const int x = std::clamp(static_cast<int>(std::lround(p.x)), 0, gray.cols - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(p.y)), 0, gray.rows - 1);
+    return static_cast<double>(fgray.at<float>(y, x));
+  };
+  std::vector<GridMap> ok_maps;
+  double contrast = 0;
+  for (const GridMap &m : candidates) {
+    // handedness
+    double cross = 0;
+    for (int R = 0; R + 1 < rows; ++R)
+      for (int C = 0; C + 1 < cols; ++C) {
+        const cv::Point2d p = boardPixel(m, R, C), ex = boardPixel(m, R, C + 1) - p, ey = boardPixel(m, R + 1, C) - p;
+        cross += ex.x * ey.y - ex.y * ey.x;
+      }
+    if (!(cross > 0))
+      continue;
+    // colours of the inner squares
+    double even = 0, odd = 0;
+    int ne = 0, no = 0;
+    for (int R = 0; R + 1 < rows; ++R)
+      for (int C = 0; C + 1 < cols; ++C) {
+        const cv::Point2d p00 = boardPixel(m, R, C), p01 = boardPixel(m, R, C + 1), p10 = boardPixel(m, R + 1, C),
+                          p11 = boardPixel(m, R + 1, C + 1);
+        const cv::Point2d ctr = 0.25 * (p00 + p01 + p10 + p11);
+        double v = sample(ctr);
+        for (const cv::Point2d &q : {p00, p01, p10, p11})
+          v += sample(ctr + 0.4 * (q - ctr));
+        v /= 5;
+        if ((R + C) % 2 == 0) {
+          even += v;
+          ++ne;
+        } else {
+          odd += v;
+          ++no;
+        }
+      }
+    even /= std::max(ne, 1);
+    odd /= std::max(no, 1);
+    contrast = std::max(contrast, std::abs(odd - even));
+    if (even < odd)
+      ok_maps.push_back(m);
+  }
+  if (ok_maps.empty()) {
+    out.reason = name + ": cannot tell the board's orientation (square colours)";
+    return out;
+  }
+  if (contrast < 5) {
+    out.reason = name + ": too little contrast between black and white squares";
+    return out;
+  }
+  std::size_t best = 0;
+  if (ok_maps.size() > 1) {
+    // Symmetric board: consistent with the previous frame (nearest assignment), else id 0
+    // nearest the image's top-left.
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < ok_maps.size(); ++i) {
+      double cost = 0;
+      int common = 0;
+      if (!previous.empty()) {
+        for (int R = 0; R < rows; ++R)
+          for (int C = 0; C < cols; ++C) {
+            auto it = previous.find(static_cast<long>(R) * cols + C);
+            if (it == previous.end())
+              continue;
+            const cv::Point2d d = boardPixel(ok_maps[i], R, C) - it->second;
+            cost += d.dot(d);
+            ++common;
+          }
+      }
+      if (common == 0) {
+        const cv::Point2d p0 = boardPixel(ok_maps[i], 0, 0);
+        cost = p0.dot(p0);
+      }
+      if (cost < best_cost) {
+        best_cost = cost;
+        best = i;
+      }
+    }
+  }
+  const GridMap &m = ok_maps[best];
+  std::map<long, cv::Point2d> current;
+  for (int R = 0; R < rows; ++R)
+    for (int C = 0; C < cols; ++C) {
+      const cv::Point2d p = boardPixel(m, R, C);
+      const long id = static_cast<long>(R) * cols + C;
+      out.features.push_back(DetectedFeature{id, p.x, p.y});
+      current[id] = p;
+    }
+  previous = std::move(current);
+  out.found = true;
+  return out;
+}
+
+FrameDetection PatternDetector::Impl::detectAprilTag(const cv::Mat &gray, long frame) {
+  FrameDetection out;
+  out.frame = frame;
+  vpImage<unsigned char> I;
+  cv::Mat cont = gray.isContinuous() ? gray : gray.clone();
+  vpImageConvert::convert(cont, I);
+  if (!apriltag->detect(I)) {
+    out.reason = "no AprilTag of family " + pattern.family + " found";
+    return out;
+  }
+  std::map<long, int> count;
+  std::vector<long> ids(apriltag->getNbObjects(), -1);
+  for (std::size_t i = 0; i < apriltag->getNbObjects(); ++i) {
+    ids[i] = tagIdFromMessage(apriltag->getMessage(i));
+    if (ids[i] >= 0)
+      ++count[ids[i]];
+  }
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (ids[i] < 0 || count[ids[i]] != 1 || ids[i] > std::numeric_limits<int>::max() / 5 - 1)
+      continue; // unreadable or ambiguous (the same tag twice)
+    const std::vector<vpImagePoint> &poly = apriltag->getPolygon(i);
+    if (poly.size() != 4)
+      continue;
+    const int tag = static_cast<int>(ids[i]);
+    // libapriltag (hence ViSP's polygon) puts pixel centres at half-integers (a pixel's top-left
+    // corner is its origin); yawdepth, OpenCV and the camera model put them at integers.
+    Eigen::Vector2d c[4];
+    for (int k = 0; k < 4; ++k)
+      c[k] = Eigen::Vector2d(poly[k].get_u() - 0.5, poly[k].get_v() - 0.5);
+    // Centre: the image of the tag's centre, the intersection of the diagonals (exact for a planar
+    // square under perspective; done on undistorted points, then distorted back). ViSP's getCog()
+    // is the mean of the corners, which perspective biases.
+    Eigen::Vector2d centre = 0.25 * (c[0] + c[1] + c[2] + c[3]);
+    Eigen::Vector2d m[4];
+    bool und = true;
+    for (int k = 0; k < 4 && und; ++k)
+      und = camera_ok && camera.undistort(c[k], m[k]);
+    const auto diagonals = [](const Eigen::Vector2d *p, Eigen::Vector2d &x) {
+      const Eigen::Vector2d d1 = p[2] - p[0], d2 = p[3] - p[1], r = p[1] - p[0];
+      const double den = d1.x() * d2.y() - d1.y() * d2.x();
+      if (!(std::abs(den) > 1e-12 * d1.squaredNorm() * d2.squaredNorm()))
+        return false;
+      const double t = (r.x() * d2.y() - r.y() * d2.x()) / den;
+      x = p[0] + t * d1;
+      return x.allFinite();
+    };
+    Eigen::Vector2d x;
+    if (und && diagonals(m, x))
+      centre = camera.project(x);
+    else if (diagonals(c, x))
+      centre = x;
+    out.features.push_back(DetectedFeature{aprilTagFeatureId(tag), centre.x(), centre.y()});
+    for (int k = 0; k < 4; ++k)
+      out.features.push_back(DetectedFeature{aprilTagFeatureId(tag, k), c[k].x(), c[k].y()});
+  }
+  if (out.features.empty()) {
+    out.reason = "AprilTags of family " + pattern.family + " found but none usable (duplicate or unreadable ids)";
+    return out;
+  }
+  std::sort(out.features.begin(), out.features.end(),
+            [](const DetectedFeature &a, const DetectedFeature &b) { return a.id < b.id; });
+  out.found = true;
+  return out;
+}
+
+std::vector<Track> PatternDetector::toTracks(const std::vector<FrameDetection> &frames) {
+  std::map<long, Track> by_id;
+  for (const FrameDetection &f : frames) {
+    if (!f.found)
+      continue;
+    for (const DetectedFeature &d : f.features) {
+      Track &t = by_id[d.id];
+      t.id = d.id;
+      t.observations.push_back(Observation{f.frame, d.u, d.v});
+    }
+  }
+  std::vector<Track> out;
+  out.reserve(by_id.size());
+  for (auto &kv : by_id) {
+    std::stable_sort(kv.second.observations.begin(), kv.second.observations.end(),
+                     [](const Observation &a, const Observation &b) { return a.frame < b.frame; });
+    out.push_back(std::move(kv.second));
+  }
+  return out;
+}
+
+cv::Mat readGrayImage(const std::string &path) {
+  cv::Mat img;
+  try {
+    img = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception &e) {
+    throw Error(path + ": cannot read image (" + e.err + ")");
+  }
+  if (img.empty())
+    throw Error(path + ": cannot read image (missing, unreadable, truncated or not an image)");
+  if (img.depth() != CV_8U) {
+    cv::Mat eight;
+    img.convertTo(eight, CV_8U, img.depth() == CV_16U ? 1.0 / 256 : 1.0);
+    img = eight;
+  }
+  return img;
+}
+
+} // namespace yawdepth

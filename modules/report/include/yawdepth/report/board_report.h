@@ -1,0 +1,66 @@
+#pragma once
+/*!
+  \file board_report.h
+  \brief The paper's Fig. 3 metrics of a measured board: block lengths, plane fit and each point's
+  distance to it, as a table and as a PNG figure.
+*/
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+#include <yawdepth/estimation/types.h>
+#include <yawdepth/features/pattern.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth {
+
+/*! \brief A measured point of the board in one common frame (the world of the motion log). */
+struct BoardPoint {
+  long id = 0;
+  Eigen::Vector3d w_P = Eigen::Vector3d::Zero(); //!< in the world frame (m)
+  Eigen::Vector3d c_P = Eigen::Vector3d::Zero(); //!< in the camera frame of its frame (m)
+  long frame = 0;
+};
+
+/*! \brief A distance between two neighbouring features (m). */
+struct BlockLength {
+  long id_a = 0, id_b = 0;
+  double length = 0;
+};
+
+/*! \brief Metrics of a measured board (lengths in metres). */
+struct BoardMetrics {
+  std::vector<BoardPoint> points;        //!< the valid points used
+  std::vector<BlockLength> horizontal;   //!< along the board's rows (chessboard) / tag bottom and top edges
+  std::vector<BlockLength> vertical;     //!< along the columns / tag left and right edges
+  double nominal = 0;                    //!< the true block length (square or tag size)
+  Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ(); //!< fitted plane (least squares, SVD)
+  Eigen::Vector3d plane_point = Eigen::Vector3d::Zero();
+  std::vector<double> plane_distance;    //!< signed distance of each point to the plane, same order as points
+  double max_plane_distance = 0;         //!< largest |distance|
+  double min_depth = 0, max_depth = 0;   //!< camera-frame depth range of the points
+  /*! \brief min, max, mean of a set of block lengths. */
+  static Eigen::Vector3d stats(const std::vector<BlockLength> &v);
+};
+
+/*!
+  \brief Compute the metrics from estimated points.
+  \param pattern The board's pattern (neighbour structure and nominal length).
+  \param rows Estimated points (only `ok` ones are used), each at its own frame.
+  \param motion The motion log used, to bring every point into its world frame.
+  \throws yawdepth::Error when fewer than 3 valid points remain.
+*/
+BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const std::vector<MotionSample> &motion,
+                          const std::vector<std::pair<long, PointEstimate>> &rows);
+
+/*! \brief The metrics as a plain-text table (what `measure --report` prints and writes). */
+std::string formatBoardMetrics(const BoardMetrics &m);
+
+/*!
+  \brief Write `report.txt`, `blocks.csv`, `plane.csv` and `figure.png` into `dir` (created).
+  The figure has three panels: the points in the fitted plane with each block length, the
+  distance of each point to the plane, and the points seen from above (X against depth).
+  \param title One line for the figure's title.
+*/
+void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::string &title);
+
+} // namespace yawdepth

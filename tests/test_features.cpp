@@ -1,0 +1,527 @@
+// `features` and `render`: pattern text form, board geometry, the renderer, chessboard ids and
+// corner accuracy against the renderer's exact truth, AprilTag ids and corner order, image reading
+// and detection failure reasons.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <unistd.h>
+#include <yawdepth/error.h>
+#include <yawdepth/features/detector.h>
+#include <yawdepth/features/pattern.h>
+#include <yawdepth/render/renderer.h>
+
+using namespace yawdepth;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+CameraModel paperCamera() {
+  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
+}
+/*! A wide camera with strong barrel distortion: small squares in pixels, curved edges. */
+CameraModel wideCamera() {
+  return CameraModel::brown(600.0, 602.0, 322.5, 238.0, {-0.28, 0.09, 0.0005, -0.0003, -0.012}, 640, 480);
+}
+YawRig paperRig() { return YawRig(Eigen::Vector3d(-0.1503, 0.0, 0.0)); }
+
+Eigen::Isometry3d toIso(const vpHomogeneousMatrix &M) {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  fromVisp(M, R, t);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() = t;
+  return T;
+}
+
+/*! True (distorted) pixel of every board feature, by id; false when one is behind the camera. */
+bool truthPixels(const CameraModel &cam, const YawRig &rig, const MotionSample &s, const BoardLayout &board,
+                 const Eigen::Isometry3d &wMb, std::map<long, Eigen::Vector2d> &out) {
+  const Eigen::Isometry3d cMb = toIso(wMc(rig, s)).inverse() * wMb;
+  out.clear();
+  for (const auto &f : board.features()) {
+    const Eigen::Vector3d c = cMb * f.second;
+    if (!(c.z() > 0))
+      return false;
+    out[f.first] = cam.project(Eigen::Vector2d(c.x() / c.z(), c.y() / c.z()));
+  }
+  return true;
+}
+
+/*!
+  A random pose of the board in front of the camera: board centre at depth `depth` near the optical
+  axis, tilted by up to `max_tilt` about two axes, rotated in plane by `roll`. Returns wMb.
+*/
+Eigen::Isometry3d boardPose(const YawRig &rig, const MotionSample &s, const BoardLayout &board, double depth,
+                            double tilt_x, double tilt_y, double roll, double off_x, double off_y) {
+  const Eigen::Vector4d e = board.extent();
+  const Eigen::Vector3d centre(0.5 * (e[0] + e[2]), 0.5 * (e[1] + e[3]), 0.0);
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(tilt_x, Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(tilt_y, Eigen::Vector3d::UnitY()))
+                                .toRotationMatrix();
+  Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity();
+  cMb.linear() = R;
+  cMb.translation() = Eigen::Vector3d(off_x, off_y, depth) - R * centre;
+  return toIso(wMc(rig, s)) * cMb;
+}
+
+bool allInside(const std::map<long, Eigen::Vector2d> &px, const CameraModel &cam, double margin) {
+  for (const auto &kv : px)
+    if (kv.second.x() < margin || kv.second.y() < margin || kv.second.x() > cam.width() - 1 - margin ||
+        kv.second.y() > cam.height() - 1 - margin)
+      return false;
+  return true;
+}
+
+struct ErrorStats {
+  double sx = 0, sy = 0, sxx = 0, syy = 0, max = 0;
+  long n = 0;
+  void add(const Eigen::Vector2d &e) {
+    sx += e.x();
+    sy += e.y();
+    sxx += e.x() * e.x();
+    syy += e.y() * e.y();
+    max = std::max(max, e.norm());
+    ++n;
+  }
+  double rms() const { return n ? std::sqrt((sxx + syy) / n) : NAN; } // of the 2D error
+  double biasX() const { return n ? sx / n : NAN; }
+  double biasY() const { return n ? sy / n : NAN; }
+};
+
+struct AccuracyScene {
+  CameraModel cam;
+  BoardLayout board;
+  MotionSample sample;
+  Eigen::Isometry3d wMb;
+  std::map<long, Eigen::Vector2d> truth;
+};
+
+/*! Seeded random scenes with every corner well inside the image. */
+std::vector<AccuracyScene> accuracyScenes(int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<AccuracyScene> out;
+  const YawRig rig = paperRig();
+  int attempts = 0;
+  while (static_cast<int>(out.size()) < count && attempts < 100 * count) {
+    ++attempts;
+    AccuracyScene sc;
+    const bool wide = U(rng) < 0.5;
+    sc.cam = wide ? wideCamera() : paperCamera();
+    const int pick = static_cast<int>(U(rng) * 3);
+    sc.board.pattern = PatternSpec::parse(pick == 0 ? "chessboard:5x4:0.02" : pick == 1 ? "chessboard:7x6:0.02"
+                                                                                         : "chessboard:6x6:0.02");
+    sc.sample.yaw = (U(rng) - 0.5) * 90 * kDeg;
+    sc.sample.x = (U(rng) - 0.5) * 0.1;
+    sc.sample.z = (U(rng) - 0.5) * 0.1;
+    sc.sample.heading = (U(rng) - 0.5) * 20 * kDeg;
+    const double depth = wide ? 0.25 + 0.35 * U(rng) : 0.55 + 0.4 * U(rng);
+    sc.wMb = boardPose(rig, sc.sample, sc.board, depth, (U(rng) - 0.5) * 80 * kDeg, (U(rng) - 0.5) * 80 * kDeg,
+                       U(rng) * 2 * M_PI, (U(rng) - 0.5) * 0.2 * depth, (U(rng) - 0.5) * 0.15 * depth);
+    if (!truthPixels(sc.cam, rig, sc.sample, sc.board, sc.wMb, sc.truth) || !allInside(sc.truth, sc.cam, 25))
+      continue;
+    out.push_back(sc);
+  }
+  return out;
+}
+
+} // namespace
+
+// ------------------------------------------------------------------------------------------------
+// Method comparison (hidden; run with: test_features "[.bench]"): per-corner error of each
+// refinement against the renderer's truth over seeded random poses (the 6x6 boards, symmetric
+// and seen without history, get the top-left labelling and count as "wrong ids").
+TEST_CASE("corner refinement comparison", "[.bench]") {
+  const YawRig rig = paperRig();
+  const std::vector<AccuracyScene> scenes = accuracyScenes(24, 7);
+  struct Cond {
+    const char *name;
+    double blur, noise;
+  };
+  for (const Cond cond : {Cond{"blur 0.7 noise 2", 0.7, 2.0}, Cond{"blur 0 noise 0", 0.0, 0.0},
+                          Cond{"blur 1.2 noise 4", 1.2, 4.0}}) {
+    std::map<std::string, ErrorStats> stats;
+    std::map<std::string, int> id_errors;
+    std::map<std::string, double> det_ms;
+    double render_ms = 0;
+    int failures = 0;
+    for (std::size_t i = 0; i < scenes.size(); ++i) {
+      const AccuracyScene &sc = scenes[i];
+      RenderOptions ro;
+      ro.blur_sigma_px = cond.blur;
+      ro.noise_sigma = cond.noise;
+      ro.seed = 100 + i;
+      const auto t0 = std::chrono::steady_clock::now();
+      const cv::Mat img = renderBoard(sc.cam, rig, sc.sample, sc.board, sc.wMb, ro);
+      render_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      for (int mi = 0; mi < 5; ++mi) {
+        const CornerRefinement m = mi == 0 ? CornerRefinement::None : mi <= 2 ? CornerRefinement::OpenCV
+                                   : mi == 3                      ? CornerRefinement::Saddle
+                                                                  : CornerRefinement::Gradient;
+        DetectorOptions o;
+        o.refinement = m;
+        if (mi == 2)
+          o.subpixel_window = 5; // the common 11x11 window
+        PatternDetector det(sc.board.pattern, o);
+        const auto t1 = std::chrono::steady_clock::now();
+        const FrameDetection d = det.detect(img, 0);
+        const char *name = m == CornerRefinement::None ? "SB+ACCURACY" : mi == 2 ? "cornerSubPix11" : m == CornerRefinement::OpenCV ? "cornerSubPix"
+                           : m == CornerRefinement::Saddle                                       ? "saddle"
+                                                                                                 : "gradient";
+        det_ms[name] += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
+        if (!d.found) {
+          ++failures;
+          continue;
+        }
+        for (const auto &f : d.features) {
+          const Eigen::Vector2d e = Eigen::Vector2d(f.u, f.v) - sc.truth.at(f.id);
+          if (e.norm() > 3)
+            ++id_errors[name];
+          else
+            stats[name].add(e);
+        }
+      }
+    }
+    std::printf("%s: %zu scenes, render %.1f ms/frame, %d failed detections\n", cond.name, scenes.size(),
+                render_ms / scenes.size(), failures);
+    for (const auto &kv : stats)
+      std::printf("  %-14s n=%5ld rms %.4f px  bias (%+.4f, %+.4f)  max %.4f  (%d wrong ids, %.1f ms/detect)\n",
+                  kv.first.c_str(), kv.second.n, kv.second.rms(), kv.second.biasX(), kv.second.biasY(), kv.second.max,
+                  id_errors[kv.first], det_ms[kv.first] / scenes.size());
+  }
+}
+
+
+// ------------------------------------------------------------------------------------------------
+TEST_CASE("pattern text form", "[features]") {
+  const PatternSpec c = PatternSpec::parse("chessboard:5x4:0.02");
+  CHECK(c.kind == PatternSpec::Kind::Chessboard);
+  CHECK(c.cols == 5);
+  CHECK(c.rows == 4);
+  CHECK(c.square == 0.02);
+  CHECK(c.chessboardCorners() == 20);
+  CHECK(c.toString() == "chessboard:5x4:0.02");
+  CHECK(PatternSpec::parse(c.toString()).square == c.square);
+  const PatternSpec odd = PatternSpec::parse("chessboard:9X6:0.0254");
+  CHECK(PatternSpec::parse(odd.toString()).square == 0.0254);
+
+  const PatternSpec a = PatternSpec::parse("apriltag:36h11:0.05");
+  CHECK(a.kind == PatternSpec::Kind::AprilTag);
+  CHECK(a.family == "36h11");
+  CHECK(a.tag_size == 0.05);
+  CHECK(a.chessboardCorners() == 0);
+  CHECK(a.toString() == "apriltag:36h11:0.05");
+  CHECK(PatternSpec::parse("apriltag:tag25h9:0.1").family == "25h9");
+  CHECK(PatternSpec::parse("apriltag:Circle21h7:0.1").family == "circle21h7");
+
+  for (const char *bad : {"", "chessboard", "chessboard:5x4", "chessboard:5x4:0.02:1", "chessboard:5:0.02",
+                          "chessboard:5x:0.02", "chessboard:x4:0.02", "chessboard:-5x4:0.02", "chessboard:2x4:0.02",
+                          "chessboard:5x4:0", "chessboard:5x4:-0.02", "chessboard:5x4:abc", "chessboard:5x4:nan",
+                          "chessboard:5x4:0.02mm", "chessboard:5.5x4:0.02", "apriltag:36h11", "apriltag:99h99:0.05",
+                          "apriltag:36h11:0", "apriltag:36h11:inf", "circles:5x4:0.02"})
+    CHECK_THROWS_AS(PatternSpec::parse(bad), yawdepth::Error);
+}
+
+TEST_CASE("board layout: ids, reflectance, extent", "[features]") {
+  BoardLayout b;
+  b.pattern = PatternSpec::parse("chessboard:5x4:0.02");
+  const auto f = b.features();
+  REQUIRE(f.size() == 20);
+  CHECK(f[7].first == 7);
+  CHECK(f[7].second.isApprox(Eigen::Vector3d(2 * 0.02, 1 * 0.02, 0)));
+  CHECK(b.reflectance(-0.01, -0.01) == 0); // the outer square beyond corner 0: black
+  CHECK(b.reflectance(0.01, -0.01) == 1);
+  CHECK(b.reflectance(0.01, 0.01) == 0);
+  CHECK(b.reflectance(0.09, 0.07) == 1);   // square (4, 3) beyond the last corner: white (5 + 4 odd)
+  CHECK(b.reflectance(-0.03, 0.0) == 1);   // margin
+  CHECK(b.reflectance(-0.05, 0.0) == -1);  // outside
+  CHECK(b.extent().isApprox(Eigen::Vector4d(-0.04, -0.04, 0.12, 0.10)));
+
+  BoardLayout t;
+  t.pattern = PatternSpec::parse("apriltag:36h11:0.08");
+  t.tags_x = 2;
+  t.tags_y = 1;
+  t.gap = 0.02;
+  t.first_tag_id = 4;
+  const auto tf = t.features();
+  REQUIRE(tf.size() == 10);
+  CHECK(tf[0].first == aprilTagFeatureId(4));
+  CHECK(tf[0].second.isApprox(Eigen::Vector3d(0.04, 0.04, 0)));
+  CHECK(tf[1].first == aprilTagFeatureId(4, 0));
+  CHECK(tf[1].second.isApprox(Eigen::Vector3d(0, 0.08, 0))); // bottom-left
+  CHECK(tf[9].first == aprilTagFeatureId(5, 3));
+  CHECK(tf[9].second.isApprox(Eigen::Vector3d(0.10, 0, 0))); // top-left of tag 5
+  CHECK(t.reflectance(0.005, 0.005) == 0);   // black border
+  CHECK(t.reflectance(-0.005, 0.04) == 1);   // white ring of the bitmap / margin
+  CHECK(t.extent().isApprox(Eigen::Vector4d(-0.02, -0.02, 0.20, 0.10)));
+  const AprilTagFamilyInfo info = aprilTagFamilyInfo("36h11");
+  CHECK(info.ncodes == 587);
+  CHECK(info.total_width == 10);
+  CHECK(info.width_at_border == 8);
+  t.first_tag_id = 586;
+  CHECK_THROWS_AS(t.features(), yawdepth::Error);
+}
+
+TEST_CASE("renderer: exact coverage, background, determinism and speed", "[render]") {
+  const CameraModel cam = CameraModel::brown(800, 800, 320, 240, {}, 640, 480);
+  const YawRig rig;
+  MotionSample s;
+  BoardLayout b;
+  b.pattern = PatternSpec::parse("chessboard:5x4:0.02");
+  // Fronto-parallel at 0.8 m: 20 px squares; corner 0 at pixel (300.25, 220.5).
+  Eigen::Isometry3d wMb = Eigen::Isometry3d::Identity();
+  wMb.translation() = Eigen::Vector3d(-19.75 * 0.001, -19.5 * 0.001, 0.8);
+  RenderOptions ro;
+  const cv::Mat img = renderBoard(cam, rig, s, b, wMb, ro);
+  REQUIRE(img.type() == CV_8UC1);
+  REQUIRE(img.cols == 640);
+  REQUIRE(img.rows == 480);
+  CHECK(img.at<unsigned char>(210, 290) == 25);  // inside the black outer square
+  CHECK(img.at<unsigned char>(210, 310) == 230); // white
+  CHECK(img.at<unsigned char>(5, 5) == 110);     // background
+  // Pixel 300 spans u in [299.5, 300.5]: 3/4 left of the edge at 300.25 (black above row 220.5).
+  CHECK(img.at<unsigned char>(210, 300) == static_cast<int>(std::lround(0.75 * 25 + 0.25 * 230)));
+  // Board behind the camera: all background.
+  Eigen::Isometry3d behind = wMb;
+  behind.translation().z() = -0.8;
+  const cv::Mat bg = renderBoard(cam, rig, s, b, behind, ro);
+  CHECK(cv::countNonZero(bg != 110) == 0);
+  // Same seed, same image; blur and noise change it.
+  ro.blur_sigma_px = 0.7;
+  ro.noise_sigma = 2;
+  const cv::Mat n1 = renderBoard(cam, rig, s, b, wMb, ro), n2 = renderBoard(cam, rig, s, b, wMb, ro);
+  CHECK(cv::countNonZero(n1 != n2) == 0);
+  ro.seed = 2;
+  CHECK(cv::countNonZero(renderBoard(cam, rig, s, b, wMb, ro) != n1) > 0);
+  // Speed: 640x480, distortion, blur and noise.
+  const CameraModel paper = paperCamera();
+  const auto t0 = std::chrono::steady_clock::now();
+  const int frames = 5;
+  for (int i = 0; i < frames; ++i) {
+    MotionSample si;
+    si.z = 0.008 * i;
+    renderBoard(paper, paperRig(), si, b, wMb, ro);
+  }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / frames;
+  std::printf("render: %.1f ms per 640x480 frame\n", ms);
+  CHECK(ms < 500);
+  RenderOptions badopt;
+  badopt.supersampling = 0;
+  CHECK_THROWS_AS(renderBoard(cam, rig, s, b, wMb, badopt), yawdepth::Error);
+  CHECK_THROWS_AS(renderBoard(CameraModel::brown(800, 800, 320, 240, {}), rig, s, b, wMb), yawdepth::Error);
+}
+
+namespace {
+
+/*! Detect and compare every id with the truth; returns the largest error (px). */
+double maxIdError(PatternDetector &det, const cv::Mat &img, const std::map<long, Eigen::Vector2d> &truth,
+                  std::size_t expected) {
+  const FrameDetection d = det.detect(img, 0);
+  INFO(d.reason);
+  REQUIRE(d.found);
+  REQUIRE(d.features.size() == expected);
+  double worst = 0;
+  for (const auto &f : d.features)
+    worst = std::max(worst, (Eigen::Vector2d(f.u, f.v) - truth.at(f.id)).norm());
+  return worst;
+}
+
+} // namespace
+
+TEST_CASE("chessboard ids follow the board's own grid under rotation", "[features]") {
+  const CameraModel cam = paperCamera();
+  const YawRig rig = paperRig();
+  MotionSample s;
+  RenderOptions ro;
+  ro.blur_sigma_px = 0.7;
+  ro.noise_sigma = 2;
+  SECTION("odd boards: the square colours fix the orientation in every frame") {
+    for (const char *pat : {"chessboard:5x4:0.02", "chessboard:7x4:0.015"}) {
+      BoardLayout b;
+      b.pattern = PatternSpec::parse(pat);
+      for (double roll : {0.0, 0.4, M_PI, M_PI + 0.3, -M_PI / 2}) {
+        PatternDetector det(b.pattern); // fresh: no history
+        const Eigen::Isometry3d wMb = boardPose(rig, s, b, 0.6, 0.2, -0.25, roll, 0.0, 0.0);
+        std::map<long, Eigen::Vector2d> truth;
+        REQUIRE(truthPixels(cam, rig, s, b, wMb, truth));
+        CHECK(maxIdError(det, renderBoard(cam, rig, s, b, wMb, ro), truth, truth.size()) < 0.2);
+      }
+    }
+  }
+  SECTION("symmetric boards: consistent with the previous frame while the board turns by 180 degrees") {
+    for (const char *pat : {"chessboard:6x4:0.02", "chessboard:5x5:0.02", "chessboard:4x4:0.02"}) {
+      BoardLayout b;
+      b.pattern = PatternSpec::parse(pat);
+      PatternDetector det(b.pattern);
+      for (int k = 0; k <= 6; ++k) { // 0 .. 180 degrees in 30 degree steps
+        const double roll = 0.05 + k * M_PI / 6;
+        const Eigen::Isometry3d wMb = boardPose(rig, s, b, 0.6, 0.15, 0.1, roll, 0.0, 0.0);
+        std::map<long, Eigen::Vector2d> truth;
+        REQUIRE(truthPixels(cam, rig, s, b, wMb, truth));
+        INFO(pat << " roll " << roll);
+        CHECK(maxIdError(det, renderBoard(cam, rig, s, b, wMb, ro), truth, truth.size()) < 0.2);
+      }
+    }
+  }
+}
+
+TEST_CASE("chessboard corner accuracy on rendered images", "[features]") {
+  // Seeded random poses (tilt up to 40 degrees, any roll, two cameras incl. strong distortion),
+  // blur 0.7 px, noise 2 gray levels; boards whose orientation the colours fix.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const YawRig rig = paperRig();
+  ErrorStats stats;
+  int scenes = 0, attempts = 0;
+  while (scenes < 16 && attempts < 400) {
+    ++attempts;
+    AccuracyScene sc;
+    const bool wide = scenes % 2 == 1;
+    sc.cam = wide ? wideCamera() : paperCamera();
+    sc.board.pattern = PatternSpec::parse(scenes % 4 < 2 ? "chessboard:5x4:0.02" : "chessboard:7x6:0.015");
+    sc.sample.yaw = (U(rng) - 0.5) * 90 * kDeg;
+    const double depth = wide ? 0.25 + 0.3 * U(rng) : 0.5 + 0.4 * U(rng);
+    sc.wMb = boardPose(rig, sc.sample, sc.board, depth, (U(rng) - 0.5) * 80 * kDeg, (U(rng) - 0.5) * 80 * kDeg,
+                       U(rng) * 2 * M_PI, (U(rng) - 0.5) * 0.2 * depth, (U(rng) - 0.5) * 0.15 * depth);
+    if (!truthPixels(sc.cam, rig, sc.sample, sc.board, sc.wMb, sc.truth) || !allInside(sc.truth, sc.cam, 25))
+      continue;
+    RenderOptions ro;
+    ro.blur_sigma_px = 0.7;
+    ro.noise_sigma = 2;
+    ro.seed = 500 + scenes;
+    const cv::Mat img = renderBoard(sc.cam, rig, sc.sample, sc.board, sc.wMb, ro);
+    PatternDetector det(sc.board.pattern);
+    const FrameDetection d = det.detect(img, scenes);
+    INFO("scene " << scenes << ": " << d.reason);
+    REQUIRE(d.found);
+    REQUIRE(d.features.size() == sc.truth.size());
+    for (const auto &f : d.features)
+      stats.add(Eigen::Vector2d(f.u, f.v) - sc.truth.at(f.id));
+    ++scenes;
+  }
+  REQUIRE(scenes == 16);
+  std::printf("corner accuracy: %ld corners, rms %.4f px, bias (%+.4f, %+.4f) px, max %.4f px\n", stats.n,
+              stats.rms(), stats.biasX(), stats.biasY(), stats.max);
+  CHECK(stats.rms() < 0.05);
+  CHECK(std::abs(stats.biasX()) < 0.02);
+  CHECK(std::abs(stats.biasY()) < 0.02);
+  CHECK(stats.max < 0.2); // every id right (a wrong id is off by a whole square)
+}
+
+TEST_CASE("AprilTag ids, corner order and centre against the truth", "[features]") {
+  const CameraModel cam = CameraModel::brown(900, 900, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
+  const YawRig rig;
+  MotionSample s;
+  for (const char *pat : {"apriltag:36h11:0.05", "apriltag:25h9:0.05"}) {
+    BoardLayout b;
+    b.pattern = PatternSpec::parse(pat);
+    b.tags_x = 2;
+    b.tags_y = 2;
+    b.gap = 0.03;
+    b.first_tag_id = 3;
+    for (double roll : {0.3, 2.5}) {
+      const Eigen::Isometry3d wMb = boardPose(rig, s, b, 0.45, 0.3, 0.1, roll, 0.0, 0.0);
+      std::map<long, Eigen::Vector2d> truth;
+      REQUIRE(truthPixels(cam, rig, s, b, wMb, truth));
+      RenderOptions ro;
+      ro.blur_sigma_px = 0.7;
+      ro.noise_sigma = 2;
+      const cv::Mat img = renderBoard(cam, rig, s, b, wMb, ro);
+      PatternDetector det(b.pattern);
+      det.setCamera(cam);
+      const FrameDetection d = det.detect(img, 3);
+      INFO(pat << " roll " << roll << ": " << d.reason);
+      REQUIRE(d.found);
+      CHECK(d.frame == 3);
+      REQUIRE(d.features.size() == 20); // 4 tags x (centre + 4 corners)
+      for (const auto &f : d.features) {
+        REQUIRE(truth.count(f.id) == 1);
+        CHECK((Eigen::Vector2d(f.u, f.v) - truth.at(f.id)).norm() < 0.3);
+      }
+    }
+  }
+  CHECK_THROWS_AS(PatternDetector(PatternSpec{PatternSpec::Kind::AprilTag, 0, 0, 0, "99h1", 0.05}), yawdepth::Error);
+}
+
+TEST_CASE("readGrayImage and detection failures", "[features]") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("yawdepth_features_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string missing = (dir / "missing.png").string();
+  try {
+    readGrayImage(missing);
+    FAIL("no exception");
+  } catch (const yawdepth::Error &e) {
+    CHECK(std::string(e.what()).rfind(missing + ": cannot read image", 0) == 0);
+  }
+  cv::Mat img(60, 80, CV_8UC1);
+  cv::randu(img, 0, 255);
+  const std::string good = (dir / "good.png").string();
+  REQUIRE(cv::imwrite(good, img));
+  const cv::Mat back = readGrayImage(good);
+  CHECK(cv::countNonZero(back != img) == 0);
+  // A truncated PNG.
+  std::ifstream in(good, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string truncated = (dir / "truncated.png").string();
+  std::ofstream(truncated, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  CHECK_THROWS_AS(readGrayImage(truncated), yawdepth::Error);
+  const std::string text = (dir / "text.png").string();
+  std::ofstream(text) << "not an image\n";
+  CHECK_THROWS_AS(readGrayImage(text), yawdepth::Error);
+  fs::remove_all(dir);
+
+  PatternDetector chess(PatternSpec::parse("chessboard:5x4:0.02"));
+  const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(128));
+  FrameDetection d = chess.detect(blank, 7);
+  CHECK_FALSE(d.found);
+  CHECK(d.frame == 7);
+  CHECK(d.features.empty());
+  CHECK(d.reason == "chessboard 5x4 not found");
+  d = chess.detect(cv::Mat(), 8);
+  CHECK_FALSE(d.found);
+  CHECK(d.reason == "empty image");
+  d = chess.detect(cv::Mat(10, 10, CV_32FC1, cv::Scalar(0.5)), 9);
+  CHECK_FALSE(d.found);
+  CHECK_FALSE(d.reason.empty());
+  PatternDetector tags(PatternSpec::parse("apriltag:36h11:0.05"));
+  d = tags.detect(blank, 1);
+  CHECK_FALSE(d.found);
+  CHECK(d.reason == "no AprilTag of family 36h11 found");
+  cv::Mat colour;
+  cv::cvtColor(blank, colour, cv::COLOR_GRAY2BGR);
+  CHECK_FALSE(tags.detect(colour, 2).found);
+}
+
+TEST_CASE("toTracks groups by id and sorts by frame", "[features]") {
+  std::vector<FrameDetection> frames(3);
+  frames[0].frame = 5;
+  frames[0].found = true;
+  frames[0].features = {{1, 10, 20}, {0, 1, 2}};
+  frames[1].frame = 2;
+  frames[1].found = true;
+  frames[1].features = {{1, 11, 21}};
+  frames[2].frame = 3;
+  frames[2].found = false;
+  const std::vector<Track> tracks = PatternDetector::toTracks(frames);
+  REQUIRE(tracks.size() == 2);
+  CHECK(tracks[0].id == 0);
+  REQUIRE(tracks[1].observations.size() == 2);
+  CHECK(tracks[1].observations[0].frame == 2);
+  CHECK(tracks[1].observations[0].u == 11);
+  CHECK(tracks[1].observations[1].frame == 5);
+}

@@ -1,0 +1,114 @@
+// `yawdepth measure`: detect a pattern in the motion log's images, build tracks, estimate points,
+// and optionally write the paper's Fig. 3 report.
+#include "commands.h"
+#include "method_options.h"
+
+#include <iostream>
+#include <memory>
+#include <yawdepth/camera/camera_file.h>
+#include <yawdepth/error.h>
+#include <yawdepth/features/detector.h>
+#include <yawdepth/io/files.h>
+#include <yawdepth/report/board_report.h>
+
+namespace yawdepth::cli {
+
+namespace {
+
+struct MeasureArgs {
+  std::string camera, camera_name, rig, motion, pattern, out, report, tracks_out, outliers;
+  MethodArgs method;
+  bool quiet = false;
+};
+
+} // namespace
+
+Runner addMeasure(CLI::App &app)
+{
+  auto a = std::make_shared<MeasureArgs>();
+  CLI::App *sub = app.add_subcommand(
+      "measure", "Detect a chessboard or AprilTags in the images of a motion log and measure their 3D points.");
+  sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
+  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
+  sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset)")->required();
+  sub->add_option("--motion", a->motion, "Motion log CSV with an image column (paths relative to the CSV's folder)")
+      ->required();
+  sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE or apriltag:FAMILY:SIZE (metres)")->required();
+  addMethodOptions(sub, a->method, bestMethod());
+  sub->add_option("--out", a->out, "Output points CSV (default: standard output)");
+  sub->add_option("--report", a->report,
+                  "Folder for the paper's Fig. 3 report: report.txt, blocks.csv, plane.csv, figure.png");
+  sub->add_option("--tracks-out", a->tracks_out, "Also write the detected features as a tracks CSV (frame,id,u,v)");
+  sub->add_option("--outliers", a->outliers, "fused/refine: also write the observations rejected as outliers");
+  sub->add_flag("--quiet", a->quiet, "No progress or per-frame detection messages on stderr");
+
+  return [a]() {
+    a->method.noise.validate();
+    a->method.gates.validate();
+    const PatternSpec pattern = PatternSpec::parse(a->pattern);
+    const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
+    const RigFile rig_file = readRigFile(a->rig);
+    const YawRig rig(rig_file.camera_offset);
+    const MotionLog motion = readMotionCsv(a->motion, rig_file.yaw);
+    if (motion.images.empty())
+      throw Error(a->motion + ": no 'image' column: measure needs the image of each frame");
+
+    PatternDetector detector(pattern);
+    std::vector<FrameDetection> detections;
+    const std::size_t n = motion.samples.size();
+    const std::size_t every = n >= 20 ? std::max<std::size_t>(1, n / 10) : 0;
+    std::size_t found = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const long frame = motion.samples[i].frame;
+      if (motion.images[i].empty()) {
+        if (!a->quiet)
+          std::cerr << "measure: frame " << frame << ": no image\n";
+        continue;
+      }
+      const cv::Mat image = readGrayImage(motion.images[i]);
+      if (image.cols != static_cast<int>(camera.width()) && camera.width() > 0)
+        throw Error(motion.images[i] + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                    " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+      FrameDetection d = detector.detect(image, frame);
+      if (d.found)
+        ++found;
+      else if (!a->quiet)
+        std::cerr << "measure: frame " << frame << ": " << d.reason << "\n";
+      detections.push_back(std::move(d));
+      if (every && !a->quiet && ((i + 1) % every == 0 || i + 1 == n))
+        std::cerr << "measure: " << i + 1 << "/" << n << " frames, pattern found in " << found << "\n";
+    }
+    if (found == 0)
+      throw Error("the pattern " + pattern.toString() + " was not found in any image");
+    const std::vector<Track> tracks = PatternDetector::toTracks(detections);
+    if (!a->tracks_out.empty())
+      writeTracksCsv(a->tracks_out, tracks);
+
+    std::vector<std::vector<bool>> flags;
+    const std::vector<PointEstimate> estimates = runMethod(camera, rig, motion.samples, tracks, a->method, flags);
+    std::vector<PointRow> rows;
+    std::vector<std::pair<long, PointEstimate>> pairs;
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      rows.push_back({tracks[i].id, estimates[i]});
+      pairs.emplace_back(tracks[i].id, estimates[i]);
+    }
+    if (!a->outliers.empty())
+      writeTracksCsv(a->outliers, rejectedObservations(tracks, flags));
+    if (!a->report.empty()) {
+      const BoardMetrics m = boardMetrics(pattern, rig, motion.samples, pairs);
+      const std::string title = "yawdepth measure: " + pattern.toString() + ", method " + a->method.method + ", " +
+                                std::to_string(found) + " of " + std::to_string(n) + " frames";
+      writeBoardReport(a->report, m, title);
+      if (!a->quiet)
+        std::cerr << formatBoardMetrics(m) << "report: " << a->report << "/report.txt, " << a->report
+                  << "/figure.png\n";
+    }
+    if (a->out.empty() || a->out == "-")
+      writePointsCsv(std::cout, rows);
+    else
+      writePointsCsv(a->out, rows);
+    return 0;
+  };
+}
+
+} // namespace yawdepth::cli

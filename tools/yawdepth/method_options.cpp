@@ -1,0 +1,91 @@
+#include "method_options.h"
+
+#include "commands.h"
+
+#include <yawdepth/error.h>
+#include <yawdepth/estimation/track_estimator.h>
+#include <yawdepth/refine/refine.h>
+
+namespace yawdepth::cli {
+
+std::string bestMethod() { return refineAvailable() ? "refine" : "fused"; }
+
+void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &default_method)
+{
+  args.method = default_method;
+  args.robust_px = RefineOptions().robust_threshold_px;
+  args.outlier_px = RefineOptions().outlier_threshold_px;
+  sub->add_option("--method", args.method,
+                  "paper: eq. (5) on the last increment as published; exact: finite-increment two-view form (exact on "
+                  "noise-free data); fused: recursive filter over every frame; refine: joint MAP of every point with the "
+                  "motion (Ceres)")
+      ->check(CLI::IsMember({"paper", "exact", "fused", "refine"}))
+      ->capture_default_str();
+  sub->add_option("--sigma-px", args.noise.sigma_px, "Pixel noise (px)")->check(FiniteNonNegative)->capture_default_str();
+  sub->add_option("--sigma-odom", args.noise.sigma_odom, "Odometry translation noise per increment, per axis (m)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--sigma-heading", args.noise.sigma_heading, "Heading noise per increment (rad)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--sigma-yaw", args.noise.sigma_yaw, "Noise of each yaw reading (rad)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--min-baseline", args.gates.min_baseline, "Camera translation below this is no_motion (m)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--min-parallax-px", args.gates.min_parallax_px, "Parallax below this is degenerate (px)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--robust-threshold-px", args.robust_px, "refine: scale of the robust loss (px)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--outlier-threshold-px", args.outlier_px,
+                  "refine: observations with a larger reprojection error are flagged as outliers (px)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+}
+
+std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                                     const std::vector<Track> &tracks, const MethodArgs &args,
+                                     std::vector<std::vector<bool>> &outliers)
+{
+  args.noise.validate();
+  args.gates.validate();
+  const bool refine = args.method == "refine";
+  if (refine && !refineAvailable())
+    throw Error("method refine is unavailable: this yawdepth was built without Ceres");
+  TrackEstimatorOptions options;
+  options.method = refine ? Method::Fused : methodFromString(args.method);
+  options.two_view.noise = args.noise;
+  options.two_view.gates = args.gates;
+  std::vector<PointEstimate> estimates = estimateTracks(camera, rig, motion, tracks, options, &outliers);
+  if (refine) {
+    RefineOptions ro;
+    ro.noise = args.noise;
+    ro.gates = args.gates;
+    ro.robust_threshold_px = args.robust_px;
+    ro.outlier_threshold_px = args.outlier_px;
+    RefineResult r = refineWindow(camera, rig, motion, tracks, estimates, ro);
+    estimates = std::move(r.points);
+    outliers = std::move(r.outliers);
+  }
+  return estimates;
+}
+
+std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers)
+{
+  std::vector<Track> rejected;
+  for (std::size_t i = 0; i < tracks.size() && i < outliers.size(); ++i) {
+    Track t;
+    t.id = tracks[i].id;
+    for (std::size_t k = 0; k < tracks[i].observations.size() && k < outliers[i].size(); ++k)
+      if (outliers[i][k])
+        t.observations.push_back(tracks[i].observations[k]);
+    if (!t.observations.empty())
+      rejected.push_back(t);
+  }
+  return rejected;
+}
+
+} // namespace yawdepth::cli

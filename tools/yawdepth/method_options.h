@@ -1,0 +1,38 @@
+#pragma once
+// The estimation options shared by `estimate` and `measure`: method, noise model, gates, refine's
+// thresholds; and running the chosen method on tracks.
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/estimation/types.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth::cli {
+
+struct MethodArgs {
+  std::string method;
+  NoiseModel noise;
+  GateOptions gates;
+  double robust_px = 1.0;
+  double outlier_px = 2.0;
+};
+
+/*! \brief Register --method (with `default_method`), the noise, gate and refine options on `sub`. */
+void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &default_method);
+
+/*! \brief The best method this build has: refine with Ceres, else fused. */
+std::string bestMethod();
+
+/*!
+  \brief Run the chosen method on every track (same order).
+  \param outliers Receives, per track and observation, whether it was rejected as an outlier.
+*/
+std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                                     const std::vector<Track> &tracks, const MethodArgs &args,
+                                     std::vector<std::vector<bool>> &outliers);
+
+/*! \brief The observations flagged in `outliers`, as tracks (for --outliers). */
+std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers);
+
+} // namespace yawdepth::cli
