@@ -300,7 +300,8 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
     x_lo = std::min(x_lo, a.x());
     x_hi = std::max(x_hi, a.x());
   }
-  const double zr = std::max(m.max_depth - m.min_depth, 1e-4), xr = std::max(x_hi - x_lo, 1e-4);
+  // Depth at no more than 4x the scale of the board axis, so that millimetre noise is not drawn as a curve.
+  const double xr = std::max(x_hi - x_lo, 1e-4), zr = std::max({m.max_depth - m.min_depth, 0.25 * xr, 1e-4});
   for (std::size_t i = 0; i < m.points.size(); ++i) {
     const int x = static_cast<int>(p3.x + 30 + (q[i].x() - x_lo) / xr * (p3.width - 60));
     const int y = static_cast<int>(p3.y + 40 + (m.points[i].c_P.z() - m.min_depth) / zr * (p3.height - 70));
