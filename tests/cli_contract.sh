@@ -189,6 +189,33 @@ for m in fused refine; do
 done
 
 # ---------------------------------------------------------------------------
+# 2c. measure on rendered images: the paper's two images (chessboard) and an AprilTag board.
+PE="$W/paper_two"
+run "$PE.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$PE" --frames 2 --step -0.0565685 --yaw 0.785398 \
+    --pattern chessboard:5x4:0.02 --board-distance 0.62 --blur 0.7 --image-noise 2
+run "$PE.m" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PE/motion.csv" --pattern chessboard:5x4:0.02 \
+    --sigma-px 0.05 --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-yaw 1e-6 --report "$PE/report" --out "$PE/points.csv"
+if [ "$(rc_of "$PE.m")" -eq 0 ] && [ -s "$PE/report/figure.png" ] && [ -s "$PE/report/report.txt" ]; then pass; else
+  fail "measure paper setup: exit $(rc_of "$PE.m"): $(first "$PE.m.err")"; fi
+res=$(awk -F, 'NR > 1 && $10 == "ok" { k++ } END { print k+0 }' "$PE/points.csv" 2>/dev/null)
+if [ "$res" = 20 ]; then pass; else fail "measure paper setup: $res of 20 corners ok"; fi
+res=$(awk -F, 'NR > 1 { e = $5; if (e < 0) e = -e; if (e > w) w = e; n++ } END { if (n == 31 && w < 0.0003) print "OK"; else print n " blocks, worst error " w " m" }' "$PE/report/blocks.csv" 2>/dev/null)
+if [ "$res" = OK ]; then pass; else fail "measure paper setup block lengths: $res"; fi
+res=$(compare_points "$PE/points.csv" "$PE/truth.csv" 2e-3 0.99)
+case $res in OK*) pass ;; *) fail "measure paper setup against truth: $(echo "$res" | head -n 2 | tr '\n' ';')" ;; esac
+
+AT="$W/apriltag"
+run "$AT.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$AT" --frames 4 --step 0.01 --yaw 1.5708 \
+    --pattern apriltag:36h11:0.05 --tags 2x1 --board-distance 0.6 --board-offset-x -0.02 --blur 0.6 --image-noise 1
+run "$AT.m" measure --quiet --camera "$YML" --rig "$RIG" --motion "$AT/motion.csv" --pattern apriltag:36h11:0.05 \
+    --sigma-px 0.2 --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-yaw 1e-6 --out "$AT/points.csv"
+res=$(awk -F, 'NR > 1 && $10 == "ok" { k++; if ($1 % 5 == 0) c++ } END { print k+0, c+0 }' "$AT/points.csv" 2>/dev/null)
+if [ "$(rc_of "$AT.m")" -eq 0 ] && [ "$res" = "10 2" ]; then pass; else
+  fail "measure apriltag 2 tags: exit $(rc_of "$AT.m"), ok rows and centres: $res; $(first "$AT.m.err")"; fi
+res=$(compare_points "$AT/points.csv" "$AT/truth.csv" 1e-2 0.99)
+case $res in OK*) pass ;; *) fail "measure apriltag against truth: $(echo "$res" | head -n 2 | tr '\n' ';')" ;; esac
+
+# ---------------------------------------------------------------------------
 # 3. Status words.
 S="$W/status"; mkdir -p "$S"
 # status_of FILE ID -> status word of that id (or "<missing>")
@@ -330,6 +357,18 @@ bad() {
   [ $useout -eq 1 ] && [ -e "$out" ] && msg="$msg output file created;"
   if [ -z "$msg" ]; then pass; else fail "bad input $name:$msg stderr: $(first "$B/$name.err")"; fi
 }
+# measure: bad input.
+MEA=(measure --camera "$YML" --rig "$RIG" --pattern chessboard:5x4:0.02)
+cut -d, -f1-6 "$PE/motion.csv" > "$PE/motion_noimg.csv"
+bad measure_no_image_column "${MEA[@]}" --motion "$PE/motion_noimg.csv"
+cp "$PE/motion.csv" "$PE/motion_missing.csv"; sed -i 's/frame_0001.png/nothere.png/' "$PE/motion_missing.csv"
+bad measure_missing_image "${MEA[@]}" --motion "$PE/motion_missing.csv"
+head -c 300 "$PE/frame_0000.png" > "$PE/trunc.png"; cp "$PE/motion.csv" "$PE/motion_trunc.csv"
+sed -i 's/frame_0001.png/trunc.png/' "$PE/motion_trunc.csv"
+bad measure_truncated_image "${MEA[@]}" --motion "$PE/motion_trunc.csv"
+bad measure_bad_pattern measure --camera "$YML" --rig "$RIG" --motion "$PE/motion.csv" --pattern chessboard:5:0.02
+bad measure_pattern_not_found measure --camera "$YML" --rig "$RIG" --motion "$AT/motion.csv" --pattern chessboard:5x4:0.02
+
 EST=(estimate --camera "$XML" --rig "$RIG")
 bad missing_camera estimate --camera "$B/nope.xml" --rig "$RIG" --motion "$M" --tracks "$T"
 bad missing_motion "${EST[@]}" --motion "$B/nope.csv" --tracks "$T"

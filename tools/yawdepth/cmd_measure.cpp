@@ -4,6 +4,7 @@
 #include "method_options.h"
 
 #include <iostream>
+#include <unistd.h>
 #include <memory>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
@@ -54,15 +55,19 @@ Runner addMeasure(CLI::App &app)
       throw Error(a->motion + ": no 'image' column: measure needs the image of each frame");
 
     PatternDetector detector(pattern);
+    detector.setCamera(camera);
     std::vector<FrameDetection> detections;
+    std::vector<std::string> failures; // per-frame reasons, printed once we know the run succeeds
     const std::size_t n = motion.samples.size();
-    const std::size_t every = n >= 20 ? std::max<std::size_t>(1, n / 10) : 0;
+    // Progress for long sequences, only on a terminal: a caller capturing stderr gets one line per
+    // problem, not a progress bar.
+    const bool progress = !a->quiet && n >= 20 && isatty(STDERR_FILENO);
+    const std::size_t every = std::max<std::size_t>(1, n / 10);
     std::size_t found = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const long frame = motion.samples[i].frame;
       if (motion.images[i].empty()) {
-        if (!a->quiet)
-          std::cerr << "measure: frame " << frame << ": no image\n";
+        failures.push_back("measure: frame " + std::to_string(frame) + ": no image");
         continue;
       }
       const cv::Mat image = readGrayImage(motion.images[i]);
@@ -72,14 +77,18 @@ Runner addMeasure(CLI::App &app)
       FrameDetection d = detector.detect(image, frame);
       if (d.found)
         ++found;
-      else if (!a->quiet)
-        std::cerr << "measure: frame " << frame << ": " << d.reason << "\n";
+      else
+        failures.push_back("measure: frame " + std::to_string(frame) + ": " + d.reason);
       detections.push_back(std::move(d));
-      if (every && !a->quiet && ((i + 1) % every == 0 || i + 1 == n))
+      if (progress && ((i + 1) % every == 0 || i + 1 == n))
         std::cerr << "measure: " << i + 1 << "/" << n << " frames, pattern found in " << found << "\n";
     }
     if (found == 0)
-      throw Error("the pattern " + pattern.toString() + " was not found in any image");
+      throw Error("the pattern " + pattern.toString() + " was not found in any of the " + std::to_string(n) +
+                  " images" + (failures.empty() ? std::string() : " (" + failures.front().substr(9) + ")"));
+    if (!a->quiet)
+      for (const std::string &f : failures)
+        std::cerr << f << "\n";
     const std::vector<Track> tracks = PatternDetector::toTracks(detections);
     if (!a->tracks_out.empty())
       writeTracksCsv(a->tracks_out, tracks);

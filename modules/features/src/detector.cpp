@@ -3,6 +3,14 @@
   \brief Chessboard corners (OpenCV detection, own sub-pixel refinement, stable ids) and AprilTags
   (ViSP's vpDetectorAprilTag), with failure reasons.
 */
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fcntl.h>
+#include <fstream>
+#include <iterator>
+#include <mutex>
+#include <unistd.h>
 #include <yawdepth/features/detector.h>
 
 #include <algorithm>
@@ -580,14 +588,44 @@ std::vector<Track> PatternDetector::toTracks(const std::vector<FrameDetection> &
 }
 
 cv::Mat readGrayImage(const std::string &path) {
+  // Read the bytes ourselves (clear messages for missing or empty files), then decode in memory.
+  // The decoders of OpenCV and libpng/libjpeg print their own complaints on stderr for damaged
+  // files; the library must not print, so stderr is silenced while decoding.
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw Error(path + ": cannot read image (" + std::strerror(errno) + ")");
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad())
+    throw Error(path + ": cannot read image (read error)");
+  if (bytes.empty())
+    throw Error(path + ": cannot read image (empty file)");
   cv::Mat img;
-  try {
-    img = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception &e) {
-    throw Error(path + ": cannot read image (" + e.err + ")");
+  {
+    static std::mutex stderr_mutex;
+    std::lock_guard<std::mutex> lock(stderr_mutex);
+    std::fflush(stderr);
+    const int saved = dup(STDERR_FILENO);
+    const int null_fd = open("/dev/null", O_WRONLY);
+    if (saved >= 0 && null_fd >= 0)
+      dup2(null_fd, STDERR_FILENO);
+    std::string failure;
+    try {
+      img = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+    } catch (const cv::Exception &e) {
+      failure = e.err;
+    }
+    std::fflush(stderr);
+    if (saved >= 0) {
+      dup2(saved, STDERR_FILENO);
+      close(saved);
+    }
+    if (null_fd >= 0)
+      close(null_fd);
+    if (!failure.empty())
+      throw Error(path + ": cannot read image (" + failure + ")");
   }
   if (img.empty())
-    throw Error(path + ": cannot read image (missing, unreadable, truncated or not an image)");
+    throw Error(path + ": cannot read image (truncated, damaged or not an image)");
   if (img.depth() != CV_8U) {
     cv::Mat eight;
     img.convertTo(eight, CV_8U, img.depth() == CV_16U ? 1.0 / 256 : 1.0);
