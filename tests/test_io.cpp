@@ -711,3 +711,38 @@ TEST_CASE("atomic write: replaces an existing file, no partial file on failure",
   CHECK(dir.count() == 2);
   CHECK(slurp(p) == "third\n");
 }
+
+TEST_CASE("rig file: yaw_offset and yaw_axis", "[io][rig]")
+{
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "yawdepth_rig_offset_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "rig.yaml").string();
+  {
+    std::ofstream f(path);
+    f << "camera_offset: [-0.15, 0, 0.01]\nyaw_offset: 0.0087\nyaw_axis: [0.01, 1, 0]\n";
+  }
+  const RigFile rig = readRigFile(path);
+  CHECK(rig.yaw_offset == 0.0087);
+  REQUIRE(rig.yaw_axis.has_value());
+  CHECK(rig.yaw_axis->norm() == Approx(1.0));
+  std::vector<MotionSample> motion(2);
+  motion[1].yaw = 0.5;
+  applyRigFile(rig, motion);
+  CHECK(motion[0].yaw == 0.0087);
+  CHECK(motion[1].yaw == Approx(0.5087));
+  // Round trip through the writer.
+  writeRigFile(path, rig);
+  const RigFile back = readRigFile(path);
+  CHECK(back.yaw_offset == rig.yaw_offset);
+  CHECK((*back.yaw_axis - *rig.yaw_axis).norm() < 1e-15);
+  // Bad values are rejected with the file named.
+  for (const char *bad : {"camera_offset: [0, 0, 0]\nyaw_offset: nan\n", "camera_offset: [0, 0, 0]\nyaw_axis: [0, 0]\n",
+                          "camera_offset: [0, 0, 0]\nyaw_axis: [0, 0, 0]\n", "camera_offset: [0, 0, 0]\nyaw_offset:\n"}) {
+    {
+      std::ofstream f(path);
+      f << bad;
+    }
+    CHECK_THROWS_AS(readRigFile(path), Error);
+  }
+  std::filesystem::remove_all(dir);
+}

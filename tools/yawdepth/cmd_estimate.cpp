@@ -38,7 +38,8 @@ Runner addEstimate(CLI::App &app)
     const CameraModel camera = loadCameraFile(args->camera, args->camera_name);
     const RigFile rig_file = readRigFile(args->rig);
     const YawRig rig(rig_file.camera_offset);
-    const MotionLog motion = readMotionCsv(args->motion, rig_file.yaw);
+    MotionLog motion = readMotionCsv(args->motion, rig_file.yaw);
+    applyRigFile(rig_file, motion.samples);
     const std::vector<Track> tracks = readTracksCsv(args->tracks);
     checkTracksAgainstMotion(tracks, motion, args->tracks);
 

@@ -50,7 +50,8 @@ Runner addMeasure(CLI::App &app)
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
     const RigFile rig_file = readRigFile(a->rig);
     const YawRig rig(rig_file.camera_offset);
-    const MotionLog motion = readMotionCsv(a->motion, rig_file.yaw);
+    MotionLog motion = readMotionCsv(a->motion, rig_file.yaw);
+    applyRigFile(rig_file, motion.samples);
     if (motion.images.empty())
       throw Error(a->motion + ": no 'image' column: measure needs the image of each frame");
 

@@ -197,6 +197,10 @@ Runner addSimulate(CLI::App &app)
         w_points.push_back(scene.w_points[i]);
       }
     }
+    // The logs hold yaw *readings*: true yaw minus the rig's yaw_offset (its reading's zero).
+    for (auto *log : {&measured, &truth})
+      for (MotionSample &m : log->samples)
+        m.yaw -= rig_file.yaw_offset;
     writeMotionCsv((dir / "motion.csv").string(), measured);
     writeMotionCsv((dir / "motion_truth.csv").string(), truth);
     writeTracksCsv((dir / "tracks.csv").string(), tracks);

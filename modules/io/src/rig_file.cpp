@@ -72,7 +72,7 @@ RigFile readRigFile(const std::string &path)
       const std::string &key = kv.first.Scalar();
       if (key == "yaw")
         yaw_mark = kv.first.Mark();
-      if (!seen.insert(key).second && (key == "camera_offset" || key == "yaw"))
+      if (!seen.insert(key).second && (key == "camera_offset" || key == "yaw" || key == "yaw_offset" || key == "yaw_axis"))
         throwError(where(path, kv.first.Mark()) + "duplicated key '" + key + "'");
     }
 
@@ -91,6 +91,24 @@ RigFile readRigFile(const std::string &path)
       rig.yaw = finiteNumber(path, yaw, "'yaw'");
     else if (yaw)
       throwError(where(path, yaw_mark) + "'yaw' has no value");
+
+    const YAML::Node yaw_offset = root["yaw_offset"];
+    if (yaw_offset) {
+      if (yaw_offset.IsNull())
+        throwError(where(path, yaw_offset.Mark()) + "'yaw_offset' has no value");
+      rig.yaw_offset = finiteNumber(path, yaw_offset, "'yaw_offset'");
+    }
+    const YAML::Node axis = root["yaw_axis"];
+    if (axis) {
+      if (!axis.IsSequence() || axis.size() != 3)
+        throwError(where(path, axis.Mark()) + "'yaw_axis' must be a sequence of 3 numbers [x, y, z]");
+      Eigen::Vector3d a;
+      for (std::size_t i = 0; i < 3; ++i)
+        a(static_cast<Eigen::Index>(i)) = finiteNumber(path, axis[i], "'yaw_axis' value " + std::to_string(i + 1));
+      if (!(a.norm() > 1e-9))
+        throwError(where(path, axis.Mark()) + "'yaw_axis' must not be zero");
+      rig.yaw_axis = a.normalized();
+    }
   } catch (const YAML::Exception &e) {
     throwError(where(path, e.mark) + "not valid YAML (" + e.msg + ")");
   }
@@ -107,7 +125,24 @@ void writeRigFile(const std::string &path, const RigFile &rig)
                     formatNumber(rig.camera_offset.y()) + ", " + formatNumber(rig.camera_offset.z()) + "]\n";
   if (rig.yaw)
     out += "yaw: " + formatNumber(*rig.yaw) + "\n";
+  if (!std::isfinite(rig.yaw_offset))
+    throwError(path + ": yaw_offset is not finite");
+  if (rig.yaw_offset != 0.0)
+    out += "yaw_offset: " + formatNumber(rig.yaw_offset) + "\n";
+  if (rig.yaw_axis) {
+    if (!rig.yaw_axis->allFinite())
+      throwError(path + ": yaw_axis is not finite");
+    out += "yaw_axis: [" + formatNumber(rig.yaw_axis->x()) + ", " + formatNumber(rig.yaw_axis->y()) + ", " +
+           formatNumber(rig.yaw_axis->z()) + "]\n";
+  }
   writeFileAtomically(path, out);
+}
+
+void applyRigFile(const RigFile &rig, std::vector<MotionSample> &motion)
+{
+  if (rig.yaw_offset != 0.0)
+    for (MotionSample &s : motion)
+      s.yaw += rig.yaw_offset;
 }
 
 } // namespace yawdepth

@@ -21,7 +21,20 @@ namespace yawdepth {
 struct RigFile {
   Eigen::Vector3d camera_offset = Eigen::Vector3d::Zero(); //!< `camera_offset: [x, y, z]` (m), required.
   std::optional<double> yaw; //!< optional `yaw:` (rad), used when the motion log has no yaw column.
+  /*! optional `yaw_offset:` (rad), the zero of the yaw reading: true yaw = reading + yaw_offset.
+      Applied to every yaw of the motion log (applyRigFile()). Written by `calibrate-rig`. */
+  double yaw_offset = 0.0;
+  /*! optional `yaw_axis: [x, y, z]`, the measured direction of the yaw axis in the vision frame
+      (unit; ideally (0, 1, 0)). Informational: the estimators take the yaw axis as the vision
+      frame's Y; `calibrate-rig` measures it so that a tilted mechanism can be noticed and fixed. */
+  std::optional<Eigen::Vector3d> yaw_axis;
 };
+
+/*!
+  \brief Bring a motion log's yaw readings to true yaws with the rig file: adds `yaw_offset` to
+  every row's yaw.
+*/
+void applyRigFile(const RigFile &rig, std::vector<MotionSample> &motion);
 
 /*!
   \brief Read a rig YAML file. Required key `camera_offset` (3 finite numbers); optional `yaw`.
