@@ -1,0 +1,168 @@
+#pragma once
+/*!
+  \file depth_provider.h
+  \brief Depth for ViSP's point features in a servo loop, from the robot's motion: no constant
+  guess, no depth sensor.
+
+  Each control period, give the provider the odometry (the vision frame's pose and the camera's
+  yaw reading, a yawdepth::MotionSample) and the tracked points' observed pixels by id; then let it
+  set the depth of your vpFeaturePoint's with apply(). Per feature it runs the `fused` estimator
+  (yawdepth::FusedEstimator: a recursive log-inverse-depth filter with pixel, odometry and yaw
+  noise modelled) and gives:
+
+  - depth(id): the estimated depth Zc of the feature in the CURRENT camera frame once the estimate
+    has converged (relative 1-sigma below `converged_relative_sigma`), otherwise the prior
+    (`prior_depth`, 1 m like vpFeaturePoint's default, or a per-feature prior set by setPrior()).
+    Once a feature has converged it keeps its estimate while the relative sigma stays below
+    `release_factor` x the threshold (no flicker between prior and estimate). The value is always
+    finite and within [min_depth, max_depth]: never the non-positive Z that vpFeaturePoint::set_Z()
+    rejects.
+  - sigma(id): the 1-sigma uncertainty of depth(id) (m): the estimate's, or for the prior
+    `prior_depth * prior_relative_sigma`.
+  - status(id): the estimator's status word (ok, too_few_frames, degenerate, no_motion, ...).
+  - converged(id): whether depth(id) is the estimate (true) or the prior (false).
+
+  The depth only matters when the interaction matrix is computed from the current features:
+  use `task.setInteractionMatrixType(vpServo::CURRENT)` (or vpServo::MEAN). With vpServo::DESIRED
+  the interaction matrix is built once from the desired features' depth and the current depths
+  are never read.
+
+  Observations are the observed (distorted) pixels, as a tracker gives them (vpImagePoint is
+  (i = v, j = u)); the provider undistorts them with its camera model. vpFeaturePoint works on
+  undistorted normalised coordinates: build them with buildFrom(), which undistorts the same way.
+
+  Standing still must not count as motion: the noise model's odometry noise is per estimator
+  increment, so the provider feeds the estimator a new frame only once the camera has translated
+  at least `min_translation` since the last frame it used (or after `max_skipped_periods`
+  periods). In the periods in between, the estimates are carried to the current camera frame
+  through the odometry, so depth(id) is always the depth at the latest update().
+
+  Typical loop (see examples/servo_ibvs_yawing_camera.cpp):
+  \code
+  yawdepth::DepthProvider depth(camera, rig);        // camera: yawdepth::CameraModel or vpCameraParameters
+  std::vector<vpFeaturePoint> s(4), sd(4);            // current and desired features
+  task.setInteractionMatrixType(vpServo::CURRENT);    // depth matters only with CURRENT or MEAN
+  for (;;) {
+    // odometry: vision-frame pose (x, y, z, heading) and the pan angle; points: (id, observed pixel)
+    depth.update(odometry, points);
+    for (std::size_t i = 0; i < s.size(); ++i)
+      depth.buildFrom(ids[i], pixel[i], s[i]);       // x, y undistorted, Z = depth(id)
+    vpColVector qdot = task.computeControlLaw();
+  }
+  \endcode
+  Library code: never prints; throws yawdepth::Error for invalid options or input.
+*/
+#include <limits>
+#include <map>
+#include <utility>
+#include <vector>
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpImagePoint.h>
+#include <visp3/visual_features/vpFeaturePoint.h>
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/estimation/fused_estimator.h>
+#include <yawdepth/estimation/types.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth {
+
+/*! \brief Options of DepthProvider. Lengths in m, angles in rad. */
+struct DepthProviderOptions {
+  double prior_depth = 1.0;              //!< Depth used until a feature's estimate converges (ViSP's default Z = 1 m).
+  double prior_relative_sigma = 1.0;     //!< sigma(id) of the prior, relative to it (a guess: 100 %).
+  double converged_relative_sigma = 0.10; //!< Use the estimate once sigma(Z)/Z is below this (10 %: IBVS tolerates such errors well).
+  double release_factor = 2.0;           //!< Keep a converged estimate while sigma(Z)/Z < release_factor x the threshold.
+  double min_depth = 0.05;               //!< depth() never returns less (m); must be > 0.
+  double max_depth = 100.0;              //!< depth() never returns more (m).
+  double min_translation = 0.005;        //!< Feed the estimator once the camera moved this far (m).
+  int max_skipped_periods = 50;          //!< ... or after this many periods (> 0), whatever the motion.
+  NoiseModel noise;                      //!< Pixel, odometry (per estimator increment), heading and yaw noise.
+  double initial_depth = 0.0;            //!< Filter's initial median depth (m); 0 = prior_depth.
+  int max_missing_frames = 30;           //!< Forget a feature unseen for this many estimator frames.
+  /*! \brief Throws yawdepth::Error for an invalid option. */
+  void validate() const;
+};
+
+/*! \brief Everything the provider knows about one feature's depth. */
+struct FeatureDepth {
+  long id = 0;
+  double depth = 1.0;   //!< What apply() sets: the estimate when converged, else the prior (m).
+  double sigma = 1.0;   //!< 1-sigma of `depth` (m).
+  bool converged = false; //!< `depth` is the estimate.
+  Status status = Status::TooFewFrames; //!< The estimator's status.
+  double estimate = std::numeric_limits<double>::quiet_NaN(); //!< The estimate at the current frame, converged or not (NaN unless status ok).
+  double estimate_sigma = std::numeric_limits<double>::quiet_NaN(); //!< Its 1-sigma (m).
+};
+
+/*! \brief Depth of vpFeaturePoint's from the robot's odometry and the image motion (see the file). */
+class DepthProvider {
+public:
+  using Options = DepthProviderOptions;
+
+  /*! \param camera Camera model (distortion included); \param rig the yaw mechanism (optical centre offset). */
+  DepthProvider(const CameraModel &camera, const YawRig &rig, const Options &options = Options());
+  /*! \brief Same, from ViSP camera parameters (with or without ViSP's kud distortion). */
+  DepthProvider(const vpCameraParameters &camera, const YawRig &rig, const Options &options = Options());
+
+  /*!
+    \brief One control period: the odometry and the observed pixels of the tracked points.
+    \param odometry Pose of the vision frame in the odometry's world frame (x, y, z, heading) and
+           the camera's yaw reading; `odometry.frame` is ignored (the provider counts periods).
+    \param points (id, observed pixel) of each tracked point, at most one per id. Points may come
+           and go; a point not seen for `max_missing_frames` estimator frames is forgotten.
+    Throws yawdepth::Error for a non-finite odometry or a repeated id.
+  */
+  void update(const MotionSample &odometry, const std::vector<std::pair<long, vpImagePoint>> &points);
+
+  /*! \brief Depth to use for feature `id` (m): see the file. Always in [min_depth, max_depth]. */
+  double depth(long id) const;
+  /*! \brief 1-sigma of depth(id) (m). */
+  double sigma(long id) const;
+  /*! \brief The estimator's status for `id` (too_few_frames for an unknown id). */
+  Status status(long id) const;
+  /*! \brief Whether depth(id) is the estimate (else the prior). */
+  bool converged(long id) const;
+  /*! \brief All of the above at once. */
+  FeatureDepth info(long id) const;
+  /*! \brief The full estimate (camera-frame point and covariance) at the current frame. */
+  PointEstimate estimate(long id) const;
+
+  /*! \brief A prior depth for one feature (m, > 0), e.g. from a known object size; replaces prior_depth for it. */
+  void setPrior(long id, double Z);
+
+  /*! \brief s.set_Z(depth(id)). */
+  void apply(long id, vpFeaturePoint &s) const;
+  /*! \brief set_Z for each feature: `features[i]` is feature `ids[i]` (sizes must match). */
+  void apply(const std::vector<long> &ids, std::vector<vpFeaturePoint> &features) const;
+  /*!
+    \brief Build a feature from an observed pixel: undistorted normalised (x, y) by the provider's
+    camera model and Z = depth(id). Throws yawdepth::Error when the pixel cannot be undistorted.
+  */
+  void buildFrom(long id, const vpImagePoint &observed, vpFeaturePoint &s) const;
+
+  /*! \brief Number of update() calls so far. */
+  long periods() const { return period_; }
+  /*! \brief Number of frames given to the estimator (periods with enough motion). */
+  long estimatorFrames() const { return frames_used_; }
+  const CameraModel &camera() const { return camera_; }
+  const YawRig &rig() const { return rig_; }
+  const Options &options() const { return o_; }
+  /*! \brief The underlying estimator (its frames are the periods fed to it). */
+  const FusedEstimator &estimator() const { return fused_; }
+
+private:
+  void refresh(long id);
+  double priorOf(long id) const;
+
+  CameraModel camera_;
+  YawRig rig_;
+  Options o_;
+  FusedEstimator fused_;
+  long period_ = 0, frames_used_ = 0, skipped_ = 0;
+  bool have_fed_ = false;
+  MotionSample last_fed_, current_;
+  std::map<long, double> priors_;
+  std::map<long, FeatureDepth> state_;
+};
+
+} // namespace yawdepth

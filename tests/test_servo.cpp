@@ -1,0 +1,257 @@
+// yawdepth::servo: the depth provider for vpFeaturePoint, the yaw helper, the pan robot's
+// Jacobian and a short simulated servo run. Every random input is seeded.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <visp3/core/vpExponentialMap.h>
+#include <yawdepth/error.h>
+#include <yawdepth/servo/depth_provider.h>
+#include <yawdepth/servo/servo_simulation.h>
+#include <yawdepth/servo/yaw_helper.h>
+#include <yawdepth/simulation/scene.h>
+
+using namespace yawdepth;
+
+namespace {
+
+CameraModel testCamera() { return CameraModel::brown(600, 600, 320, 240, {-0.05, 0, 0, 0}, 640, 480); }
+
+// Each frame's observations of a scene, as the provider takes them.
+std::map<long, std::vector<std::pair<long, vpImagePoint>>> framesOf(const Scene &scene)
+{
+  std::map<long, std::vector<std::pair<long, vpImagePoint>>> frames;
+  for (const Track &t : scene.tracks)
+    for (const Observation &o : t.observations)
+      frames[o.frame].emplace_back(t.id, vpImagePoint(o.v, o.u));
+  return frames;
+}
+
+} // namespace
+
+TEST_CASE("depth provider: the prior before convergence, never a non-positive Z", "[servo]")
+{
+  const CameraModel camera = testCamera();
+  DepthProviderOptions o;
+  o.prior_depth = 1.0;
+  DepthProvider p(camera, YawRig(), o);
+  // Unknown feature: the prior.
+  CHECK(p.depth(7) == 1.0);
+  CHECK_FALSE(p.converged(7));
+  CHECK(p.status(7) == Status::TooFewFrames);
+  // One frame: still the prior.
+  MotionSample m;
+  p.update(m, {{7, vpImagePoint(200, 400)}});
+  CHECK(p.depth(7) == 1.0);
+  CHECK_FALSE(p.converged(7));
+  CHECK(p.sigma(7) == Approx(1.0));
+  // No motion at all for many periods: no estimate, the prior stays.
+  for (int k = 0; k < 80; ++k)
+    p.update(m, {{7, vpImagePoint(200, 400)}});
+  CHECK_FALSE(p.converged(7));
+  CHECK(p.depth(7) == 1.0);
+  // A per-feature prior.
+  p.setPrior(7, 0.4);
+  CHECK(p.depth(7) == 0.4);
+  vpFeaturePoint s;
+  p.buildFrom(7, vpImagePoint(200, 400), s);
+  CHECK(s.get_Z() == 0.4);
+  CHECK_THROWS_AS(p.setPrior(7, 0.0), Error);
+  CHECK_THROWS_AS(p.setPrior(7, -1.0), Error);
+
+  // Invalid options are refused: the provider can never hand ViSP a non-positive Z.
+  DepthProviderOptions bad = o;
+  bad.min_depth = 0;
+  CHECK_THROWS_AS(DepthProvider(camera, YawRig(), bad), Error);
+  bad = o;
+  bad.prior_depth = -1;
+  CHECK_THROWS_AS(DepthProvider(camera, YawRig(), bad), Error);
+  // A repeated id and a non-finite odometry are errors.
+  CHECK_THROWS_AS(p.update(m, {{1, vpImagePoint(1, 1)}, {1, vpImagePoint(2, 2)}}), Error);
+  MotionSample nan_m;
+  nan_m.x = std::nan("");
+  CHECK_THROWS_AS(p.update(nan_m, {}), Error);
+}
+
+TEST_CASE("depth provider: Z stays positive and bounded on random tracks and motion", "[servo]")
+{
+  const CameraModel camera = testCamera();
+  DepthProviderOptions o;
+  o.min_depth = 0.1;
+  o.max_depth = 20;
+  DepthProvider p(camera, YawRig(Eigen::Vector3d(-0.15, 0, 0)), o);
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> U(0, 1);
+  MotionSample m;
+  std::vector<long> ids{1, 2, 3, 4, 5};
+  std::vector<vpFeaturePoint> features(ids.size());
+  for (int k = 0; k < 300; ++k) {
+    // Odometry and pixels unrelated to any scene: jumps, reversals, pure rotation.
+    m.x += 0.05 * (U(rng) - 0.5);
+    m.z += 0.05 * (U(rng) - 0.5);
+    m.heading += 0.2 * (U(rng) - 0.5);
+    m.yaw = 3.0 * (U(rng) - 0.5);
+    std::vector<std::pair<long, vpImagePoint>> pts;
+    for (long id : ids)
+      if (U(rng) < 0.9)
+        pts.emplace_back(id, vpImagePoint(480 * U(rng), 640 * U(rng)));
+    p.update(m, pts);
+    p.apply(ids, features);
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      const double Z = features[i].get_Z();
+      REQUIRE(std::isfinite(Z));
+      REQUIRE(Z >= o.min_depth);
+      REQUIRE(Z <= o.max_depth);
+      REQUIRE(p.sigma(ids[i]) >= 0);
+    }
+  }
+  CHECK(p.periods() == 300);
+  CHECK_THROWS_AS(p.apply(std::vector<long>{1}, features), Error);
+}
+
+TEST_CASE("depth provider: converges to the true depth on a side-view sequence", "[servo]")
+{
+  const CameraModel camera = testCamera();
+  const YawRig rig(Eigen::Vector3d(-0.15, 0, 0));
+  SceneOptions so;
+  so.frames = 30;
+  so.step = 0.01;
+  so.yaw = M_PI / 2;
+  so.points = 12;
+  so.min_depth = 0.8;
+  so.max_depth = 2.0;
+  so.noise = NoiseModel{0.2, 0.0003, 0.0002, 0.0002};
+  so.seed = 7;
+  const Scene scene = simulateScene(camera, rig, so);
+  DepthProviderOptions o;
+  o.noise = NoiseModel{0.2, 0.0005, 0.0003, 0.0003};
+  o.min_translation = 0.005;
+  DepthProvider p(camera, rig, o);
+  const auto frames = framesOf(scene);
+  for (std::size_t r = 0; r < scene.measured.size(); ++r) {
+    const auto it = frames.find(scene.measured[r].frame);
+    p.update(scene.measured[r], it == frames.end() ? std::vector<std::pair<long, vpImagePoint>>{} : it->second);
+  }
+  const std::size_t last = scene.truth.size() - 1;
+  int converged = 0;
+  for (const Track &t : scene.tracks) {
+    if (t.observations.back().frame != scene.truth[last].frame)
+      continue; // left the image
+    const double Z_true = scene.cameraPoint(rig, t.id, last).z();
+    const FeatureDepth f = p.info(t.id);
+    INFO("feature " << t.id << " true " << Z_true << " depth " << f.depth << " sigma " << f.sigma);
+    REQUIRE(f.converged);
+    CHECK(f.status == Status::Ok);
+    CHECK(std::abs(f.depth - Z_true) < 3 * f.sigma + 1e-6);
+    CHECK(std::abs(f.depth - Z_true) / Z_true < 0.03);
+    ++converged;
+  }
+  CHECK(converged >= 6);
+}
+
+TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion", "[servo]")
+{
+  const CameraModel camera = testCamera();
+  const YawRig rig;
+  YawHelperOptions o;
+  o.max_rate = 0.4;
+  // The paper's rig (optical centre 0.15 m off the yaw axis), robot standing still, features ahead:
+  // panning translates the camera, so the helper asks for a yaw rate that creates parallax.
+  const YawRig paper_rig(Eigen::Vector3d(-0.15, 0, 0));
+  std::vector<YawHelperFeature> f{{0.05, 0.0, 1.0, 1.0}, {-0.05, 0.05, 1.0, 1.0}};
+  const YawRecommendation r = recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d::Zero(), f, o);
+  CHECK(r.parallax_now == 0.0);
+  CHECK(std::abs(r.rate) > 0.1);
+  CHECK(std::abs(r.rate) <= o.max_rate + 1e-12);
+  CHECK(r.parallax_target > r.parallax_now);
+  CHECK(r.feasible);
+  CHECK(r.visible_now);
+  // Weights 0 (every depth converged): nothing asks for parallax, only recentring (here none needed).
+  std::vector<YawHelperFeature> done{{0.0, 0.0, 1.0, 0.0}};
+  CHECK(std::abs(recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d::Zero(), done, o).rate) < 0.05);
+  // Driving forward: bounded, and never a worse parallax than now.
+  const YawRecommendation fwd = recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, o);
+  CHECK(std::abs(fwd.rate) <= o.max_rate + 1e-12);
+  CHECK(fwd.parallax_target >= fwd.parallax_now - 1e-12);
+  // Side view, translation along the camera's -X: parallax far larger than at front view.
+  const YawRecommendation side = recommendYawRate(camera, rig, M_PI / 2, Eigen::Vector3d(0, 0, 0.2), f, o);
+  const YawRecommendation front = recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, o);
+  CHECK(side.parallax_now > 5 * front.parallax_now);
+  CHECK(std::abs(side.rate) <= o.max_rate + 1e-12);
+  // No offset, no translation: only the visibility term; features right of centre -> turn right (positive yaw).
+  std::vector<YawHelperFeature> right{{0.15, 0.0, 1.0, 1.0}, {0.20, 0.05, 1.0, 1.0}};
+  const YawRecommendation still = recommendYawRate(camera, rig, 0.0, Eigen::Vector3d::Zero(), right, o);
+  CHECK(still.rate > 0);
+  CHECK(still.parallax_now == 0.0);
+  // Centred, not moving: nothing to do.
+  const YawRecommendation centred =
+      recommendYawRate(camera, rig, 0.0, Eigen::Vector3d::Zero(), {{0.0, 0.0, 1.0, 1.0}}, o);
+  CHECK(std::abs(centred.rate) < 0.05);
+  // The pan joint's range bounds the target.
+  o.max_yaw = 0.01;
+  o.min_yaw = -0.01;
+  const YawRecommendation limited = recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, o);
+  CHECK(std::abs(limited.target_yaw) <= 0.01 + 1e-12);
+  // Bad input.
+  CHECK_THROWS_AS(recommendYawRate(camera, rig, 0.0, Eigen::Vector3d::Zero(), {}, o), Error);
+  CHECK_THROWS_AS(recommendYawRate(CameraModel(), rig, 0.0, Eigen::Vector3d::Zero(), f, o), Error);
+}
+
+TEST_CASE("pan robot: the camera Jacobian matches the kinematics", "[servo]")
+{
+  UnicyclePanRobot robot;
+  robot.rig = YawRig(Eigen::Vector3d(0.02, 0, 0.03));
+  robot.x = 0.3;
+  robot.z = -1.0;
+  robot.heading = 0.4;
+  robot.pan = -0.7;
+  const vpMatrix J = robot.cJq();
+  const double dt = 1e-6;
+  for (int j = 0; j < 3; ++j) {
+    vpColVector q(3, 0.0);
+    q[j] = 1.0;
+    UnicyclePanRobot moved = robot;
+    moved.step(q, dt);
+    // Camera twist from the pose change, in the camera frame.
+    const vpHomogeneousMatrix cMc2 = robot.wMc().inverse() * moved.wMc();
+    const vpColVector v = vpExponentialMap::inverse(cMc2, dt);
+    for (unsigned i = 0; i < 6; ++i)
+      CHECK(v[i] == Approx(J[i][j]).margin(1e-5));
+  }
+}
+
+TEST_CASE("servo: a short run converges with estimated depth, front and side", "[servo]")
+{
+  for (bool side : {false, true}) {
+    ServoSimOptions o;
+    o.depth = ServoDepthMode::Estimated;
+    o.side_view = side;
+    o.seed = 3;
+    o.max_iterations = 400;
+    o.provider.noise = NoiseModel{0.3, 0.0005, 0.05 * M_PI / 180, 0.0005};
+    const ServoSimResult r = runServoSimulation(o);
+    INFO("side " << side << " reason " << r.reason << " iterations " << r.iterations);
+    REQUIRE(r.converged);
+    CHECK(r.final_error_px < o.tolerance_px);
+    CHECK(r.iterations < 200);
+    // The estimate took over from the prior, and every depth handed to ViSP was positive.
+    bool any_converged = false;
+    for (const ServoSimStep &st : r.steps)
+      for (std::size_t i = 0; i < st.used_Z.size(); ++i) {
+        REQUIRE(st.used_Z[i] > 0);
+        any_converged = any_converged || st.converged[i];
+      }
+    CHECK(any_converged);
+    // The last depths are within 10 % of the truth.
+    const ServoSimStep &before_last = r.steps[r.steps.size() - 2];
+    for (std::size_t i = 0; i < before_last.used_Z.size(); ++i)
+      CHECK(std::abs(before_last.used_Z[i] - before_last.true_Z[i]) / before_last.true_Z[i] < 0.1);
+  }
+  // The other modes run too.
+  ServoSimOptions t;
+  t.depth = ServoDepthMode::True;
+  t.max_iterations = 400;
+  CHECK(runServoSimulation(t).converged);
+  CHECK_THROWS_AS(servoDepthModeFromString("sensor"), Error);
+}
