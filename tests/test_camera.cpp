@@ -505,6 +505,10 @@ TEST_CASE("camera file: fuzzer regressions are rejected cleanly", "[camera][file
   const std::string dir = std::string(YAWDEPTH_TEST_DATA_DIR) + "/regress/camera_file/";
   // A stray byte before `rows`' value made OpenCV size the matrix at 48 GB.
   requireRejected(dir + "huge_matrix_rows.yaml", "", "camera_matrix is not a matrix");
+  // An indented first key, a line "--", then "-": OpenCV's YAML parser looped forever.
+  requireRejected(dir + "yaml_endless_loop.yaml", "", "top level must be a map");
+  // NUL bytes in an OpenCV XML file: OpenCV dereferenced a null pointer.
+  requireRejected(dir + "xml_nul_bytes.xml", "", "NUL byte");
   std::size_t n = 0;
   for (const auto &entry : std::filesystem::directory_iterator(dir)) {
     ++n;
@@ -512,4 +516,38 @@ TEST_CASE("camera file: fuzzer regressions are rejected cleanly", "[camera][file
       requireRejected(entry.path().string(), name, "");
   }
   REQUIRE(n >= 1);
+}
+
+// OpenCV's parsers recurse once per nesting level without a limit: deep nesting is rejected
+// before they see it (it would overflow the stack).
+TEST_CASE("camera file: deep nesting is rejected before OpenCV parses it", "[camera][file][regress]") {
+  const std::string dir = (std::filesystem::temp_directory_path() /
+                           ("yawdepth_test_nesting_" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  const std::size_t n = 200000;
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"flow.yaml", "%YAML:1.0\ncamera_matrix: " + std::string(n, '[') + "1" + std::string(n, ']') + "\n"},
+      {"block.yaml", "%YAML:1.0\ncamera_matrix:\n  " + [&] {
+         std::string s;
+         for (std::size_t i = 0; i < n; ++i)
+           s += "- ";
+         return s + "1\n";
+       }()},
+      {"deep.xml", "<?xml version=\"1.0\"?>\n<opencv_storage>\n" + [&] {
+         std::string s;
+         for (std::size_t i = 0; i < n; ++i)
+           s += "<a>";
+         return s + "1";
+       }() + "\n</opencv_storage>\n"},
+  };
+  for (const auto &[name, text] : files) {
+    const std::string path = dir + "/" + name;
+    std::ofstream(path, std::ios::binary) << text;
+    requireRejected(path, "", "nested more than 16 levels deep");
+  }
+  // Nesting as deep as a real file is fine.
+  const std::string ok = dir + "/ok.yaml";
+  std::ofstream(ok, std::ios::binary) << "%YAML:1.0\ncamera_matrix: !!opencv-matrix { rows: 3, cols: 3, dt: d, data: [ 1734.1, 0, 319.2, 0, 1734.5, 241.4, 0, 0, 1 ] }\n";
+  CHECK_NOTHROW(yawdepth::loadCameraFile(ok));
+  std::filesystem::remove_all(dir);
 }

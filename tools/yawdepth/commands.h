@@ -13,6 +13,8 @@ Runner addEstimate(CLI::App &app);
 Runner addErrorAnalysis(CLI::App &app);
 Runner addSimulate(CLI::App &app);
 Runner addMeasure(CLI::App &app);
+Runner addCalibrateCamera(CLI::App &app);
+Runner addCalibrateRig(CLI::App &app);
 
 /*! \brief CLI11 validator: a finite number (rejects nan and inf). */
 extern const CLI::Validator Finite;

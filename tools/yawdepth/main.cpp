@@ -63,6 +63,8 @@ int main(int argc, char **argv)
   add(addMeasure);
   add(addErrorAnalysis);
   add(addSimulate);
+  add(addCalibrateCamera);
+  add(addCalibrateRig);
 
   // Name an unknown command instead of CLI11's generic "A subcommand is required".
   if (argc > 1 && argv[1][0] != '-') {

@@ -5,6 +5,7 @@
 #include <yawdepth/camera/camera_file.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <exception>
 #include <filesystem>
@@ -328,10 +329,74 @@ unsigned readImageSize(const cv::FileNode &node, const std::string &path, const 
   return static_cast<unsigned>(v);
 }
 
+/*! \brief Deepest nesting accepted in a camera file (a real one nests 2 or 3 levels). */
+constexpr int kMaxNesting = 16;
+
+/*!
+  \brief Throws yawdepth::Error for what OpenCV 4.6's cv::FileStorage cannot take safely (found by
+  fuzzing; its parsers are third-party code, so the input is checked here first):
+  - YAML whose top level is not a block map starting in the first column, or with a second
+    document ('---' or '...' after the first key): after a first document that ends before the end
+    of the file, a line starting with '-' sends the parser into an endless loop;
+  - nesting deeper than kMaxNesting (flow collections `[` `{`, block sequences `- - -` on one line,
+    XML elements): the parsers recurse once per level without a limit and overflow the stack.
+*/
+void precheckOpenCv(const std::string &path, const std::string &content, bool yaml) {
+  const auto tooDeep = [&] {
+    return Error(path + ": nested more than " + std::to_string(kMaxNesting) + " levels deep; not a camera file");
+  };
+  if (!yaml) {
+    const std::string t = stripXmlComments(content);
+    int depth = 0;
+    for (std::size_t p = t.find('<'); p != std::string::npos; p = t.find('<', p + 1)) {
+      const std::size_t gt = t.find('>', p);
+      if (gt == std::string::npos)
+        break;
+      if (p + 1 < t.size() && t[p + 1] == '/')
+        depth = std::max(0, depth - 1);
+      else if (p + 1 < t.size() && t[p + 1] != '?' && t[p + 1] != '!' && t[gt - 1] != '/' && ++depth > kMaxNesting)
+        throw tooDeep();
+    }
+    return;
+  }
+  std::istringstream in(content);
+  std::string line;
+  bool first_item = false;
+  int flow_depth = 0;
+  while (std::getline(in, line)) {
+    const std::size_t b = line.find_first_not_of(" \t\r");
+    if (b == std::string::npos || line[b] == '#')
+      continue;
+    if (!first_item) {
+      if (line[b] == '%' || line.compare(b, 3, "---") == 0)
+        continue; // directives and the document start, before the first key
+      if (b != 0 || !(std::isalnum(static_cast<unsigned char>(line[0])) || line[0] == '_'))
+        throw Error(path + ": not a camera file (its top level must be a map of keys starting in the first "
+                           "column, e.g. 'camera_matrix: ...')");
+      first_item = true;
+    } else if (b == 0 && (line.compare(0, 3, "---") == 0 || line.compare(0, 3, "...") == 0)) {
+      throw Error(path + ": a camera file holds one YAML document ('" + line.substr(0, 3) +
+                  "' after its first key)");
+    }
+    int dashes = 0; // block sequences opened on this line: "- - - x"
+    for (std::size_t i = b; i < line.size() && line[i] == '-' && (i + 1 == line.size() || line[i + 1] == ' ');
+         i = line.find_first_not_of(' ', i + 1))
+      if (++dashes > kMaxNesting)
+        throw tooDeep();
+    for (const char c : line) {
+      if ((c == '[' || c == '{') && ++flow_depth > kMaxNesting)
+        throw tooDeep();
+      if ((c == ']' || c == '}') && flow_depth > 0)
+        --flow_depth;
+    }
+  }
+}
+
 CameraModel loadOpenCv(const std::string &path, const std::string &text, bool yaml) {
   std::string content = text;
   if (yaml && trim(text).rfind("%YAML", 0) != 0)
     content = "%YAML:1.0\n---\n" + text; // OpenCV 4 insists on the YAML header
+  precheckOpenCv(path, content, yaml);
   std::vector<double> K, D;
   int kr = 0, kc = 0, dr = 0, dc = 0;
   unsigned w = 0, h = 0;
@@ -403,6 +468,10 @@ CameraModel loadCameraFile(const std::string &path, const std::string &camera_na
     const std::string text = readWholeFile(path);
     if (trim(text).empty())
       throw Error(path + ": empty camera file");
+    // Text only: OpenCV's in-memory parsers stop at a NUL byte and then dereference a null
+    // pointer (found by fuzzing).
+    if (text.find('\0') != std::string::npos)
+      throw Error(path + ": not a camera file (it holds a NUL byte)");
     switch (detectFormat(text)) {
     case Format::ViSPXml:
       return loadVispXml(path, text, camera_name);

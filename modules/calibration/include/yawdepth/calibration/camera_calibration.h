@@ -1,0 +1,115 @@
+#pragma once
+/*!
+  \file camera_calibration.h
+  \brief Camera calibration from images of a chessboard or an AprilTag grid: intrinsics and Brown
+  distortion (OpenCV's cv::calibrateCamera), ViSP's two models (without distortion, and kud/kdu,
+  each fitted by vpCalibration as ViSP's own calibration tool does), per-view errors, outlier
+  views, parameter standard deviations, degeneracy checks and a coverage picture.
+*/
+#include <string>
+#include <vector>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <visp3/core/vpCameraParameters.h>
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/features/detector.h>
+#include <yawdepth/features/pattern.h>
+
+namespace yawdepth {
+
+/*! \brief The features detected in one calibration image. */
+struct CalibrationView {
+  std::string name;                       //!< image name (for messages)
+  std::vector<DetectedFeature> features;  //!< observed (distorted) pixels with board feature ids
+};
+
+/*! \brief Detection over a set of calibration images. */
+struct CalibrationDetections {
+  int width = 0, height = 0;              //!< image size (all images must share it)
+  std::vector<CalibrationView> views;     //!< the images where the pattern was found
+  std::vector<std::string> failures;      //!< "NAME: reason" for every image where it was not
+};
+
+/*!
+  \brief Detect the board in each image. Only the board's features are kept (AprilTag: the tag
+  corners of tags that belong to `board`, not the centres).
+  \throws yawdepth::Error when `images` is empty, the sizes differ, or the pattern is found in no
+  image (the message says why, and hints at a wrong COLSxROWS when the board is found with one
+  corner fewer or more per side).
+*/
+CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std::vector<std::string> &names,
+                                             const std::vector<cv::Mat> &images,
+                                             const DetectorOptions &options = DetectorOptions());
+
+/*! \brief Options of calibrateCamera(). */
+struct CameraCalibrationOptions {
+  bool fix_aspect_ratio = false;    //!< fx = fy (cv::CALIB_FIX_ASPECT_RATIO, vpCalibration aspect ratio 1)
+  bool fix_principal_point = false; //!< principal point at the image centre (OpenCV model only)
+  bool estimate_k3 = false;         //!< k3 is fixed at 0 unless set
+  bool zero_tangential = false;     //!< p1 = p2 = 0
+  bool drop_outliers = false;       //!< recalibrate without the views flagged as outliers
+  double outlier_ratio = 3.0;       //!< a view is an outlier when its RMS > ratio x median ...
+  double outlier_min_px = 0.5;      //!< ... and > this (px)
+  int min_views = 3;                //!< fewer views: error
+  int min_points_per_view = 6;      //!< views with fewer points are not used
+  double min_orientation_spread = 4.0 * M_PI / 180.0; //!< largest angle between board normals below this: degenerate
+  bool fit_visp = true;             //!< also fit ViSP's two models with vpCalibration
+};
+
+/*! \brief Result for one view. */
+struct CalibrationViewResult {
+  std::string name;
+  int points = 0;
+  double rms_px = 0;          //!< RMS reprojection error of the view's points (px), Brown model
+  bool outlier = false;       //!< flagged as an outlier view
+  bool used = true;           //!< used in the final calibration
+  double tilt = 0;            //!< angle between the board normal and the optical axis (rad)
+  Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity(); //!< board pose in the camera frame
+};
+
+/*! \brief Result of calibrateCamera(). */
+struct CameraCalibration {
+  CameraModel camera;              //!< Brown model with the image size
+  double rms_px = 0;               //!< RMS reprojection error over the views used (px)
+  /*! standard deviations of fx, fy, u0, v0, k1, k2, p1, p2, k3 (0 for fixed parameters) */
+  std::vector<double> std_devs;
+  std::vector<CalibrationViewResult> views; //!< every input view, in input order
+  int views_used = 0;
+  double orientation_spread = 0;   //!< largest angle between two board normals (rad)
+  double coverage = 0;             //!< fraction of a 8 x 6 image grid's cells with at least one point
+  bool visp_fitted = false;
+  vpCameraParameters visp_without; //!< ViSP model without distortion (px, py, u0, v0)
+  vpCameraParameters visp_with;    //!< ViSP model with distortion (px, py, u0, v0, kud, kdu)
+  double visp_rms_without = 0;     //!< RMS reprojection error of the model without distortion (px)
+  double visp_rms_with = 0;        //!< RMS reprojection error of the kud projection (px)
+  double visp_rms_kdu = 0;         //!< RMS error of the kdu model (observed pixel undistorted, px)
+  std::vector<std::string> notes;  //!< warnings for the user (few views, poor coverage, ...)
+};
+
+/*!
+  \brief Calibrate from detected views of `board`.
+  \throws yawdepth::Error: too few views ("too few views: ..."), degenerate views ("degenerate
+  views: ..."), a failed or non-finite solution.
+*/
+CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<CalibrationView> &views, int width,
+                                  int height, const CameraCalibrationOptions &options = CameraCalibrationOptions());
+
+/*!
+  \brief Write the ViSP camera XML (vpXmlParserCamera::save) with both models under `camera_name`
+  and the image size, atomically. Throws yawdepth::Error when the ViSP models were not fitted or on
+  failure.
+*/
+void saveVispCameraXml(const std::string &path, const CameraCalibration &calibration,
+                       const std::string &camera_name = "Camera", const std::string &additional_info = "");
+
+/*!
+  \brief The coverage picture: every point of every view on a blank image of the camera's size
+  (a colour per view, outlier views as red crosses), an 8 x 6 grid whose empty cells are shaded.
+*/
+cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<CalibrationView> &views);
+/*! \brief coverageImage() written as a PNG (or any format cv::imwrite knows); throws yawdepth::Error on failure. */
+void writeCoverageImage(const std::string &path, const CameraCalibration &calibration,
+                        const std::vector<CalibrationView> &views);
+
+} // namespace yawdepth

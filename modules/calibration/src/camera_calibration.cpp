@@ -1,0 +1,597 @@
+/*!
+  \file camera_calibration.cpp
+  \brief Camera calibration: OpenCV's Brown model, ViSP's two models, diagnostics.
+*/
+#include <yawdepth/calibration/camera_calibration.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <streambuf>
+#include <sstream>
+#include <unistd.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <visp3/core/vpException.h>
+#include <visp3/core/vpImagePoint.h>
+#include <visp3/core/vpXmlParserCamera.h>
+#include <visp3/vision/vpCalibration.h>
+#include <yawdepth/error.h>
+
+namespace yawdepth {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+std::string fmt(double v, int precision = 3)
+{
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+std::string oneLine(std::string s)
+{
+  for (char &c : s)
+    if (c == '\n' || c == '\r' || c == '\t')
+      c = ' ';
+  while (!s.empty() && s.back() == ' ')
+    s.pop_back();
+  return s;
+}
+
+/*! Board points by feature id (AprilTag: the tag corners only, not the centres). */
+std::map<long, Eigen::Vector3d> boardPoints(const BoardLayout &board)
+{
+  std::map<long, Eigen::Vector3d> pts;
+  const bool tags = board.pattern.kind == PatternSpec::Kind::AprilTag;
+  for (const auto &f : board.features())
+    if (!tags || f.first % 5 != 0)
+      pts[f.first] = f.second;
+  return pts;
+}
+
+/*! Tries a chessboard of another size on a few images: the usual mistake is counting squares. */
+std::string sizeHint(const BoardLayout &board, const std::vector<cv::Mat> &images, const DetectorOptions &options)
+{
+  if (board.pattern.kind != PatternSpec::Kind::Chessboard)
+    return {};
+  const int c = board.pattern.cols, r = board.pattern.rows;
+  // One image only: a failed search costs OpenCV's exhaustive detector a second or so.
+  const std::pair<int, int> candidates[] = {{c - 1, r - 1}, {c + 1, r + 1}, {c - 1, r}, {c, r - 1}};
+  DetectorOptions fast = options;
+  fast.subpixel = false;
+  for (std::size_t i = 0; i < images.size() && i < 1; ++i) {
+    if (images[i].empty())
+      continue;
+    for (const auto &cand : candidates) {
+      if (cand.first < 3 || cand.second < 3)
+        continue;
+      PatternSpec p = board.pattern;
+      p.cols = cand.first;
+      p.rows = cand.second;
+      try {
+        PatternDetector d(p, fast);
+        if (d.detect(images[i], 0).found)
+          return "; a " + std::to_string(cand.first) + "x" + std::to_string(cand.second) +
+                 " chessboard is there: COLSxROWS counts inner corners (squares minus one), use --pattern " +
+                 p.toString();
+      } catch (const Error &) {
+      }
+    }
+  }
+  return {};
+}
+
+/*! Board normal (camera frame) from a homography with a guessed camera, for a failed calibration. */
+double homographySpread(const std::map<long, Eigen::Vector3d> &pts, const std::vector<CalibrationView> &views, int width,
+                        int height)
+{
+  const double f = std::max(width, height);
+  const Eigen::Matrix3d Kinv =
+      (Eigen::Matrix3d() << f, 0, 0.5 * (width - 1), 0, f, 0.5 * (height - 1), 0, 0, 1).finished().inverse();
+  std::vector<Eigen::Vector3d> normals;
+  for (const auto &v : views) {
+    std::vector<cv::Point2d> src, dst;
+    for (const auto &ft : v.features) {
+      auto it = pts.find(ft.id);
+      if (it == pts.end())
+        continue;
+      src.emplace_back(it->second.x(), it->second.y());
+      dst.emplace_back(ft.u, ft.v);
+    }
+    if (src.size() < 4)
+      continue;
+    const cv::Mat H = cv::findHomography(src, dst);
+    if (H.empty())
+      continue;
+    Eigen::Matrix3d He;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        He(i, j) = H.at<double>(i, j);
+    const Eigen::Matrix3d A = Kinv * He;
+    const Eigen::Vector3d r1 = A.col(0).normalized(), r2 = A.col(1).normalized();
+    Eigen::Vector3d n = r1.cross(r2);
+    if (n.norm() < 1e-9)
+      continue;
+    n.normalize();
+    if (n.z() < 0)
+      n = -n;
+    normals.push_back(n);
+  }
+  double spread = 0;
+  for (std::size_t i = 0; i < normals.size(); ++i)
+    for (std::size_t j = i + 1; j < normals.size(); ++j)
+      spread = std::max(spread, std::acos(std::clamp(normals[i].dot(normals[j]), -1.0, 1.0)));
+  return spread;
+}
+
+/*!
+  Silences std::cout, std::cerr and std::clog while alive: vpXmlParserCamera::save prints "Found
+  camera with name ..." when it adds the second model, and the library must not print. Process-wide;
+  calls from here are serialised by a mutex.
+*/
+class SilenceStdStreams {
+public:
+  SilenceStdStreams() : cout_(std::cout.rdbuf(&null_)), cerr_(std::cerr.rdbuf(&null_)), clog_(std::clog.rdbuf(&null_)) {}
+  ~SilenceStdStreams()
+  {
+    std::cout.rdbuf(cout_);
+    std::cerr.rdbuf(cerr_);
+    std::clog.rdbuf(clog_);
+  }
+  SilenceStdStreams(const SilenceStdStreams &) = delete;
+  SilenceStdStreams &operator=(const SilenceStdStreams &) = delete;
+
+private:
+  struct NullBuf : std::streambuf {
+    int overflow(int c) override { return traits_type::not_eof(c); }
+    std::streamsize xsputn(const char *, std::streamsize n) override { return n; }
+  };
+  NullBuf null_;
+  std::streambuf *cout_, *cerr_, *clog_;
+};
+
+std::mutex &vispMutex()
+{
+  static std::mutex m;
+  return m;
+}
+
+struct OpenCvSolution {
+  cv::Mat K, dist;
+  std::vector<cv::Mat> rvecs, tvecs;
+  cv::Mat std_intrinsics;
+};
+
+} // namespace
+
+CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std::vector<std::string> &names,
+                                             const std::vector<cv::Mat> &images, const DetectorOptions &options)
+{
+  if (images.empty())
+    throw Error("no calibration images given");
+  if (names.size() != images.size())
+    throw Error("detectCalibrationViews: " + std::to_string(names.size()) + " names for " +
+                std::to_string(images.size()) + " images");
+  const std::map<long, Eigen::Vector3d> pts = boardPoints(board);
+  PatternDetector detector(board.pattern, options);
+  CalibrationDetections out;
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const cv::Mat &img = images[i];
+    if (img.empty()) {
+      out.failures.push_back(names[i] + ": empty image");
+      continue;
+    }
+    if (out.width == 0) {
+      out.width = img.cols;
+      out.height = img.rows;
+    } else if (img.cols != out.width || img.rows != out.height) {
+      throw Error(names[i] + ": image is " + std::to_string(img.cols) + "x" + std::to_string(img.rows) + " but " +
+                  names.front() + " is " + std::to_string(out.width) + "x" + std::to_string(out.height) +
+                  ": all calibration images must come from the same camera at the same resolution");
+    }
+    const FrameDetection d = detector.detect(img, static_cast<long>(i));
+    if (!d.found) {
+      out.failures.push_back(names[i] + ": " + d.reason);
+      continue;
+    }
+    CalibrationView v;
+    v.name = names[i];
+    for (const auto &f : d.features)
+      if (pts.count(f.id))
+        v.features.push_back(f);
+    if (v.features.size() < 4) {
+      out.failures.push_back(names[i] + ": only " + std::to_string(v.features.size()) +
+                             " features of the board (tags outside the board's --tags grid?)");
+      continue;
+    }
+    out.views.push_back(std::move(v));
+  }
+  if (out.views.empty()) {
+    std::string msg = "the pattern " + board.pattern.toString() + " was not found in any of the " +
+                      std::to_string(images.size()) + " images";
+    if (!out.failures.empty())
+      msg += " (" + out.failures.front() + ")";
+    msg += sizeHint(board, images, options);
+    throw Error(msg);
+  }
+  return out;
+}
+
+CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<CalibrationView> &views, int width,
+                                  int height, const CameraCalibrationOptions &options)
+{
+  if (width <= 0 || height <= 0)
+    throw Error("calibrateCamera: unknown image size");
+  const std::map<long, Eigen::Vector3d> pts = boardPoints(board);
+
+  CameraCalibration result;
+  result.views.resize(views.size());
+  std::vector<std::vector<cv::Point3f>> object(views.size());
+  std::vector<std::vector<cv::Point2f>> image(views.size());
+  std::vector<std::size_t> usable;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    result.views[i].name = views[i].name;
+    for (const auto &f : views[i].features) {
+      auto it = pts.find(f.id);
+      if (it == pts.end() || !std::isfinite(f.u) || !std::isfinite(f.v))
+        continue;
+      object[i].emplace_back(static_cast<float>(it->second.x()), static_cast<float>(it->second.y()), 0.0f);
+      image[i].emplace_back(static_cast<float>(f.u), static_cast<float>(f.v));
+    }
+    result.views[i].points = static_cast<int>(object[i].size());
+    if (result.views[i].points >= std::max(4, options.min_points_per_view))
+      usable.push_back(i);
+    else {
+      result.views[i].used = false;
+      result.notes.push_back(views[i].name + ": only " + std::to_string(result.views[i].points) +
+                             " points, view not used");
+    }
+  }
+  const int min_views = std::max(1, options.min_views);
+  if (static_cast<int>(usable.size()) < min_views)
+    throw Error("too few views: " + std::to_string(usable.size()) + " usable view(s) of the board, at least " +
+                std::to_string(min_views) + " are needed (10 to 20 views at different tilts are best)");
+
+  int flags = 0;
+  if (!options.estimate_k3)
+    flags |= cv::CALIB_FIX_K3;
+  if (options.zero_tangential)
+    flags |= cv::CALIB_ZERO_TANGENT_DIST;
+  if (options.fix_aspect_ratio)
+    flags |= cv::CALIB_FIX_ASPECT_RATIO;
+  if (options.fix_principal_point)
+    flags |= cv::CALIB_FIX_PRINCIPAL_POINT;
+
+  auto degenerateMessage = [&](double spread, std::size_t n) {
+    return "degenerate views: the board's orientation varies by only " + fmt(spread / kDeg, 1) + " deg over the " +
+           std::to_string(n) + " views (all fronto-parallel or all tilted alike); the focal length cannot be "
+           "told from the distance: tilt the board 20 to 45 degrees in different directions";
+  };
+
+  auto solve = [&](const std::vector<std::size_t> &idx) {
+    std::vector<std::vector<cv::Point3f>> obj;
+    std::vector<std::vector<cv::Point2f>> img;
+    std::vector<CalibrationView> sel;
+    for (std::size_t i : idx) {
+      obj.push_back(object[i]);
+      img.push_back(image[i]);
+      sel.push_back(views[i]);
+    }
+    // Before OpenCV: a homography-based orientation check (independent of the focal length's value
+    // for fronto-parallel boards, whose homographies have no perspective part).
+    const double pre = homographySpread(pts, sel, width, height);
+    if (pre < 0.25 * options.min_orientation_spread)
+      throw Error(degenerateMessage(pre, idx.size()));
+    OpenCvSolution s;
+    s.K = cv::Mat::eye(3, 3, CV_64F);
+    s.dist = cv::Mat::zeros(1, 5, CV_64F);
+    cv::Mat std_ext, per_view;
+    try {
+      cv::calibrateCamera(obj, img, cv::Size(width, height), s.K, s.dist, s.rvecs, s.tvecs, s.std_intrinsics, std_ext,
+                          per_view, flags,
+                          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
+    } catch (const cv::Exception &e) {
+      if (pre < options.min_orientation_spread)
+        throw Error(degenerateMessage(pre, idx.size()));
+      throw Error("calibration failed (OpenCV: " + oneLine(e.err) + ")");
+    }
+    const double fx = s.K.at<double>(0, 0), fy = s.K.at<double>(1, 1);
+    if (!cv::checkRange(s.K) || !cv::checkRange(s.dist) || !(fx > 0) || !(fy > 0)) {
+      if (pre < options.min_orientation_spread)
+        throw Error(degenerateMessage(pre, idx.size()));
+      throw Error("calibration failed: no finite solution (views too few or too alike?)");
+    }
+    return s;
+  };
+
+  std::vector<std::size_t> used = usable;
+  OpenCvSolution sol;
+  for (int pass = 0; pass < 2; ++pass) {
+    sol = solve(used);
+    // Orientation spread of the board normals.
+    std::vector<Eigen::Vector3d> normals;
+    for (std::size_t k = 0; k < used.size(); ++k) {
+      cv::Mat R;
+      cv::Rodrigues(sol.rvecs[k], R);
+      Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b)
+          M.linear()(a, b) = R.at<double>(a, b);
+        M.translation()(a) = sol.tvecs[k].at<double>(a);
+      }
+      CalibrationViewResult &vr = result.views[used[k]];
+      vr.cMb = M;
+      const Eigen::Vector3d n = M.linear().col(2);
+      vr.tilt = std::acos(std::min(1.0, std::abs(n.z())));
+      normals.push_back(n);
+    }
+    double spread = 0;
+    for (std::size_t a = 0; a < normals.size(); ++a)
+      for (std::size_t b = a + 1; b < normals.size(); ++b)
+        spread = std::max(spread, std::acos(std::clamp(normals[a].dot(normals[b]), -1.0, 1.0)));
+    result.orientation_spread = spread;
+    if (spread < options.min_orientation_spread)
+      throw Error(degenerateMessage(spread, used.size()));
+
+    // Per-view errors (double precision reprojection).
+    double sum2 = 0;
+    std::size_t n_all = 0;
+    std::vector<double> rms;
+    for (std::size_t k = 0; k < used.size(); ++k) {
+      std::vector<cv::Point2f> proj;
+      cv::projectPoints(object[used[k]], sol.rvecs[k], sol.tvecs[k], sol.K, sol.dist, proj);
+      double s2 = 0;
+      for (std::size_t j = 0; j < proj.size(); ++j) {
+        const double du = proj[j].x - image[used[k]][j].x, dv = proj[j].y - image[used[k]][j].y;
+        s2 += du * du + dv * dv;
+      }
+      sum2 += s2;
+      n_all += proj.size();
+      result.views[used[k]].rms_px = std::sqrt(s2 / static_cast<double>(proj.size()));
+      rms.push_back(result.views[used[k]].rms_px);
+    }
+    result.rms_px = std::sqrt(sum2 / static_cast<double>(n_all));
+    std::vector<double> sorted = rms;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    std::vector<std::size_t> kept;
+    for (std::size_t k = 0; k < used.size(); ++k) {
+      CalibrationViewResult &vr = result.views[used[k]];
+      vr.outlier = pass == 0 && rms[k] > options.outlier_ratio * median && rms[k] > options.outlier_min_px;
+      if (!vr.outlier)
+        kept.push_back(used[k]);
+    }
+    if (pass == 1 || !options.drop_outliers || kept.size() == used.size())
+      break;
+    if (static_cast<int>(kept.size()) < min_views)
+      throw Error("too few views: " + std::to_string(kept.size()) + " left after dropping " +
+                  std::to_string(used.size() - kept.size()) + " outlier view(s), at least " +
+                  std::to_string(min_views) + " are needed");
+    for (std::size_t i : used)
+      if (std::find(kept.begin(), kept.end(), i) == kept.end()) {
+        result.views[i].used = false;
+        result.views[i].outlier = true;
+        result.notes.push_back(result.views[i].name + ": outlier view dropped (RMS " +
+                               fmt(result.views[i].rms_px) + " px against a median of " + fmt(median) + " px)");
+      }
+    used = kept;
+  }
+  result.views_used = static_cast<int>(used.size());
+
+  const double fx = sol.K.at<double>(0, 0), fy = sol.K.at<double>(1, 1);
+  const double u0 = sol.K.at<double>(0, 2), v0 = sol.K.at<double>(1, 2);
+  std::vector<double> d(5);
+  for (int i = 0; i < 5; ++i)
+    d[static_cast<std::size_t>(i)] = sol.dist.at<double>(i);
+  result.camera = CameraModel::brown(fx, fy, u0, v0, d, static_cast<unsigned>(width), static_cast<unsigned>(height));
+  result.std_devs.assign(9, 0.0);
+  for (int i = 0; i < 9 && i < static_cast<int>(sol.std_intrinsics.total()); ++i)
+    result.std_devs[static_cast<std::size_t>(i)] = sol.std_intrinsics.at<double>(i);
+  if (options.fix_aspect_ratio) // fx = (fx/fy) fy: OpenCV reports only fy's deviation
+    result.std_devs[0] = result.std_devs[1] * fx / fy;
+
+  // Coverage: 8 x 6 cells.
+  {
+    std::vector<int> cells(48, 0);
+    for (std::size_t i : used)
+      for (const auto &p : image[i]) {
+        const int cx = std::clamp(static_cast<int>(p.x / width * 8), 0, 7);
+        const int cy = std::clamp(static_cast<int>(p.y / height * 6), 0, 5);
+        ++cells[static_cast<std::size_t>(cy * 8 + cx)];
+      }
+    result.coverage = static_cast<double>(std::count_if(cells.begin(), cells.end(), [](int c) { return c > 0; })) / 48.0;
+  }
+  if (result.views_used < 8)
+    result.notes.push_back("only " + std::to_string(result.views_used) +
+                           " views used: 10 to 20 views give more reliable parameters");
+  if (result.coverage < 0.6)
+    result.notes.push_back("the corners cover only " + fmt(100 * result.coverage, 0) +
+                           " % of the image: the distortion is poorly known where there are none (see the coverage picture)");
+  for (const auto &v : result.views)
+    if (v.outlier && v.used)
+      result.notes.push_back(v.name + ": outlier view (RMS " + fmt(v.rms_px) + " px); --drop-outliers recalibrates without it");
+
+  // ViSP's two models, fitted by vpCalibration as ViSP's calibration tool does, from OpenCV's result.
+  if (options.fit_visp) {
+    try {
+      std::lock_guard<std::mutex> lock(vispMutex()); // vpCalibration's gain is a static
+      SilenceStdStreams silence;
+      std::vector<vpCalibration> table;
+      for (std::size_t i : used) {
+        vpCalibration calib;
+        calib.clearPoint();
+        if (options.fix_aspect_ratio)
+          calib.setAspectRatio(1.0);
+        for (std::size_t j = 0; j < object[i].size(); ++j) {
+          vpImagePoint ip(image[i][j].y, image[i][j].x);
+          calib.addPoint(object[i][j].x, object[i][j].y, object[i][j].z, ip);
+        }
+        table.push_back(calib);
+      }
+      vpCalibration::setLambda(0.5);
+      vpCameraParameters cam;
+      cam.initPersProjWithoutDistortion(fx, fy, u0, v0);
+      double err = 0;
+      if (vpCalibration::computeCalibrationMulti(vpCalibration::CALIB_VIRTUAL_VS, table, cam, err, false) != 0)
+        throw Error("vpCalibration failed (model without distortion)");
+      result.visp_without = cam;
+      if (vpCalibration::computeCalibrationMulti(vpCalibration::CALIB_VIRTUAL_VS_DIST, table, cam, err, false) != 0)
+        throw Error("vpCalibration failed (model with distortion)");
+      result.visp_with = cam;
+      // Reprojection errors of each model with its own poses.
+      double s_wo = 0, s_w = 0, s_kdu = 0;
+      std::size_t n = 0;
+      const vpCameraParameters &cw = result.visp_with, &c0 = result.visp_without;
+      for (std::size_t k = 0; k < used.size(); ++k) {
+        const std::size_t i = used[k];
+        const vpHomogeneousMatrix &M0 = table[k].cMo, &M1 = table[k].cMo_dist;
+        for (std::size_t j = 0; j < object[i].size(); ++j) {
+          const double X = object[i][j].x, Y = object[i][j].y, Z = object[i][j].z;
+          const double u = image[i][j].x, v = image[i][j].y;
+          auto proj = [&](const vpHomogeneousMatrix &M, double &x, double &y) {
+            const double cx = M[0][0] * X + M[0][1] * Y + M[0][2] * Z + M[0][3];
+            const double cy = M[1][0] * X + M[1][1] * Y + M[1][2] * Z + M[1][3];
+            const double cz = M[2][0] * X + M[2][1] * Y + M[2][2] * Z + M[2][3];
+            x = cx / cz;
+            y = cy / cz;
+          };
+          double x, y;
+          proj(M0, x, y);
+          s_wo += std::pow(c0.get_u0() + c0.get_px() * x - u, 2) + std::pow(c0.get_v0() + c0.get_py() * y - v, 2);
+          proj(M1, x, y);
+          const double r2 = x * x + y * y;
+          s_w += std::pow(cw.get_u0() + cw.get_px() * x * (1 + cw.get_kud() * r2) - u, 2) +
+                 std::pow(cw.get_v0() + cw.get_py() * y * (1 + cw.get_kud() * r2) - v, 2);
+          // kdu: observed pixel to undistorted pixel, compared with the pinhole projection.
+          const double xd = (u - cw.get_u0()) / cw.get_px(), yd = (v - cw.get_v0()) / cw.get_py();
+          const double f = 1 + cw.get_kdu() * (xd * xd + yd * yd);
+          s_kdu += std::pow(cw.get_u0() + cw.get_px() * xd * f - (cw.get_u0() + cw.get_px() * x), 2) +
+                   std::pow(cw.get_v0() + cw.get_py() * yd * f - (cw.get_v0() + cw.get_py() * y), 2);
+          ++n;
+        }
+      }
+      result.visp_rms_without = std::sqrt(s_wo / static_cast<double>(n));
+      result.visp_rms_with = std::sqrt(s_w / static_cast<double>(n));
+      result.visp_rms_kdu = std::sqrt(s_kdu / static_cast<double>(n));
+      result.visp_fitted = std::isfinite(result.visp_rms_with) && std::isfinite(result.visp_rms_without);
+      if (!result.visp_fitted)
+        result.notes.push_back("ViSP models: non-finite fit");
+    } catch (const Error &e) {
+      result.notes.push_back(std::string("ViSP models not fitted: ") + e.what());
+    } catch (const vpException &e) {
+      result.notes.push_back("ViSP models not fitted: " + oneLine(e.getStringMessage()));
+    }
+  }
+  return result;
+}
+
+void saveVispCameraXml(const std::string &path, const CameraCalibration &calibration, const std::string &camera_name,
+                       const std::string &additional_info)
+{
+  if (!calibration.visp_fitted)
+    throw Error(path + ": the ViSP models were not fitted");
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw Error(path + ": folder does not exist");
+  const fs::path tmp = dir / (target.filename().string() + ".tmp" + std::to_string(::getpid()) + ".xml");
+  fs::remove(tmp, ec);
+  const std::string name = camera_name.empty() ? std::string("Camera") : camera_name;
+  const unsigned w = calibration.camera.width(), h = calibration.camera.height();
+  try {
+    std::lock_guard<std::mutex> lock(vispMutex());
+    SilenceStdStreams silence;
+    vpXmlParserCamera xml;
+    if (xml.save(calibration.visp_without, tmp.string(), name, w, h) != vpXmlParserCamera::SEQUENCE_OK)
+      throw Error(path + ": cannot write the ViSP camera (model without distortion)");
+    vpXmlParserCamera xml2;
+    if (xml2.save(calibration.visp_with, tmp.string(), name, w, h, additional_info) != vpXmlParserCamera::SEQUENCE_OK)
+      throw Error(path + ": cannot write the ViSP camera (model with distortion)");
+  } catch (const vpException &e) {
+    fs::remove(tmp, ec);
+    throw Error(path + ": cannot write the ViSP camera: " + oneLine(e.getStringMessage()));
+  } catch (...) {
+    fs::remove(tmp, ec);
+    throw;
+  }
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw Error(path + ": cannot write the ViSP camera file (rename failed)");
+  }
+}
+
+cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<CalibrationView> &views)
+{
+  const int w = static_cast<int>(calibration.camera.width()), h = static_cast<int>(calibration.camera.height());
+  if (w <= 0 || h <= 0)
+    throw Error("coverageImage: unknown image size");
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  std::vector<int> cells(48, 0);
+  for (std::size_t i = 0; i < views.size() && i < calibration.views.size(); ++i)
+    if (calibration.views[i].used)
+      for (const auto &f : views[i].features) {
+        const int cx = std::clamp(static_cast<int>(f.u / w * 8), 0, 7);
+        const int cy = std::clamp(static_cast<int>(f.v / h * 6), 0, 5);
+        ++cells[static_cast<std::size_t>(cy * 8 + cx)];
+      }
+  for (int cy = 0; cy < 6; ++cy)
+    for (int cx = 0; cx < 8; ++cx)
+      if (cells[static_cast<std::size_t>(cy * 8 + cx)] == 0)
+        cv::rectangle(img, cv::Point(cx * w / 8, cy * h / 6), cv::Point((cx + 1) * w / 8 - 1, (cy + 1) * h / 6 - 1),
+                      cv::Scalar(200, 200, 255), cv::FILLED);
+  for (int k = 1; k < 8; ++k)
+    cv::line(img, cv::Point(k * w / 8, 0), cv::Point(k * w / 8, h - 1), cv::Scalar(180, 180, 180), 1);
+  for (int k = 1; k < 6; ++k)
+    cv::line(img, cv::Point(0, k * h / 6), cv::Point(w - 1, k * h / 6), cv::Scalar(180, 180, 180), 1);
+  const int r = std::max(2, w / 320);
+  for (std::size_t i = 0; i < views.size() && i < calibration.views.size(); ++i) {
+    const bool used = calibration.views[i].used;
+    cv::Mat hsv(1, 1, CV_8UC3, cv::Scalar(static_cast<double>((i * 37) % 180), 255, 200)), bgr;
+    cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
+    const cv::Vec3b c = bgr.at<cv::Vec3b>(0, 0);
+    for (const auto &f : views[i].features) {
+      const cv::Point p(static_cast<int>(std::lround(f.u)), static_cast<int>(std::lround(f.v)));
+      if (used)
+        cv::circle(img, p, r, cv::Scalar(c[0], c[1], c[2]), cv::FILLED, cv::LINE_AA);
+      else {
+        cv::line(img, p - cv::Point(r + 1, r + 1), p + cv::Point(r + 1, r + 1), cv::Scalar(0, 0, 255), 1);
+        cv::line(img, p - cv::Point(r + 1, -r - 1), p + cv::Point(r + 1, -r - 1), cv::Scalar(0, 0, 255), 1);
+      }
+    }
+  }
+  const std::string text = std::to_string(calibration.views_used) + " views, coverage " +
+                           fmt(100 * calibration.coverage, 0) + " % (shaded: no corner)";
+  const double scale = std::max(0.4, w / 1600.0);
+  cv::putText(img, text, cv::Point(8, static_cast<int>(20 * scale / 0.4)), cv::FONT_HERSHEY_SIMPLEX, scale,
+              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  return img;
+}
+
+void writeCoverageImage(const std::string &path, const CameraCalibration &calibration,
+                        const std::vector<CalibrationView> &views)
+{
+  const cv::Mat img = coverageImage(calibration, views);
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, img);
+  } catch (const cv::Exception &e) {
+    throw Error(path + ": cannot write the coverage picture (" + oneLine(e.err) + ")");
+  }
+  if (!ok)
+    throw Error(path + ": cannot write the coverage picture");
+}
+
+} // namespace yawdepth

@@ -1,0 +1,439 @@
+/*!
+  \file rig_calibration.cpp
+  \brief Yaw-rig calibration: camera offset, yaw axis and yaw zero by Levenberg–Marquardt on the
+  reprojection error of a static board seen at several yaw readings.
+*/
+#include <yawdepth/calibration/rig_calibration.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+#include <yawdepth/error.h>
+
+namespace yawdepth {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr int kParams = 11;
+// Parameter layout.
+enum { P_AX = 0, P_AZ, P_TX, P_TZ, P_DELTA, P_PSI, P_ALPHA, P_GAMMA, P_BX, P_BY, P_BZ };
+
+std::string fmt(double v, int precision)
+{
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+std::string num(double v)
+{
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+Eigen::Matrix3d rotX(double a)
+{
+  return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix();
+}
+Eigen::Matrix3d rotZ(double a)
+{
+  return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+Eigen::Isometry3d isoWMV(const MotionSample &s)
+{
+  Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+  M.linear() = rotY(s.heading);
+  M.translation() = Eigen::Vector3d(s.x, s.y, s.z);
+  return M;
+}
+
+Eigen::Vector3d axisOf(const Eigen::VectorXd &p)
+{
+  return Eigen::Vector3d(p[P_AX], 1.0, p[P_AZ]).normalized();
+}
+
+/*! Pose of the camera in the vision frame at true yaw theta: [Ra(theta) | Ra(theta) t0]. */
+Eigen::Isometry3d vMc(const Eigen::Vector3d &axis, double theta, const Eigen::Vector3d &t0)
+{
+  Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+  M.linear() = Eigen::AngleAxisd(theta, axis).toRotationMatrix();
+  M.translation() = M.linear() * t0;
+  return M;
+}
+
+struct Problem {
+  const CameraModel *camera = nullptr;
+  std::vector<Eigen::Isometry3d> v0Mv;                   // vision frame of each view in the first one
+  std::vector<double> readings;                          // yaw readings
+  std::vector<std::vector<Eigen::Vector3d>> points;      // board points per view
+  std::vector<std::vector<Eigen::Vector2d>> pixels;      // observed pixels per view
+  double t0y = 0;
+  std::size_t residuals = 0;
+
+  Eigen::Isometry3d board(const Eigen::VectorXd &p) const
+  {
+    Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+    M.linear() = rotY(p[P_PSI]) * rotX(p[P_ALPHA]) * rotZ(p[P_GAMMA]);
+    M.translation() = Eigen::Vector3d(p[P_BX], p[P_BY], p[P_BZ]);
+    return M;
+  }
+  Eigen::Isometry3d cMb(const Eigen::VectorXd &p, std::size_t i) const
+  {
+    const Eigen::Vector3d t0(p[P_TX], t0y, p[P_TZ]);
+    return (v0Mv[i] * vMc(axisOf(p), readings[i] + p[P_DELTA], t0)).inverse() * board(p);
+  }
+  Eigen::VectorXd residual(const Eigen::VectorXd &p) const
+  {
+    Eigen::VectorXd r(static_cast<Eigen::Index>(residuals));
+    Eigen::Index k = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Isometry3d M = cMb(p, i);
+      for (std::size_t j = 0; j < points[i].size(); ++j) {
+        const Eigen::Vector3d P = M * points[i][j];
+        if (!(P.z() > 1e-9)) {
+          r[k++] = 1e4;
+          r[k++] = 1e4;
+          continue;
+        }
+        const Eigen::Vector2d uv = camera->project(Eigen::Vector2d(P.x() / P.z(), P.y() / P.z()));
+        r[k++] = uv.x() - pixels[i][j].x();
+        r[k++] = uv.y() - pixels[i][j].y();
+      }
+    }
+    return r;
+  }
+  Eigen::MatrixXd jacobian(const Eigen::VectorXd &p, const std::vector<int> &free) const
+  {
+    Eigen::MatrixXd J(static_cast<Eigen::Index>(residuals), static_cast<Eigen::Index>(free.size()));
+    for (std::size_t c = 0; c < free.size(); ++c) {
+      const double h = 1e-6;
+      Eigen::VectorXd pp = p, pm = p;
+      pp[free[c]] += h;
+      pm[free[c]] -= h;
+      J.col(static_cast<Eigen::Index>(c)) = (residual(pp) - residual(pm)) / (2 * h);
+    }
+    return J;
+  }
+};
+
+void eulerYXZ(const Eigen::Matrix3d &R, double &psi, double &alpha, double &gamma)
+{
+  // R = Ry(psi) Rx(alpha) Rz(gamma): third column (s_psi c_a, -s_a, c_psi c_a), second row (c_a s_g, c_a c_g, -s_a).
+  alpha = std::asin(std::clamp(-R(1, 2), -1.0, 1.0));
+  psi = std::atan2(R(0, 2), R(2, 2));
+  gamma = std::atan2(R(1, 0), R(1, 1));
+}
+
+void setBoard(Eigen::VectorXd &p, const Eigen::Isometry3d &M)
+{
+  eulerYXZ(M.linear(), p[P_PSI], p[P_ALPHA], p[P_GAMMA]);
+  p[P_BX] = M.translation().x();
+  p[P_BY] = M.translation().y();
+  p[P_BZ] = M.translation().z();
+}
+
+} // namespace
+
+RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board, const std::vector<RigView> &views,
+                            const RigCalibrationOptions &options)
+{
+  std::map<long, Eigen::Vector3d> pts;
+  const bool tags = board.pattern.kind == PatternSpec::Kind::AprilTag;
+  for (const auto &f : board.features())
+    if (!tags || f.first % 5 != 0)
+      pts[f.first] = f.second;
+
+  Problem pb;
+  pb.camera = &camera;
+  std::vector<Eigen::Isometry3d> cMb0; // per view, from its own pose estimate
+  std::vector<MotionSample> samples;
+  for (const RigView &v : views) {
+    std::vector<cv::Point3d> obj;
+    std::vector<cv::Point2d> norm;
+    std::vector<Eigen::Vector3d> P;
+    std::vector<Eigen::Vector2d> uv;
+    for (const auto &f : v.features) {
+      auto it = pts.find(f.id);
+      if (it == pts.end())
+        continue;
+      Eigen::Vector2d m;
+      if (!camera.undistort(Eigen::Vector2d(f.u, f.v), m))
+        continue;
+      obj.emplace_back(it->second.x(), it->second.y(), it->second.z());
+      norm.emplace_back(m.x(), m.y());
+      P.push_back(it->second);
+      uv.emplace_back(f.u, f.v);
+    }
+    if (static_cast<int>(obj.size()) < std::max(4, options.min_points_per_view))
+      continue;
+    cv::Mat rvec, tvec;
+    const cv::Mat K = cv::Mat::eye(3, 3, CV_64F);
+    if (!cv::solvePnP(obj, norm, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_IPPE))
+      continue;
+    cv::solvePnP(obj, norm, K, cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
+    cv::Mat R;
+    cv::Rodrigues(rvec, R);
+    Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b)
+        M.linear()(a, b) = R.at<double>(a, b);
+      M.translation()(a) = tvec.at<double>(a);
+    }
+    cMb0.push_back(M);
+    samples.push_back(v.sample);
+    pb.points.push_back(std::move(P));
+    pb.pixels.push_back(std::move(uv));
+    pb.residuals += 2 * pb.points.back().size();
+  }
+  const std::size_t n = samples.size();
+  if (n < 3)
+    throw Error("too few views: the board was usable in " + std::to_string(n) +
+                " image(s); at least 3 at different yaw readings are needed");
+
+  RigCalibration out;
+  out.views = static_cast<int>(n);
+  out.points = static_cast<int>(pb.residuals / 2);
+
+  // Yaw readings: distinct values and span.
+  std::vector<double> yaws;
+  for (const auto &s : samples)
+    yaws.push_back(s.yaw);
+  std::sort(yaws.begin(), yaws.end());
+  out.distinct_yaws = 1;
+  for (std::size_t i = 1; i < yaws.size(); ++i)
+    if (yaws[i] - yaws[i - 1] > 0.2 * kDeg)
+      ++out.distinct_yaws;
+  out.yaw_span = yaws.back() - yaws.front();
+  if (out.distinct_yaws < options.min_distinct_yaws || out.yaw_span < options.min_yaw_span)
+    throw Error("yaw readings span only " + fmt(out.yaw_span / kDeg, 1) + " deg over " +
+                std::to_string(out.distinct_yaws) + " distinct value(s) in the " + std::to_string(n) +
+                " usable views: the camera offset and the yaw axis need at least " +
+                std::to_string(options.min_distinct_yaws) + " distinct yaws spanning " +
+                fmt(options.min_yaw_span / kDeg, 0) + " deg");
+
+  // Robot poses.
+  const Eigen::Isometry3d wMv0 = isoWMV(samples.front());
+  for (const auto &s : samples) {
+    pb.v0Mv.push_back(wMv0.inverse() * isoWMV(s));
+    pb.readings.push_back(s.yaw);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j)
+      out.baseline = std::max(out.baseline, (pb.v0Mv[i].translation() - pb.v0Mv[j].translation()).norm());
+  const bool motion = out.baseline >= options.min_baseline;
+
+  // Views sharing the first view's robot pose (static group) for the closed-form start.
+  std::vector<std::size_t> group;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Isometry3d &M = pb.v0Mv[i];
+    if (M.translation().norm() < 1e-6 && (M.linear() - Eigen::Matrix3d::Identity()).norm() < 1e-9)
+      group.push_back(i);
+  }
+
+  Eigen::VectorXd p = Eigen::VectorXd::Zero(kParams);
+  pb.t0y = options.initial_offset.y();
+  Eigen::Vector3d t0 = options.initial_offset;
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitY();
+  if (group.size() >= 2) {
+    // Camera centre C_i = O + bRc_i t0 in the board frame: (bRc_i - bRc_k) t0 = C_i - C_k.
+    std::size_t lo = group.front(), hi = group.front();
+    for (std::size_t i : group) {
+      if (pb.readings[i] < pb.readings[lo])
+        lo = i;
+      if (pb.readings[i] > pb.readings[hi])
+        hi = i;
+    }
+    if (pb.readings[hi] - pb.readings[lo] > 2 * kDeg) {
+      if (!options.use_initial_offset) {
+        Eigen::MatrixXd A(3 * (group.size() - 1), 2);
+        Eigen::VectorXd b(3 * (group.size() - 1));
+        Eigen::Index row = 0;
+        const Eigen::Isometry3d bMc_ref = cMb0[lo].inverse();
+        for (std::size_t i : group) {
+          if (i == lo)
+            continue;
+          const Eigen::Isometry3d bMc = cMb0[i].inverse();
+          const Eigen::Matrix3d D = bMc.linear() - bMc_ref.linear();
+          A.block(row, 0, 3, 1) = D.col(0);
+          A.block(row, 1, 3, 1) = D.col(2);
+          b.segment(row, 3) = bMc.translation() - bMc_ref.translation() - D.col(1) * pb.t0y;
+          row += 3;
+        }
+        const Eigen::Vector2d xz = A.colPivHouseholderQr().solve(b);
+        if (xz.allFinite())
+          t0 = Eigen::Vector3d(xz.x(), pb.t0y, xz.y());
+      }
+      if (options.estimate_axis) {
+        // Relative rotation between the extreme yaws: about the axis (in the camera frame).
+        const Eigen::Matrix3d Rrel = cMb0[hi].linear() * cMb0[lo].linear().transpose();
+        const Eigen::AngleAxisd aa(Rrel);
+        Eigen::Vector3d a = aa.axis();
+        if (a.y() < 0)
+          a = -a;
+        if (a.y() > 0.5)
+          axis = a;
+      }
+    }
+  }
+  axis /= axis.y();
+  p[P_AX] = axis.x();
+  p[P_AZ] = axis.z();
+  p[P_TX] = t0.x();
+  p[P_TZ] = t0.z();
+  p[P_DELTA] = options.initial_yaw_offset;
+  auto boardFromView = [&](const Eigen::VectorXd &q) {
+    const Eigen::Vector3d t(q[P_TX], pb.t0y, q[P_TZ]);
+    return pb.v0Mv[0] * vMc(axisOf(q), pb.readings[0] + q[P_DELTA], t) * cMb0[0];
+  };
+  setBoard(p, boardFromView(p));
+  if (options.board_square) {
+    p[P_DELTA] -= p[P_PSI];
+    setBoard(p, boardFromView(p));
+    p[P_PSI] = 0;
+  }
+
+  out.yaw_zero = options.board_square ? YawZeroSource::BoardSquare
+                                      : (motion ? YawZeroSource::RobotMotion : YawZeroSource::Fixed);
+  std::vector<int> free;
+  if (options.estimate_axis) {
+    free.push_back(P_AX);
+    free.push_back(P_AZ);
+  }
+  free.push_back(P_TX);
+  free.push_back(P_TZ);
+  if (out.yaw_zero != YawZeroSource::Fixed)
+    free.push_back(P_DELTA);
+  if (!options.board_square)
+    free.push_back(P_PSI);
+  for (int k : {P_ALPHA, P_GAMMA, P_BX, P_BY, P_BZ})
+    free.push_back(k);
+  const Eigen::Index nf = static_cast<Eigen::Index>(free.size());
+  if (pb.residuals <= free.size())
+    throw Error("too few points for the rig calibration");
+
+  // Levenberg–Marquardt.
+  Eigen::VectorXd r = pb.residual(p);
+  double cost = r.squaredNorm();
+  double lambda = 1e-3;
+  int it = 0;
+  for (; it < 200; ++it) {
+    const Eigen::MatrixXd J = pb.jacobian(p, free);
+    const Eigen::MatrixXd H = J.transpose() * J;
+    const Eigen::VectorXd g = J.transpose() * r;
+    bool improved = false;
+    double rel = 0;
+    for (int tries = 0; tries < 20 && !improved; ++tries) {
+      Eigen::MatrixXd A = H;
+      for (Eigen::Index k = 0; k < nf; ++k)
+        A(k, k) += lambda * std::max(H(k, k), 1e-12);
+      const Eigen::VectorXd dx = A.ldlt().solve(-g);
+      Eigen::VectorXd q = p;
+      for (Eigen::Index k = 0; k < nf; ++k)
+        q[free[static_cast<std::size_t>(k)]] += dx[k];
+      const Eigen::VectorXd rq = pb.residual(q);
+      const double cq = rq.squaredNorm();
+      if (std::isfinite(cq) && cq < cost) {
+        rel = (cost - cq) / std::max(cost, 1e-300);
+        p = q;
+        r = rq;
+        cost = cq;
+        lambda = std::max(lambda / 10, 1e-12);
+        improved = true;
+        if (dx.norm() < 1e-12)
+          rel = 0;
+      } else {
+        lambda *= 10;
+      }
+    }
+    if (!improved || rel < 1e-14)
+      break;
+  }
+  out.iterations = it + 1;
+  if (!std::isfinite(cost))
+    throw Error("rig calibration failed: no finite solution");
+
+  const std::size_t m = pb.residuals;
+  out.rms_px = std::sqrt(cost / static_cast<double>(m / 2));
+  {
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      double s = 0;
+      for (std::size_t j = 0; j < pb.points[i].size(); ++j, k += 2)
+        s += r[static_cast<Eigen::Index>(k)] * r[static_cast<Eigen::Index>(k)] +
+             r[static_cast<Eigen::Index>(k + 1)] * r[static_cast<Eigen::Index>(k + 1)];
+      out.view_rms_px.push_back(std::sqrt(s / static_cast<double>(pb.points[i].size())));
+    }
+  }
+
+  // Covariance: sigma^2 (J^T J)^-1 on the free parameters.
+  const Eigen::MatrixXd J = pb.jacobian(p, free);
+  const double sigma2 = cost / static_cast<double>(m - free.size());
+  const Eigen::MatrixXd cov = sigma2 * (J.transpose() * J).inverse();
+  auto sd = [&](int param) {
+    for (std::size_t k = 0; k < free.size(); ++k)
+      if (free[k] == param)
+        return std::sqrt(std::max(0.0, cov(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k))));
+    return 0.0;
+  };
+  out.camera_offset = Eigen::Vector3d(p[P_TX], pb.t0y, p[P_TZ]);
+  out.camera_offset_sigma = Eigen::Vector3d(sd(P_TX), 0.0, sd(P_TZ));
+  out.yaw_offset = p[P_DELTA];
+  out.yaw_offset_sigma = sd(P_DELTA);
+  out.yaw_axis = axisOf(p);
+  if (options.estimate_axis) {
+    // a(p, q) = (p, 1, q) / |.|: propagate the 2x2 covariance of (p, q).
+    Eigen::Matrix<double, 3, 2> Ja;
+    for (int c = 0; c < 2; ++c) {
+      Eigen::VectorXd pp = p, pm = p;
+      const int idx = c == 0 ? P_AX : P_AZ;
+      pp[idx] += 1e-7;
+      pm[idx] -= 1e-7;
+      Ja.col(c) = (axisOf(pp) - axisOf(pm)) / 2e-7;
+    }
+    const Eigen::Matrix2d C = cov.topLeftCorner(2, 2);
+    const Eigen::Matrix3d Ca = Ja * C * Ja.transpose();
+    out.yaw_axis_sigma = Ca.diagonal().cwiseMax(0.0).cwiseSqrt();
+  }
+  out.v0Mb = pb.board(p);
+  return out;
+}
+
+std::string rigCalibrationYaml(const RigCalibration &rig)
+{
+  auto vec = [](const Eigen::Vector3d &v) { return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]"; };
+  std::ostringstream s;
+  s << "# yawdepth calibrate-rig: " << rig.views << " views, " << rig.points << " points, yaw readings spanning "
+    << fmt(rig.yaw_span / kDeg, 1) << " deg, reprojection RMS " << fmt(rig.rms_px, 3) << " px\n";
+  s << "# camera_offset: optical centre in the vision frame at yaw 0 (m); its component along the\n"
+       "# yaw axis is not observable and was kept at its initial value (sigma 0)\n";
+  s << "camera_offset: " << vec(rig.camera_offset) << "\n";
+  s << "# true yaw = reading + yaw_offset (rad)";
+  if (rig.yaw_zero == YawZeroSource::Fixed)
+    s << "; not estimated (static robot, board not declared square): kept at its initial value";
+  else if (rig.yaw_zero == YawZeroSource::RobotMotion)
+    s << "; from the robot's translation";
+  else
+    s << "; from the board standing square to the robot";
+  s << "\n";
+  s << "yaw_offset: " << num(rig.yaw_offset) << "\n";
+  s << "# yaw axis in the vision frame (unit)\n";
+  s << "yaw_axis: " << vec(rig.yaw_axis) << "\n";
+  s << "# 1-sigma uncertainties (0: fixed)\n";
+  s << "camera_offset_sigma: " << vec(rig.camera_offset_sigma) << "\n";
+  s << "yaw_offset_sigma: " << num(rig.yaw_offset_sigma) << "\n";
+  s << "yaw_offset_estimated: " << (rig.yaw_zero == YawZeroSource::Fixed ? "false" : "true") << "\n";
+  s << "yaw_axis_sigma: " << vec(rig.yaw_axis_sigma) << "\n";
+  s << "reprojection_rms_px: " << num(rig.rms_px) << "\n";
+  return s.str();
+}
+
+} // namespace yawdepth

@@ -1,0 +1,510 @@
+// `calibration`: camera calibration (OpenCV Brown model, ViSP's two models) and yaw-rig calibration
+// on images rendered with known truth (renderBoard: exact through the camera's distortion, blur,
+// noise); rejection of bad input.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+#include <unistd.h>
+#include <yawdepth/calibration/camera_calibration.h>
+#include <yawdepth/calibration/rig_calibration.h>
+#include <yawdepth/camera/camera_file.h>
+#include <yawdepth/error.h>
+#include <yawdepth/features/detector.h>
+#include <yawdepth/io/files.h>
+#include <opencv2/imgcodecs.hpp>
+#include <yawdepth/render/renderer.h>
+
+using namespace yawdepth;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+CameraModel paperCamera()
+{
+  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
+}
+/*! A wide camera (74 deg across) with barrel distortion, for the rig: the board stays in view over +-25 deg. */
+CameraModel wideCamera()
+{
+  return CameraModel::brown(420.0, 421.0, 322.0, 238.5, {-0.25, 0.07, 0.0004, -0.0002}, 640, 480);
+}
+
+BoardLayout chessboard(int cols, int rows, double square)
+{
+  BoardLayout b;
+  b.pattern.kind = PatternSpec::Kind::Chessboard;
+  b.pattern.cols = cols;
+  b.pattern.rows = rows;
+  b.pattern.square = square;
+  return b;
+}
+
+RenderOptions renderOptions(std::uint64_t seed)
+{
+  RenderOptions o;
+  o.blur_sigma_px = 0.7;
+  o.noise_sigma = 2.0;
+  o.seed = seed;
+  return o;
+}
+
+/*! Render the board at pose cMb (camera frame): identity rig and motion sample, so wMc = I. */
+cv::Mat renderAt(const CameraModel &camera, const BoardLayout &board, const Eigen::Isometry3d &cMb, std::uint64_t seed)
+{
+  return renderBoard(camera, YawRig(), MotionSample(), board, cMb, renderOptions(seed));
+}
+
+/*! True when the board's squares (corners +- one square) all project inside the image with a margin. */
+bool boardInside(const CameraModel &camera, const BoardLayout &board, const Eigen::Isometry3d &cMb, double margin)
+{
+  const double s = board.pattern.square;
+  const double xs[2] = {-s, board.pattern.cols * s}, ys[2] = {-s, board.pattern.rows * s};
+  for (int k = 0; k <= 20; ++k)
+    for (int e = 0; e < 4; ++e) {
+      const double t = k / 20.0;
+      Eigen::Vector3d P;
+      if (e == 0)
+        P = {xs[0] + t * (xs[1] - xs[0]), ys[0], 0};
+      else if (e == 1)
+        P = {xs[0] + t * (xs[1] - xs[0]), ys[1], 0};
+      else if (e == 2)
+        P = {xs[0], ys[0] + t * (ys[1] - ys[0]), 0};
+      else
+        P = {xs[1], ys[0] + t * (ys[1] - ys[0]), 0};
+      const Eigen::Vector3d c = cMb * P;
+      if (c.z() <= 0.05)
+        return false;
+      const Eigen::Vector2d uv = camera.project(Eigen::Vector2d(c.x() / c.z(), c.y() / c.z()));
+      if (uv.x() < margin || uv.y() < margin || uv.x() > camera.width() - 1 - margin ||
+          uv.y() > camera.height() - 1 - margin)
+        return false;
+    }
+  return true;
+}
+
+/*! A random calibration view: tilt in [tmin, tmax] about a random in-plane axis, anywhere in the image. */
+Eigen::Isometry3d randomView(std::mt19937_64 &rng, const CameraModel &camera, const BoardLayout &board, double tmin,
+                             double tmax, double zmin, double zmax)
+{
+  std::uniform_real_distribution<double> U(0, 1);
+  const Eigen::Vector3d centre(0.5 * (board.pattern.cols - 1) * board.pattern.square,
+                               0.5 * (board.pattern.rows - 1) * board.pattern.square, 0);
+  for (int attempt = 0; attempt < 5000; ++attempt) {
+    const double phi = 2 * M_PI * U(rng), tilt = tmin + (tmax - tmin) * U(rng);
+    const double gamma = (U(rng) - 0.5) * 40 * kDeg;
+    Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+    M.linear() = (Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(phi), std::sin(phi), 0)) *
+                  Eigen::AngleAxisd(gamma, Eigen::Vector3d::UnitZ()))
+                     .toRotationMatrix();
+    const double Z = zmin + (zmax - zmin) * U(rng);
+    const double u = camera.width() * (0.1 + 0.8 * U(rng)), v = camera.height() * (0.1 + 0.8 * U(rng));
+    const Eigen::Vector3d P(Z * (u - camera.u0()) / camera.kx(), Z * (v - camera.v0()) / camera.ky(), Z);
+    M.translation() = P - M.linear() * centre;
+    if (boardInside(camera, board, M, 4))
+      return M;
+  }
+  FAIL("no random view found");
+  return Eigen::Isometry3d::Identity();
+}
+
+std::string tempDir(const std::string &tag)
+{
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("yawdepth_calib_" + tag + "_" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+/*! Rendered calibration set of the paper camera, shared by the camera tests (rendered once). */
+struct CameraSet {
+  CameraModel truth = paperCamera();
+  BoardLayout board = chessboard(7, 5, 0.015);
+  std::vector<cv::Mat> images;
+  std::vector<std::string> names;
+  std::vector<Eigen::Isometry3d> poses;
+};
+const CameraSet &cameraSet()
+{
+  static const CameraSet set = [] {
+    CameraSet s;
+    std::mt19937_64 rng(7);
+    for (int i = 0; i < 14; ++i) {
+      const Eigen::Isometry3d M = randomView(rng, s.truth, s.board, 20 * kDeg, 45 * kDeg, 0.42, 0.65);
+      s.poses.push_back(M);
+      s.images.push_back(renderAt(s.truth, s.board, M, 100 + static_cast<std::uint64_t>(i)));
+      s.names.push_back("view" + std::to_string(i) + ".png");
+    }
+    return s;
+  }();
+  return set;
+}
+
+} // namespace
+
+TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard views", "[calibration]")
+{
+  const CameraSet &set = cameraSet();
+  const CalibrationDetections det = detectCalibrationViews(set.board, set.names, set.images);
+  REQUIRE(det.views.size() == set.images.size());
+  REQUIRE(det.width == 640);
+  REQUIRE(det.height == 480);
+
+  const CameraCalibration cal = calibrateCamera(set.board, det.views, det.width, det.height);
+  const CameraModel &c = cal.camera;
+  const CameraModel &t = set.truth;
+  INFO("fx " << c.kx() << " fy " << c.ky() << " u0 " << c.u0() << " v0 " << c.v0() << " k1 "
+             << c.brownCoefficients()[0] << " k2 " << c.brownCoefficients()[1] << " rms " << cal.rms_px);
+  CHECK(std::abs(c.kx() / t.kx() - 1) < 0.005);
+  CHECK(std::abs(c.ky() / t.ky() - 1) < 0.005);
+  CHECK(std::abs(c.u0() - t.u0()) < 1.0);
+  CHECK(std::abs(c.v0() - t.v0()) < 1.0);
+  CHECK(cal.rms_px < 0.08);
+  CHECK(cal.views_used == 14);
+  CHECK(cal.std_devs.size() == 9);
+  CHECK(cal.std_devs[0] > 0);
+  CHECK(cal.std_devs[8] == 0); // k3 fixed
+  for (const auto &v : cal.views) {
+    CHECK_FALSE(v.outlier);
+    CHECK(v.tilt > 15 * kDeg);
+  }
+  // The fitted model maps the true rays to the true pixels: the distortion is right (up to the
+  // small intrinsics error it trades with), over the whole image.
+  double worst = 0;
+  for (int v = 20; v < 480; v += 40)
+    for (int u = 20; u < 640; u += 40) {
+      Eigen::Vector2d m;
+      REQUIRE(t.undistort(Eigen::Vector2d(u, v), m));
+      // Compare the shape of the mapping: pixel offsets from the principal point, scaled by focal.
+      const Eigen::Vector2d a = c.project(m), b(u, v);
+      worst = std::max(worst, (a - b).norm());
+    }
+  INFO("worst pixel difference of the fitted mapping " << worst);
+  CHECK(worst < 1.5);
+
+  // ViSP's two models: both fitted, the one with distortion better, both close to the truth.
+  REQUIRE(cal.visp_fitted);
+  INFO("ViSP without " << cal.visp_without.get_px() << " " << cal.visp_without.get_py() << " rms "
+                       << cal.visp_rms_without << "; with " << cal.visp_with.get_px() << " kud "
+                       << cal.visp_with.get_kud() << " kdu " << cal.visp_with.get_kdu() << " rms "
+                       << cal.visp_rms_with << " kdu rms " << cal.visp_rms_kdu);
+  CHECK(cal.visp_with.get_projModel() == vpCameraParameters::perspectiveProjWithDistortion);
+  CHECK(cal.visp_rms_with < cal.visp_rms_without);
+  CHECK(cal.visp_rms_with < 0.5);
+  CHECK(cal.visp_rms_kdu < 1.0);
+  CHECK(std::abs(cal.visp_with.get_px() / t.kx() - 1) < 0.01);
+  CHECK(std::abs(cal.visp_with.get_u0() - t.u0()) < 3.0);
+
+  // Files: OpenCV YAML, ViSP XML with both models, coverage picture; they read back.
+  const std::string dir = tempDir("camera");
+  saveCameraYaml(dir + "/cam.yaml", cal.camera);
+  saveVispCameraXml(dir + "/cam.xml", cal, "MyCam");
+  writeCoverageImage(dir + "/cov.png", cal, det.views);
+  const CameraModel y = loadCameraFile(dir + "/cam.yaml");
+  CHECK(std::abs(y.kx() - c.kx()) < 1e-6);
+  const CameraModel x = loadCameraFile(dir + "/cam.xml", "MyCam");
+  CHECK(x.distortion() == CameraModel::Distortion::ViSP);
+  CHECK(std::abs(x.kx() - cal.visp_with.get_px()) < 1e-3);
+  std::ifstream xin(dir + "/cam.xml");
+  const std::string xml((std::istreambuf_iterator<char>(xin)), std::istreambuf_iterator<char>());
+  CHECK(xml.find("perspectiveProjWithoutDistortion") != std::string::npos);
+  CHECK(xml.find("perspectiveProjWithDistortion") != std::string::npos);
+  CHECK(xml.find("<kud>") != std::string::npos);
+  CHECK(xml.find("<kdu>") != std::string::npos);
+  CHECK(xml.find("<image_width>640</image_width>") != std::string::npos);
+  CHECK(std::filesystem::file_size(dir + "/cov.png") > 1000);
+  CHECK(cal.coverage > 0.5);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("calibrate-camera options: fixed aspect ratio and principal point", "[calibration]")
+{
+  const CameraSet &set = cameraSet();
+  const CalibrationDetections det = detectCalibrationViews(set.board, set.names, set.images);
+  CameraCalibrationOptions o;
+  o.fix_aspect_ratio = true;
+  o.fix_principal_point = true;
+  o.fit_visp = false;
+  const CameraCalibration cal = calibrateCamera(set.board, det.views, det.width, det.height, o);
+  CHECK(cal.camera.kx() == Approx(cal.camera.ky()).epsilon(1e-12));
+  CHECK(cal.camera.u0() == Approx(319.5).margin(1e-9));
+  CHECK(cal.camera.v0() == Approx(239.5).margin(1e-9));
+  CHECK(std::abs(cal.camera.kx() / set.truth.kx() - 1) < 0.01);
+  CHECK(cal.std_devs[2] == 0);
+  CHECK_FALSE(cal.visp_fitted);
+}
+
+TEST_CASE("calibrate-camera flags and drops an outlier view", "[calibration]")
+{
+  const CameraSet &set = cameraSet();
+  CalibrationDetections det = detectCalibrationViews(set.board, set.names, set.images);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> N(0, 3.0);
+  for (auto &f : det.views[4].features) {
+    f.u += N(rng);
+    f.v += N(rng);
+  }
+  CameraCalibrationOptions o;
+  o.fit_visp = false;
+  const CameraCalibration flagged = calibrateCamera(set.board, det.views, det.width, det.height, o);
+  CHECK(flagged.views[4].outlier);
+  CHECK(flagged.views[4].used);
+  int n_outliers = 0;
+  for (const auto &v : flagged.views)
+    n_outliers += v.outlier ? 1 : 0;
+  CHECK(n_outliers == 1);
+  o.drop_outliers = true;
+  const CameraCalibration dropped = calibrateCamera(set.board, det.views, det.width, det.height, o);
+  CHECK_FALSE(dropped.views[4].used);
+  CHECK(dropped.views_used == 13);
+  CHECK(dropped.rms_px < 0.08);
+  CHECK(std::abs(dropped.camera.kx() / set.truth.kx() - 1) < 0.005);
+}
+
+TEST_CASE("calibrate-camera rejects bad input with reasons", "[calibration]")
+{
+  const CameraSet &set = cameraSet();
+  const CalibrationDetections det = detectCalibrationViews(set.board, set.names, set.images);
+
+  SECTION("too few views")
+  {
+    const std::vector<CalibrationView> two(det.views.begin(), det.views.begin() + 2);
+    CHECK_THROWS_WITH(calibrateCamera(set.board, two, 640, 480), Catch::Contains("too few views"));
+  }
+  SECTION("all views fronto-parallel")
+  {
+    std::vector<cv::Mat> images;
+    std::vector<std::string> names;
+    std::mt19937_64 rng(11);
+    for (int i = 0; i < 5; ++i) {
+      const Eigen::Isometry3d M = randomView(rng, set.truth, set.board, 0.0, 0.3 * kDeg, 0.45, 0.65);
+      images.push_back(renderAt(set.truth, set.board, M, 300 + static_cast<std::uint64_t>(i)));
+      names.push_back("flat" + std::to_string(i));
+    }
+    const CalibrationDetections flat = detectCalibrationViews(set.board, names, images);
+    REQUIRE(flat.views.size() == 5);
+    CHECK_THROWS_WITH(calibrateCamera(set.board, flat.views, 640, 480), Catch::Contains("degenerate views"));
+  }
+  SECTION("wrong pattern size: says so, and names the size that is there")
+  {
+    const BoardLayout wrong = chessboard(8, 6, 0.015); // squares counted instead of inner corners
+    const std::vector<cv::Mat> two(set.images.begin(), set.images.begin() + 2);
+    const std::vector<std::string> names(set.names.begin(), set.names.begin() + 2);
+    try {
+      detectCalibrationViews(wrong, names, two);
+      FAIL("no error");
+    } catch (const Error &e) {
+      const std::string what = e.what();
+      INFO(what);
+      CHECK(what.find("not found in any of the 2 images") != std::string::npos);
+      CHECK(what.find("chessboard:7x5") != std::string::npos);
+    }
+  }
+  SECTION("no pattern at all")
+  {
+    const std::vector<cv::Mat> blank(2, cv::Mat(480, 640, CV_8UC1, cv::Scalar(128)));
+    CHECK_THROWS_WITH(detectCalibrationViews(set.board, {"a", "b"}, blank), Catch::Contains("not found in any"));
+  }
+  SECTION("images of different sizes")
+  {
+    const std::vector<cv::Mat> mixed = {set.images[0], cv::Mat(240, 320, CV_8UC1, cv::Scalar(128))};
+    CHECK_THROWS_WITH(detectCalibrationViews(set.board, {"a", "b"}, mixed), Catch::Contains("same resolution"));
+  }
+}
+
+namespace {
+
+struct RigTruth {
+  Eigen::Vector3d t0 = Eigen::Vector3d(-0.1503, 0.002, 0.01);
+  double yaw_offset = 0.5 * kDeg;
+  Eigen::Vector3d axis = Eigen::Vector3d(0.01, 1.0, -0.005).normalized();
+};
+
+/*! Render the rig views: robot at `positions` (vision-frame origins, heading 0), the yaw readings at each. */
+std::vector<RigView> renderRig(const CameraModel &camera, const BoardLayout &board, const RigTruth &truth,
+                               const Eigen::Isometry3d &wMb, const std::vector<Eigen::Vector3d> &positions,
+                               const std::vector<double> &readings)
+{
+  PatternDetector detector(board.pattern);
+  detector.setCamera(camera);
+  std::vector<RigView> views;
+  long frame = 0;
+  for (const Eigen::Vector3d &p : positions)
+    for (double r : readings) {
+      Eigen::Isometry3d wMv = Eigen::Isometry3d::Identity();
+      wMv.translation() = p;
+      Eigen::Isometry3d vMc = Eigen::Isometry3d::Identity();
+      vMc.linear() = Eigen::AngleAxisd(r + truth.yaw_offset, truth.axis).toRotationMatrix();
+      vMc.translation() = vMc.linear() * truth.t0;
+      const Eigen::Isometry3d cMb = (wMv * vMc).inverse() * wMb;
+      REQUIRE(boardInside(camera, board, cMb, 3));
+      const cv::Mat img = renderAt(camera, board, cMb, 500 + static_cast<std::uint64_t>(frame));
+      const FrameDetection d = detector.detect(img, frame);
+      REQUIRE(d.found);
+      RigView v;
+      v.sample.frame = frame++;
+      v.sample.x = p.x();
+      v.sample.y = p.y();
+      v.sample.z = p.z();
+      v.sample.yaw = r;
+      v.features = d.features;
+      views.push_back(v);
+    }
+  return views;
+}
+
+/*! Board pose: centred in front of the robot at `distance`, turned by `yaw` about the vertical. */
+Eigen::Isometry3d boardAhead(const BoardLayout &board, double distance, double yaw, double x = -0.12)
+{
+  const Eigen::Vector3d centre(0.5 * (board.pattern.cols - 1) * board.pattern.square,
+                               0.5 * (board.pattern.rows - 1) * board.pattern.square, 0);
+  Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+  M.linear() = rotY(yaw);
+  M.translation() = Eigen::Vector3d(x, 0.0, distance) - M.linear() * centre;
+  return M;
+}
+
+std::vector<double> yawReadings(double from_deg, double to_deg, int n)
+{
+  std::vector<double> r;
+  for (int i = 0; i < n; ++i)
+    r.push_back((from_deg + (to_deg - from_deg) * i / (n - 1)) * kDeg);
+  return r;
+}
+
+} // namespace
+
+TEST_CASE("calibrate-rig: offset, axis and yaw zero of a board standing square", "[calibration][rig]")
+{
+  const CameraModel camera = wideCamera();
+  const BoardLayout board = chessboard(6, 5, 0.03);
+  const RigTruth truth;
+  const std::vector<RigView> views =
+      renderRig(camera, board, truth, boardAhead(board, 0.75, 0.0), {Eigen::Vector3d::Zero()}, yawReadings(-25, 25, 9));
+  RigCalibrationOptions o;
+  o.board_square = true;
+  o.initial_offset = Eigen::Vector3d(0, truth.t0.y(), 0); // the unobservable component, as a user would give it
+  const RigCalibration rig = calibrateRig(camera, board, views, o);
+  INFO("t0 " << rig.camera_offset.transpose() << " +- " << rig.camera_offset_sigma.transpose() << "; yaw offset "
+             << rig.yaw_offset / kDeg << " +- " << rig.yaw_offset_sigma / kDeg << " deg; axis "
+             << rig.yaw_axis.transpose() << " +- " << rig.yaw_axis_sigma.transpose() << "; rms " << rig.rms_px
+             << " px, " << rig.iterations << " iterations");
+  CHECK(rig.yaw_zero == YawZeroSource::BoardSquare);
+  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 0.001);
+  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < 0.001);
+  CHECK(rig.camera_offset.y() == truth.t0.y());
+  CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < 0.1 * kDeg);
+  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < 0.1 * kDeg);
+  CHECK(rig.rms_px < 0.1);
+  // The uncertainties are honest: the errors are within 4 sigma, and the sigmas are small.
+  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 4 * rig.camera_offset_sigma.x() + 1e-5);
+  CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < 4 * rig.yaw_offset_sigma + 1e-5);
+  CHECK(rig.camera_offset_sigma.x() > 0);
+  CHECK(rig.camera_offset_sigma.x() < 0.001);
+  CHECK(rig.camera_offset_sigma.y() == 0);
+
+  // The rig file: what readRigFile() reads, plus the sigmas.
+  const std::string dir = tempDir("rig");
+  {
+    std::ofstream out(dir + "/rig.yaml");
+    out << rigCalibrationYaml(rig);
+  }
+  const RigFile f = readRigFile(dir + "/rig.yaml");
+  CHECK((f.camera_offset - rig.camera_offset).norm() < 1e-12);
+  CHECK(f.yaw_offset == Approx(rig.yaw_offset).epsilon(1e-12));
+  REQUIRE(f.yaw_axis.has_value());
+  CHECK((*f.yaw_axis - rig.yaw_axis).norm() < 1e-12);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("calibrate-rig: static robot, board at an angle: offset found, yaw zero kept", "[calibration][rig]")
+{
+  const CameraModel camera = wideCamera();
+  const BoardLayout board = chessboard(6, 5, 0.03);
+  const RigTruth truth;
+  const std::vector<RigView> views = renderRig(camera, board, truth, boardAhead(board, 0.75, 12 * kDeg),
+                                               {Eigen::Vector3d::Zero()}, yawReadings(-25, 25, 7));
+  const RigCalibration rig = calibrateRig(camera, board, views); // closed-form start, y kept at 0
+  INFO("t0 " << rig.camera_offset.transpose() << "; axis " << rig.yaw_axis.transpose());
+  CHECK(rig.yaw_zero == YawZeroSource::Fixed);
+  CHECK(rig.yaw_offset == 0.0);
+  CHECK(rig.yaw_offset_sigma == 0.0);
+  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 0.001);
+  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < 0.001);
+  CHECK(rig.camera_offset.y() == 0.0);
+  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < 0.1 * kDeg);
+  CHECK(rig.rms_px < 0.1);
+}
+
+TEST_CASE("calibrate-rig: the robot's translation gives the yaw zero", "[calibration][rig]")
+{
+  const CameraModel camera = wideCamera();
+  const BoardLayout board = chessboard(6, 5, 0.03);
+  const RigTruth truth;
+  const std::vector<RigView> views =
+      renderRig(camera, board, truth, boardAhead(board, 0.85, -10 * kDeg),
+                {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.0, 0, 0.12), Eigen::Vector3d(0.03, 0, 0.24)},
+                yawReadings(-20, 20, 5));
+  const RigCalibration rig = calibrateRig(camera, board, views);
+  INFO("t0 " << rig.camera_offset.transpose() << "; yaw offset " << rig.yaw_offset / kDeg << " +- "
+             << rig.yaw_offset_sigma / kDeg << " deg");
+  CHECK(rig.yaw_zero == YawZeroSource::RobotMotion);
+  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 0.001);
+  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < 0.001);
+  CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < 0.1 * kDeg);
+  CHECK(rig.rms_px < 0.1);
+}
+
+TEST_CASE("calibrate-rig rejects too small a yaw spread and too few views", "[calibration][rig]")
+{
+  const CameraModel camera = wideCamera();
+  const BoardLayout board = chessboard(6, 5, 0.03);
+  const RigTruth truth;
+  const std::vector<RigView> views = renderRig(camera, board, truth, boardAhead(board, 0.75, 0.0),
+                                               {Eigen::Vector3d::Zero()}, yawReadings(-5, 5, 4));
+  CHECK_THROWS_WITH(calibrateRig(camera, board, views), Catch::Contains("yaw readings span only 10.0 deg"));
+  const std::vector<RigView> two(views.begin(), views.begin() + 2);
+  CHECK_THROWS_WITH(calibrateRig(camera, board, two), Catch::Contains("too few views"));
+}
+
+// Not run by CTest: writes the rendered calibration images and a rig sequence for trying the
+// command line, into $YAWDEPTH_CALIB_DUMP (default /tmp/yawdepth_calib_dump):
+//   build/tests/test_calibration "[.dump]"
+TEST_CASE("write rendered calibration images for the command line", "[.dump]")
+{
+  const char *env = std::getenv("YAWDEPTH_CALIB_DUMP");
+  const std::string dir = env ? env : "/tmp/yawdepth_calib_dump";
+  std::filesystem::create_directories(dir + "/camera");
+  std::filesystem::create_directories(dir + "/rig");
+  const CameraSet &set = cameraSet();
+  for (std::size_t i = 0; i < set.images.size(); ++i)
+    REQUIRE(cv::imwrite(dir + "/camera/" + set.names[i], set.images[i]));
+  // Rig: the wide camera, static robot, board square, yaw readings -25 .. 25 deg.
+  const CameraModel camera = wideCamera();
+  saveCameraYaml(dir + "/rig/wide_camera.yaml", camera);
+  const BoardLayout board = chessboard(6, 5, 0.03);
+  const RigTruth truth;
+  const Eigen::Isometry3d wMb = boardAhead(board, 0.75, 0.0);
+  std::ofstream csv(dir + "/rig/motion.csv");
+  csv << "frame,x,y,z,heading,yaw,image\n";
+  const std::vector<double> readings = yawReadings(-25, 25, 9);
+  for (std::size_t i = 0; i < readings.size(); ++i) {
+    Eigen::Isometry3d vMc = Eigen::Isometry3d::Identity();
+    vMc.linear() = Eigen::AngleAxisd(readings[i] + truth.yaw_offset, truth.axis).toRotationMatrix();
+    vMc.translation() = vMc.linear() * truth.t0;
+    const cv::Mat img = renderAt(camera, board, vMc.inverse() * wMb, 900 + i);
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04zu.png", i);
+    REQUIRE(cv::imwrite(dir + "/rig/" + name, img));
+    char row[160];
+    std::snprintf(row, sizeof row, "%zu,0,0,0,0,%.17g,%s\n", i, readings[i], name);
+    csv << row;
+  }
+}

@@ -1,0 +1,295 @@
+// `yawdepth calibrate-camera` and `yawdepth calibrate-rig`: intrinsics and distortion from images of
+// a chessboard or an AprilTag grid; camera offset, yaw axis and yaw zero from a static board seen at
+// several yaw readings.
+#include "commands.h"
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+#include <yawdepth/calibration/camera_calibration.h>
+#include <yawdepth/calibration/rig_calibration.h>
+#include <yawdepth/camera/camera_file.h>
+#include <yawdepth/error.h>
+#include <yawdepth/features/detector.h>
+#include <yawdepth/io/files.h>
+
+namespace yawdepth::cli {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+std::string fixed(double v, int precision)
+{
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", precision, v);
+  return buf;
+}
+
+/*! The board of `--pattern` (and, for AprilTag, `--tags COLSxROWS`, `--tag-gap`, `--first-tag-id`). */
+BoardLayout makeBoard(const std::string &pattern, const std::string &tags, double tag_gap, int first_tag_id)
+{
+  BoardLayout board;
+  board.pattern = PatternSpec::parse(pattern);
+  if (board.pattern.kind == PatternSpec::Kind::AprilTag) {
+    int tx = 0, ty = 0;
+    char x = 0, extra = 0;
+    std::istringstream in(tags);
+    if (!(in >> tx >> x >> ty) || (x != 'x' && x != 'X') || (in >> extra) || tx < 1 || ty < 1)
+      throw Error("--tags '" + tags + "': expected COLSxROWS, e.g. 4x3");
+    board.tags_x = tx;
+    board.tags_y = ty;
+    board.gap = tag_gap >= 0 ? tag_gap : 0.25 * board.pattern.tag_size;
+    board.first_tag_id = first_tag_id;
+    board.features(); // validates the layout against the family
+  }
+  return board;
+}
+
+void addBoardOptions(CLI::App *sub, std::string &tags, double &tag_gap, int &first_tag_id)
+{
+  sub->add_option("--tags", tags, "AprilTag grid: COLSxROWS tags")->capture_default_str();
+  sub->add_option("--tag-gap", tag_gap, "AprilTag grid: gap between tags (m; default a quarter tag)")
+      ->check(FiniteNonNegative);
+  sub->add_option("--first-tag-id", first_tag_id, "AprilTag grid: id of the top-left tag")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
+struct CameraArgs {
+  std::string pattern, out, coverage, camera_name = "Camera", tags = "1x1";
+  std::vector<std::string> images;
+  bool fix_aspect = false, fix_pp = false, drop_outliers = false, k3 = false, zero_tangent = false, quiet = false;
+  double tag_gap = -1;
+  int first_tag_id = 0;
+};
+
+struct RigArgs {
+  std::string camera, camera_name, motion, pattern, out, tags = "1x1";
+  std::vector<double> initial_offset;
+  double initial_yaw_offset = 0, min_yaw_span_deg = 20, tag_gap = -1;
+  int first_tag_id = 0;
+  bool board_square = false, fixed_axis = false, quiet = false;
+};
+
+} // namespace
+
+Runner addCalibrateCamera(CLI::App &app)
+{
+  auto a = std::make_shared<CameraArgs>();
+  CLI::App *sub = app.add_subcommand(
+      "calibrate-camera",
+      "Calibrate a camera from images of a chessboard (or an AprilTag grid): writes PREFIX.yaml (OpenCV, Brown "
+      "model) and PREFIX.xml (ViSP, without and with kud/kdu distortion) and prints the RMS reprojection error.");
+  sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE (inner corners, metres) or apriltag:FAMILY:SIZE")
+      ->required();
+  sub->add_flag("--fix-aspect-ratio", a->fix_aspect, "Keep fx = fy");
+  sub->add_flag("--fix-principal-point", a->fix_pp,
+                "Keep the principal point at the image centre (OpenCV model; ViSP's models fit it)");
+  sub->add_option("--out", a->out, "Output prefix: writes PREFIX.yaml and PREFIX.xml")->required();
+  sub->add_option("images", a->images, "Calibration images")->required();
+  sub->add_flag("--drop-outliers", a->drop_outliers,
+                "Recalibrate without the outlier views (RMS above 3x the median and above 0.5 px)");
+  sub->add_option("--coverage", a->coverage, "Coverage picture (default PREFIX_coverage.png)");
+  sub->add_option("--camera-name", a->camera_name, "Camera name in the ViSP XML")->capture_default_str();
+  sub->add_flag("--k3", a->k3, "Also estimate k3 (fixed at 0 by default)");
+  sub->add_flag("--zero-tangent", a->zero_tangent, "Fix the tangential distortion p1 = p2 = 0");
+  sub->add_flag("--quiet", a->quiet, "Print only the RMS reprojection error (and problems on stderr)");
+  addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
+
+  return [a]() {
+    const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
+    std::vector<cv::Mat> images;
+    for (const std::string &path : a->images)
+      images.push_back(readGrayImage(path));
+    const CalibrationDetections det = detectCalibrationViews(board, a->images, images);
+    for (const std::string &f : det.failures)
+      std::cerr << "calibrate-camera: " << f << " (image skipped)\n";
+
+    CameraCalibrationOptions opt;
+    opt.fix_aspect_ratio = a->fix_aspect;
+    opt.fix_principal_point = a->fix_pp;
+    opt.drop_outliers = a->drop_outliers;
+    opt.estimate_k3 = a->k3;
+    opt.zero_tangential = a->zero_tangent;
+    const CameraCalibration cal = calibrateCamera(board, det.views, det.width, det.height, opt);
+    if (!cal.visp_fitted) {
+      std::string why;
+      for (const auto &n : cal.notes)
+        if (n.rfind("ViSP", 0) == 0)
+          why = n;
+      throw Error("cannot fit ViSP's camera models" + (why.empty() ? std::string() : ": " + why));
+    }
+
+    std::size_t points = 0;
+    for (const auto &v : cal.views)
+      if (v.used)
+        points += static_cast<std::size_t>(v.points);
+    std::ostringstream info;
+    info << "<calibration_tool>yawdepth calibrate-camera</calibration_tool>"
+         << "<nb_calibration_images>" << cal.views_used << "</nb_calibration_images>"
+         << "<calibration_pattern>" << board.pattern.toString() << "</calibration_pattern>"
+         << "<global_reprojection_error><without_distortion>" << cal.visp_rms_without
+         << "</without_distortion><with_distortion>" << cal.visp_rms_with
+         << "</with_distortion></global_reprojection_error>";
+    const std::string yaml = a->out + ".yaml", xml = a->out + ".xml";
+    const std::string coverage = a->coverage.empty() ? a->out + "_coverage.png" : a->coverage;
+    saveCameraYaml(yaml, cal.camera);
+    saveVispCameraXml(xml, cal, a->camera_name, info.str());
+    writeCoverageImage(coverage, cal, det.views);
+
+    std::cout << "RMS reprojection error: " << fixed(cal.rms_px, 4) << " px (" << cal.views_used << " views, "
+              << points << " points)\n";
+    if (a->quiet)
+      return 0;
+    const CameraModel &c = cal.camera;
+    const std::vector<double> &k = c.brownCoefficients();
+    const std::vector<double> &sd = cal.std_devs;
+    auto pm = [](double v, double s, int p) { return fixed(v, p) + " +- " + fixed(s, p); };
+    std::cout << "Camera (OpenCV, Brown model), 1-sigma:\n"
+              << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
+              << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
+              << (a->fix_pp ? " (fixed)" : "") << "\n"
+              << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
+              << "  p1 = " << pm(k[2], sd[6], 6) << "   p2 = " << pm(k[3], sd[7], 6) << "\n"
+              << "  k3 = " << pm(k[4], sd[8], 5) << (a->k3 ? "" : " (fixed)") << "\n";
+    std::cout << "Per view (RMS reprojection error, board tilt):\n";
+    for (const auto &v : cal.views) {
+      std::cout << "  " << v.name << ": " << v.points << " points";
+      if (v.points > 0 && (v.used || v.outlier))
+        std::cout << ", " << fixed(v.rms_px, 4) << " px, tilt " << fixed(v.tilt / kDeg, 1) << " deg";
+      if (v.outlier)
+        std::cout << (v.used ? "  OUTLIER" : "  OUTLIER, dropped");
+      else if (!v.used)
+        std::cout << "  not used";
+      std::cout << "\n";
+    }
+    const vpCameraParameters &w0 = cal.visp_without, &w1 = cal.visp_with;
+    std::cout << "ViSP model without distortion: px = " << fixed(w0.get_px(), 2) << " py = " << fixed(w0.get_py(), 2)
+              << " u0 = " << fixed(w0.get_u0(), 2) << " v0 = " << fixed(w0.get_v0(), 2) << ", RMS "
+              << fixed(cal.visp_rms_without, 4) << " px\n"
+              << "ViSP model with distortion:    px = " << fixed(w1.get_px(), 2) << " py = " << fixed(w1.get_py(), 2)
+              << " u0 = " << fixed(w1.get_u0(), 2) << " v0 = " << fixed(w1.get_v0(), 2)
+              << " kud = " << fixed(w1.get_kud(), 5) << " kdu = " << fixed(w1.get_kdu(), 5) << ", RMS "
+              << fixed(cal.visp_rms_with, 4) << " px (kud), " << fixed(cal.visp_rms_kdu, 4) << " px (kdu)\n";
+    std::cout << "Board orientations differ by up to " << fixed(cal.orientation_spread / kDeg, 1)
+              << " deg; corners cover " << fixed(100 * cal.coverage, 0) << " % of the image (" << coverage << ")\n";
+    for (const std::string &n : cal.notes)
+      std::cout << "note: " << n << "\n";
+    std::cout << "wrote " << yaml << ", " << xml << "\n";
+    return 0;
+  };
+}
+
+Runner addCalibrateRig(CLI::App &app)
+{
+  auto a = std::make_shared<RigArgs>();
+  CLI::App *sub = app.add_subcommand(
+      "calibrate-rig",
+      "Calibrate the yaw rig from images of a static board at several yaw readings: camera offset from the yaw "
+      "axis (Lb), yaw axis direction, zero of the yaw reading, with uncertainties; writes the rig file.");
+  sub->add_option("--camera", a->camera, "Calibrated camera file: ViSP XML or OpenCV YAML/XML")->required();
+  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
+  sub->add_option("--motion", a->motion,
+                  "Motion log CSV with the yaw readings and an image column (frame,x,y,z,heading,yaw,image)")
+      ->required();
+  sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE or apriltag:FAMILY:SIZE (metres)")->required();
+  sub->add_option("--out", a->out, "Output rig file (YAML)")->required();
+  sub->add_option("--initial-offset", a->initial_offset,
+                  "Start for the camera offset x,y,z (m); y, along the yaw axis, is not observable and is kept")
+      ->expected(3)
+      ->delimiter(',')
+      ->check(Finite);
+  sub->add_option("--initial-yaw-offset", a->initial_yaw_offset,
+                  "Start for the yaw offset (rad); kept when the images cannot tell it")
+      ->check(Finite)
+      ->capture_default_str();
+  sub->add_flag("--board-square", a->board_square,
+                "The board stands square to the robot's forward direction: estimate the yaw zero from it");
+  sub->add_flag("--fixed-axis", a->fixed_axis, "Take the yaw axis as the vision frame's +Y instead of estimating it");
+  sub->add_option("--min-yaw-span", a->min_yaw_span_deg, "Smallest accepted span of the yaw readings (degrees)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_flag("--quiet", a->quiet, "No per-frame detection messages");
+  addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
+
+  return [a]() {
+    const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
+    const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
+    const MotionLog motion = readMotionCsv(a->motion);
+    if (motion.images.empty())
+      throw Error(a->motion + ": no 'image' column: calibrate-rig needs the image of each frame");
+    PatternDetector detector(board.pattern);
+    detector.setCamera(camera);
+    std::vector<RigView> views;
+    std::vector<std::string> failures;
+    for (std::size_t i = 0; i < motion.samples.size(); ++i) {
+      const long frame = motion.samples[i].frame;
+      if (motion.images[i].empty()) {
+        failures.push_back("frame " + std::to_string(frame) + ": no image");
+        continue;
+      }
+      const cv::Mat image = readGrayImage(motion.images[i]);
+      if (camera.width() > 0 &&
+          (image.cols != static_cast<int>(camera.width()) || image.rows != static_cast<int>(camera.height())))
+        throw Error(motion.images[i] + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                    " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+      const FrameDetection d = detector.detect(image, frame);
+      if (!d.found) {
+        failures.push_back("frame " + std::to_string(frame) + ": " + d.reason);
+        continue;
+      }
+      views.push_back({motion.samples[i], d.features});
+    }
+    if (views.empty())
+      throw Error("the pattern " + board.pattern.toString() + " was not found in any of the " +
+                  std::to_string(motion.samples.size()) + " images" +
+                  (failures.empty() ? std::string() : " (" + failures.front() + ")"));
+    if (!a->quiet)
+      for (const std::string &f : failures)
+        std::cerr << "calibrate-rig: " << f << " (frame skipped)\n";
+
+    RigCalibrationOptions opt;
+    if (!a->initial_offset.empty()) {
+      opt.initial_offset = Eigen::Vector3d(a->initial_offset[0], a->initial_offset[1], a->initial_offset[2]);
+      opt.use_initial_offset = true;
+    }
+    opt.initial_yaw_offset = a->initial_yaw_offset;
+    opt.board_square = a->board_square;
+    opt.estimate_axis = !a->fixed_axis;
+    opt.min_yaw_span = a->min_yaw_span_deg * kDeg;
+    const RigCalibration rig = calibrateRig(camera, board, views, opt);
+    writeFileAtomically(a->out, rigCalibrationYaml(rig));
+
+    const Eigen::Vector3d &t = rig.camera_offset, &st = rig.camera_offset_sigma;
+    const Eigen::Vector3d &ax = rig.yaw_axis, &sa = rig.yaw_axis_sigma;
+    std::cout << "calibrate-rig: " << rig.views << " views, " << rig.points << " points, yaw readings spanning "
+              << fixed(rig.yaw_span / kDeg, 1) << " deg (" << rig.distinct_yaws << " distinct), robot translation "
+              << fixed(1000 * rig.baseline, 1) << " mm\n";
+    std::cout << "camera offset t0 (mm, 1-sigma): x = " << fixed(1000 * t.x(), 2) << " +- " << fixed(1000 * st.x(), 2)
+              << ", y = " << fixed(1000 * t.y(), 2) << " (along the yaw axis: not observable, kept), z = "
+              << fixed(1000 * t.z(), 2) << " +- " << fixed(1000 * st.z(), 2) << "; distance from the axis "
+              << fixed(1000 * std::hypot(t.x(), t.z()), 2) << " mm\n";
+    std::cout << "yaw offset (true yaw = reading + offset): " << fixed(rig.yaw_offset / kDeg, 4) << " deg";
+    if (rig.yaw_zero == YawZeroSource::Fixed)
+      std::cout << " (not observable: the robot did not move and --board-square was not given; kept)\n";
+    else
+      std::cout << " +- " << fixed(rig.yaw_offset_sigma / kDeg, 4) << " deg ("
+                << (rig.yaw_zero == YawZeroSource::RobotMotion ? "from the robot's translation"
+                                                               : "from the board standing square")
+                << ")\n";
+    std::cout << "yaw axis (vision frame): (" << fixed(ax.x(), 5) << ", " << fixed(ax.y(), 5) << ", " << fixed(ax.z(), 5)
+              << ") +- (" << fixed(sa.x(), 5) << ", " << fixed(sa.y(), 5) << ", " << fixed(sa.z(), 5) << "), "
+              << fixed(std::acos(std::min(1.0, ax.y())) / kDeg, 3) << " deg from +Y"
+              << (a->fixed_axis ? " (fixed)" : "") << "\n";
+    std::cout << "RMS reprojection error: " << fixed(rig.rms_px, 4) << " px\n";
+    std::cout << "wrote " << a->out << "\n";
+    return 0;
+  };
+}
+
+} // namespace yawdepth::cli
