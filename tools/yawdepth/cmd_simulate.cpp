@@ -176,17 +176,17 @@ Runner addSimulate(CLI::App &app)
       for (std::size_t i = 0; i < ids.size(); ++i) {
         Track t;
         t.id = ids[i];
-        for (std::size_t k = 0; k < scene.truth.size(); ++k) {
+        for (const MotionSample &row : scene.truth) {
           Eigen::Matrix3d R;
           Eigen::Vector3d tt;
-          fromVisp(wMc(rig, scene.truth[k]).inverse(), R, tt);
+          fromVisp(wMc(rig, row).inverse(), R, tt);
           const Eigen::Vector3d c = R * w_points[i] + tt;
           if (!(c.z() > 1e-6))
             continue;
           const Eigen::Vector2d uv = camera.project(c.head<2>() / c.z());
           if (!(uv.x() >= 0 && uv.y() >= 0 && uv.x() <= camera.width() - 1.0 && uv.y() <= camera.height() - 1.0))
             continue;
-          t.observations.push_back({scene.truth[k].frame, uv.x() + so.noise.sigma_px * g(rng),
+          t.observations.push_back({row.frame, uv.x() + so.noise.sigma_px * g(rng),
                                     uv.y() + so.noise.sigma_px * g(rng)});
         }
         tracks.push_back(t);

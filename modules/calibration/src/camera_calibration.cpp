@@ -407,7 +407,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
       for (const auto &p : image[i]) {
         const int cx = std::clamp(static_cast<int>(p.x / width * 8), 0, 7);
         const int cy = std::clamp(static_cast<int>(p.y / height * 6), 0, 5);
-        ++cells[static_cast<std::size_t>(cy * 8 + cx)];
+        ++cells[static_cast<std::size_t>(cy) * 8 + cx];
       }
     result.coverage = static_cast<double>(std::count_if(cells.begin(), cells.end(), [](int c) { return c > 0; })) / 48.0;
   }
@@ -485,7 +485,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
       result.visp_rms_kdu = std::sqrt(s_kdu / static_cast<double>(n));
       result.visp_fitted = std::isfinite(result.visp_rms_with) && std::isfinite(result.visp_rms_without);
       if (!result.visp_fitted)
-        result.notes.push_back("ViSP models: non-finite fit");
+        result.notes.emplace_back("ViSP models: non-finite fit");
     } catch (const Error &e) {
       result.notes.push_back(std::string("ViSP models not fitted: ") + e.what());
     } catch (const vpException &e) {
@@ -545,11 +545,11 @@ cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<Ca
       for (const auto &f : views[i].features) {
         const int cx = std::clamp(static_cast<int>(f.u / w * 8), 0, 7);
         const int cy = std::clamp(static_cast<int>(f.v / h * 6), 0, 5);
-        ++cells[static_cast<std::size_t>(cy * 8 + cx)];
+        ++cells[static_cast<std::size_t>(cy) * 8 + cx];
       }
   for (int cy = 0; cy < 6; ++cy)
     for (int cx = 0; cx < 8; ++cx)
-      if (cells[static_cast<std::size_t>(cy * 8 + cx)] == 0)
+      if (cells[static_cast<std::size_t>(cy) * 8 + cx] == 0)
         cv::rectangle(img, cv::Point(cx * w / 8, cy * h / 6), cv::Point((cx + 1) * w / 8 - 1, (cy + 1) * h / 6 - 1),
                       cv::Scalar(200, 200, 255), cv::FILLED);
   for (int k = 1; k < 8; ++k)

@@ -205,6 +205,7 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
 
   // Yaw readings: distinct values and span.
   std::vector<double> yaws;
+  yaws.reserve(samples.size());
   for (const auto &s : samples)
     yaws.push_back(s.yaw);
   std::sort(yaws.begin(), yaws.end());
@@ -362,7 +363,8 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
     throw Error("rig calibration failed: no finite solution");
 
   const std::size_t m = pb.residuals;
-  out.rms_px = std::sqrt(cost / static_cast<double>(m / 2));
+  const std::size_t pairs = m / 2; // residuals come in (u, v) pairs: one per feature
+  out.rms_px = std::sqrt(cost / static_cast<double>(pairs));
   {
     std::size_t k = 0;
     for (std::size_t i = 0; i < n; ++i) {

@@ -165,6 +165,7 @@ void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corn
   if (method == CornerRefinement::OpenCV) {
     const int half = window > 0 ? window : std::clamp(static_cast<int>(std::lround(0.4 * spacing_px)), 2, 15);
     std::vector<cv::Point2f> pts;
+    pts.reserve(corners.size());
     for (const auto &p : corners)
       pts.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
     cv::cornerSubPix(gray, pts, cv::Size(half, half), cv::Size(-1, -1),
@@ -352,7 +353,7 @@ FrameDetection PatternDetector::Impl::detectChessboard(const cv::Mat &gray, long
   if (!ok)
     ok = cv::findChessboardCornersSB(gray, size, found,
                                      cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
-  if (!ok || found.size() != static_cast<std::size_t>(cols * rows)) {
+  if (!ok || found.size() != static_cast<std::size_t>(cols) * rows) {
     out.reason = name + " not found";
     return out;
   }

@@ -108,7 +108,7 @@ FamilyBitmaps makeBitmaps(apriltag_family_t *fam) {
       continue;
     for (int y = 0; y < std::min(im->height, b.total_width); ++y)
       for (int x = 0; x < std::min(im->width, b.total_width); ++x)
-        b.bits[static_cast<std::size_t>(id) * n + y * b.total_width + x] = im->buf[y * im->stride + x] >= 128 ? 1 : 0;
+        b.bits[static_cast<std::size_t>(id) * n + static_cast<std::size_t>(y) * b.total_width + x] = im->buf[y * im->stride + x] >= 128 ? 1 : 0;
     // image_u8_destroy() is not exported by Debian's libapriltag.so (it lives in
     // libapriltag-utils); the image is two malloc'ed blocks, as image_u8_create() makes them.
     std::free(im->buf);
@@ -343,7 +343,7 @@ double BoardLayout::reflectance(double X, double Y) const {
         return 1;
       const int ix = std::min(static_cast<int>(cx), f.total_width - 1);
       const int iy = std::min(static_cast<int>(cy), f.total_width - 1);
-      return f.bits[static_cast<std::size_t>(id) * f.total_width * f.total_width + iy * f.total_width + ix];
+      return f.bits[static_cast<std::size_t>(id) * f.total_width * f.total_width + static_cast<std::size_t>(iy) * f.total_width + ix];
     }
   }
   return 1;

@@ -34,7 +34,7 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
   };
 
   Model m;
-  const Eigen::Vector3d t0 = rig.cameraOffset();
+  const Eigen::Vector3d &t0 = rig.cameraOffset();
   std::copy(t0.data(), t0.data() + 3, m.t0);
   m.poses_free = noise.sigma_odom > 0 || noise.sigma_heading > 0;
   m.yaws_free = noise.sigma_yaw > 0;

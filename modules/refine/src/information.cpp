@@ -170,7 +170,7 @@ void pointCovariances(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &
     }
     // A numerically singular point information: no estimate for that point.
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(Hpp[p]);
-    const Eigen::Vector3d ev = es.eigenvalues();
+    const Eigen::Vector3d &ev = es.eigenvalues();
     if (!(ev(0) > 1e-12 * std::max(ev(2), 1e-300)) || !ev.allFinite())
       continue;
     ok[p] = 1;

@@ -171,7 +171,7 @@ cv::Scalar errorColour(double err, double scale)
   return cv::Scalar(40, 200 * (1 - t) + 40 * t, 60 + 180 * t);
 }
 
-void text(cv::Mat &img, const std::string &s, cv::Point p, double scale = 0.45, cv::Scalar c = cv::Scalar(30, 30, 30),
+void text(cv::Mat &img, const std::string &s, cv::Point p, double scale = 0.45, const cv::Scalar &c = cv::Scalar(30, 30, 30),
           int thickness = 1)
 {
   cv::putText(img, s, p, cv::FONT_HERSHEY_SIMPLEX, scale, c, thickness, cv::LINE_AA);
@@ -251,9 +251,12 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
   const double span = std::max({hi.x() - lo.x(), hi.y() - lo.y(), 1e-6});
   const double scale = 0.8 * std::min(p1.width, p1.height - 40) / span;
   const Eigen::Vector2d mid = 0.5 * (lo + hi);
+  // The panel's centre in whole pixels (integer halves, as intended).
+  const int centre_x = p1.x + p1.width / 2;
+  const int centre_y = p1.y + 20 + (p1.height - 20) / 2;
   auto toPx = [&](const Eigen::Vector2d &a) {
-    return cv::Point(static_cast<int>(p1.x + p1.width / 2 + scale * (a.x() - mid.x())),
-                     static_cast<int>(p1.y + 20 + (p1.height - 20) / 2 + scale * (a.y() - mid.y())));
+    return cv::Point(static_cast<int>(centre_x + scale * (a.x() - mid.x())),
+                     static_cast<int>(centre_y + scale * (a.y() - mid.y())));
   };
   std::map<long, cv::Point> px;
   for (std::size_t i = 0; i < m.points.size(); ++i)

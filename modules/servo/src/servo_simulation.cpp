@@ -201,7 +201,7 @@ ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<
       c_P[i] = Eigen::Vector3d(P[0], P[1], P[2]);
       if (!(P[2] > 1e-3)) {
         lost = true;
-        st.pixels.push_back(Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+        st.pixels.emplace_back(Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
         continue;
       }
       const Eigen::Vector2d uv = camera.project(Eigen::Vector2d(P[0] / P[2], P[1] / P[2]));

@@ -103,7 +103,7 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
     if (!(std::isfinite(f.x) && std::isfinite(f.y) && std::isfinite(f.Z) && f.Z > 0 && std::isfinite(f.weight) &&
           f.weight >= 0))
       throw Error("yaw helper: each feature needs finite x, y, a positive depth and a non-negative weight");
-    v_points.push_back(rotY(yaw) * (Eigen::Vector3d(f.x * f.Z, f.y * f.Z, f.Z) + rig.cameraOffset()));
+    v_points.emplace_back(rotY(yaw) * (Eigen::Vector3d(f.x * f.Z, f.y * f.Z, f.Z) + rig.cameraOffset()));
   }
 
   const double reach = options.max_rate * options.horizon;

@@ -86,7 +86,7 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
     Eigen::Vector2d m;
     if (!camera.undistort(Eigen::Vector2d(u, v), m))
       throw Error("simulate: the camera's distortion model cannot be inverted inside the image");
-    scene.w_points.push_back(R0 * (Z * Eigen::Vector3d(m.x(), m.y(), 1.0)) + t0);
+    scene.w_points.emplace_back(R0 * (Z * Eigen::Vector3d(m.x(), m.y(), 1.0)) + t0);
   }
   // Observations.
   scene.tracks.resize(static_cast<std::size_t>(o.points));

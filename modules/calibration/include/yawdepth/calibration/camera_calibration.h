@@ -26,7 +26,8 @@ struct CalibrationView {
 
 /*! \brief Detection over a set of calibration images. */
 struct CalibrationDetections {
-  int width = 0, height = 0;              //!< image size (all images must share it)
+  /*! image width (px); all images must share the size */
+  int width = 0, height = 0;              //!< image height (px)
   std::vector<CalibrationView> views;     //!< the images where the pattern was found
   std::vector<std::string> failures;      //!< "NAME: reason" for every image where it was not
 };
@@ -59,8 +60,8 @@ struct CameraCalibrationOptions {
 
 /*! \brief Result for one view. */
 struct CalibrationViewResult {
-  std::string name;
-  int points = 0;
+  std::string name;           //!< image name, as in CalibrationView
+  int points = 0;             //!< number of the view's features
   double rms_px = 0;          //!< RMS reprojection error of the view's points (px), Brown model
   bool outlier = false;       //!< flagged as an outlier view
   bool used = true;           //!< used in the final calibration
@@ -75,10 +76,10 @@ struct CameraCalibration {
   /*! standard deviations of fx, fy, u0, v0, k1, k2, p1, p2, k3 (0 for fixed parameters) */
   std::vector<double> std_devs;
   std::vector<CalibrationViewResult> views; //!< every input view, in input order
-  int views_used = 0;
+  int views_used = 0;              //!< number of views in the final calibration
   double orientation_spread = 0;   //!< largest angle between two board normals (rad)
   double coverage = 0;             //!< fraction of a 8 x 6 image grid's cells with at least one point
-  bool visp_fitted = false;
+  bool visp_fitted = false;        //!< the ViSP models below were fitted
   vpCameraParameters visp_without; //!< ViSP model without distortion (px, py, u0, v0)
   vpCameraParameters visp_with;    //!< ViSP model with distortion (px, py, u0, v0, kud, kdu)
   double visp_rms_without = 0;     //!< RMS reprojection error of the model without distortion (px)

@@ -36,8 +36,8 @@ namespace yawdepth {
 
 /*! \brief One image of the rig calibration: its motion-log row (yaw = the reading) and features. */
 struct RigView {
-  MotionSample sample;
-  std::vector<DetectedFeature> features;
+  MotionSample sample;                   //!< the image's motion-log row (yaw = the reading)
+  std::vector<DetectedFeature> features; //!< the board's features detected in the image
 };
 
 /*! \brief Options of calibrateRig(). */
@@ -50,7 +50,7 @@ struct RigCalibrationOptions {
   double min_yaw_span = 20.0 * M_PI / 180.0; //!< readings must span this much ...
   int min_distinct_yaws = 3;       //!< ... with at least this many distinct values (0.2 deg apart)
   double min_baseline = 0.02;      //!< robot translation (m) from which the yaw offset is estimated
-  int min_points_per_view = 4;
+  int min_points_per_view = 4;     //!< views with fewer points are not used
 };
 
 /*! \brief How the yaw offset was obtained. */
@@ -62,18 +62,24 @@ enum class YawZeroSource {
 
 /*! \brief Result of calibrateRig(). 1-sigma uncertainties; 0 for fixed quantities. */
 struct RigCalibration {
-  Eigen::Vector3d camera_offset = Eigen::Vector3d::Zero();
-  Eigen::Vector3d camera_offset_sigma = Eigen::Vector3d::Zero();
-  Eigen::Vector3d yaw_axis = Eigen::Vector3d::UnitY();
-  Eigen::Vector3d yaw_axis_sigma = Eigen::Vector3d::Zero();
-  double yaw_offset = 0, yaw_offset_sigma = 0;
-  YawZeroSource yaw_zero = YawZeroSource::Fixed;
+  Eigen::Vector3d camera_offset = Eigen::Vector3d::Zero();       //!< t0: the optical centre in the vision frame at yaw 0 (m)
+  Eigen::Vector3d camera_offset_sigma = Eigen::Vector3d::Zero(); //!< 1-sigma of camera_offset (m)
+  Eigen::Vector3d yaw_axis = Eigen::Vector3d::UnitY();           //!< unit yaw axis in the vision frame
+  Eigen::Vector3d yaw_axis_sigma = Eigen::Vector3d::Zero();      //!< 1-sigma of yaw_axis
+  /*! yaw offset: true yaw = reading + yaw_offset (rad) */
+  double yaw_offset = 0, yaw_offset_sigma = 0; //!< 1-sigma of yaw_offset (rad)
+  YawZeroSource yaw_zero = YawZeroSource::Fixed; //!< how yaw_offset was obtained
   Eigen::Isometry3d v0Mb = Eigen::Isometry3d::Identity(); //!< board pose in the first view's vision frame
   double rms_px = 0;               //!< RMS reprojection error (px, per coordinate pair)
   std::vector<double> view_rms_px; //!< per view
-  int views = 0, points = 0, iterations = 0;
+  /*! number of views used */
+  int views = 0, points = 0, iterations = 0; //!< Levenberg–Marquardt iterations
+  /*!
+    \var points
+    number of features used, over every view
+  */
   double yaw_span = 0;             //!< span of the yaw readings (rad)
-  int distinct_yaws = 0;
+  int distinct_yaws = 0;           //!< number of distinct yaw readings (0.2 deg apart)
   double baseline = 0;             //!< largest robot translation between views (m)
 };
 

@@ -43,11 +43,12 @@ namespace yawdepth {
   (d_x, d_y, d_z, heading, yaw_prev, yaw_cur). Computed once per frame, shared by every feature.
 */
 struct IncrementModel {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-  std::array<Eigen::Matrix3d, 6> dR;
-  std::array<Eigen::Vector3d, 6> dt;
-  long frame_prev = 0, frame_cur = 0;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity(); //!< rotation from the earlier to the later camera frame
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();     //!< translation from the earlier to the later camera frame (m)
+  std::array<Eigen::Matrix3d, 6> dR;               //!< dR/d(input) for each noisy input, in the order above
+  std::array<Eigen::Vector3d, 6> dt;               //!< dt/d(input) for each noisy input, in the order above
+  /*! frame number of the earlier row */
+  long frame_prev = 0, frame_cur = 0; //!< frame number of the later row
   double yaw_cur = 0; //!< yaw reading of the later frame (rad)
   /*! \brief The increment between two motion-log rows (prev before cur). */
   static IncrementModel between(const YawRig &rig, const MotionSample &prev, const MotionSample &cur);
@@ -59,8 +60,8 @@ struct IncrementModel {
   with the noise model's variances; FusedEstimator replaces it by what the other features observed.
 */
 struct IncrementPrior {
-  Eigen::Matrix<double, 5, 1> mean = Eigen::Matrix<double, 5, 1>::Zero();
-  Eigen::Matrix<double, 5, 5> cov = Eigen::Matrix<double, 5, 5>::Zero();
+  Eigen::Matrix<double, 5, 1> mean = Eigen::Matrix<double, 5, 1>::Zero(); //!< prior mean of the increment noise
+  Eigen::Matrix<double, 5, 5> cov = Eigen::Matrix<double, 5, 5>::Zero();  //!< prior covariance of the increment noise
 };
 
 /*! \brief Options of DepthFilter. */
@@ -81,12 +82,15 @@ struct DepthFilterOptions {
 /*! \brief Recursive log-inverse-depth filter for one feature (the `fused` method). */
 class DepthFilter {
 public:
-  using Options = DepthFilterOptions;
+  using Options = DepthFilterOptions; //!< The filter's options.
 
   /*! \brief What a step did with its observation. */
   enum class Update { Inlier, Outlier, Restarted, PredictOnly };
 
-  /*! \param kx, ky Focal lengths (px), to express parallax in pixels for the degenerate gate. */
+  /*!
+    \param options The filter's options.
+    \param kx, ky Focal lengths (px), to express parallax in pixels for the degenerate gate.
+  */
   explicit DepthFilter(const Options &options = Options(), double kx = 1.0, double ky = 1.0);
 
   /*!
@@ -95,12 +99,14 @@ public:
     \param m Observed normalised (undistorted) point. \param m_cov Its 2x2 covariance.
   */
   void initialize(long frame, double yaw, const Eigen::Vector2d &m, const Eigen::Matrix2d &m_cov);
+  /*! \brief Whether initialize() was called (the filter has a state). */
   bool initialized() const { return initialized_; }
 
   /*!
     \brief Advance to the next frame through one increment, and update with its observation if any.
     \param inc The increment from the filter's current frame to the next (frame_prev must match).
     \param m, m_cov The next frame's observation, or nullptr when the feature was not observed.
+    \param prior Prior on the increment's noise, or nullptr for defaultPrior().
     \return What happened to the observation. Throws yawdepth::Error when not initialised or when
             `inc` does not start at the filter's frame.
   */
@@ -128,11 +134,14 @@ public:
   double depth() const { return std::exp(-s_(2)); }
   /*! \brief 1-sigma of log-depth: the relative depth uncertainty. */
   double logDepthSigma() const { return std::sqrt(P_(2, 2)); }
+  /*! \brief The filter's current frame. */
   long frame() const { return frame_; }
   int inliers() const { return inliers_; }   //!< Observations used, the first one included.
   int outliers() const { return outliers_; } //!< Observations rejected since the last (re)start.
   double parallaxPx() const { return parallax_px_; } //!< Largest rotation-compensated parallax so far (px).
+  /*! \brief The state vector (its third component is the log-inverse depth lambda). */
   const Eigen::Vector4d &state() const { return s_; }
+  /*! \brief The state's covariance. */
   const Eigen::Matrix4d &covariance() const { return P_; }
 
 private:

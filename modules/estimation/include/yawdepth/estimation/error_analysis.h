@@ -65,11 +65,12 @@ struct MonteCarloDepthError {
   double rms_relative = 0;    //!< RMS of (Z_est - Z)/Z.
   double median_abs_relative = 0; //!< Median of |Z_est - Z|/Z (robust to the heavy tails near the focus of expansion).
   double bias_relative = 0;   //!< Mean of (Z_est - Z)/Z.
-  int samples = 0;
+  int samples = 0;            //!< Number of draws.
 };
 
 /*!
   \brief Monte Carlo of eq. (9) with the noise of firstOrderDepthSigma().
+  \param c The case (geometry and noise).
   \param samples Number of draws (> 0). \param seed Random seed (results are reproducible).
 */
 MonteCarloDepthError monteCarloDepthError(const ErrorAnalysisCase &c, int samples, std::uint64_t seed = 1);
@@ -77,7 +78,7 @@ MonteCarloDepthError monteCarloDepthError(const ErrorAnalysisCase &c, int sample
 /*! \brief A row of the paper's Section 4 table. */
 struct PaperErrorRow {
   std::string view;       //!< "front", "side" or "lateral"
-  ErrorAnalysisCase input;
+  ErrorAnalysisCase input; //!< the row's inputs
   double lateral_depth_error = 0; //!< for the lateral row: the dZ/Z it assumes (0.05)
 };
 

@@ -29,18 +29,25 @@ struct FusedOptions {
 
 /*! \brief One observation of a frame: feature id and observed (distorted) pixel. */
 struct FrameObservation {
-  long id = 0;
-  double u = 0, v = 0;
+  long id = 0;         //!< feature id
+  /*! observed pixel: column (px) */
+  double u = 0, v = 0; //!< observed pixel: row (px)
 };
 
 /*! \brief Many DepthFilters advanced together frame by frame. */
 class FusedEstimator {
 public:
+  /*!
+    \brief An estimator with no feature yet.
+    \param camera Camera model (observed pixels are undistorted with it).
+    \param rig Yaw rig.
+    \param options Filter and noise options.
+  */
   FusedEstimator(const CameraModel &camera, const YawRig &rig, const FusedOptions &options = FusedOptions());
 
   /*! \brief What happened to one observation of the last frame. */
   struct ObservationResult {
-    long id = 0;
+    long id = 0; //!< feature id
     DepthFilter::Update update = DepthFilter::Update::Inlier; //!< Inlier also for a (re)start
     bool undistorted = true; //!< false: outside the distortion model, not used
   };

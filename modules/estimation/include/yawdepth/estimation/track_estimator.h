@@ -29,7 +29,7 @@ Method methodFromString(const std::string &word);
 
 /*! \brief Options of estimateTrack(). */
 struct TrackEstimatorOptions {
-  Method method = Method::Exact;
+  Method method = Method::Exact; //!< the estimation method
   TwoViewOptions two_view;      //!< paper / exact (its noise and gates are also used by fused)
   DepthFilter::Options filter;  //!< fused: prior, outlier gate, convergence (noise and gates come from two_view)
 };
@@ -41,8 +41,12 @@ struct TrackEstimatorOptions {
   was seen across; when frames in between are missing, the odometry noise grows with the number
   of motion-log rows spanned). `fused` runs a DepthFilter from the first observation through every
   motion-log row to the last observation (predicting through rows where the feature is missing).
+  \param camera Camera model (observed pixels are undistorted with it).
+  \param rig Yaw rig.
   \param motion Motion-log rows sorted by strictly increasing frame; every observed frame must be in
          it (throws yawdepth::Error otherwise).
+  \param track The feature's observations.
+  \param options Method and its options.
   \return An estimate whose status says whether it is valid; `too_few_frames` for fewer than two
           observations.
 */
@@ -52,6 +56,9 @@ PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const 
 /*!
   \brief Estimate every track (same order). Same as estimateTrack() on each, but computes each
   motion increment once for all tracks.
+  \param camera, rig, options As for estimateTrack().
+  \param motion Motion-log rows, as for estimateTrack().
+  \param tracks The features.
   \param outliers If not null, receives per track and per observation whether `fused` rejected it
          as an outlier (all false for the other methods).
 */

@@ -81,6 +81,7 @@ double paperDepth(double x, double y, double du, double kx, const Eigen::Vector3
   \param rig Yaw rig.
   \param prev, cur Motion-log rows of the two frames.
   \param uv_prev, uv_cur Observed (distorted) pixels.
+  \param options Noise model and gates.
 */
 PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const MotionSample &prev,
                             const MotionSample &cur, const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv_cur,

@@ -15,14 +15,15 @@ namespace yawdepth {
 
 /*! \brief One observation of a feature: its observed (distorted) pixel in a frame. */
 struct Observation {
-  long frame = 0;
-  double u = 0, v = 0;
+  long frame = 0;      //!< frame number
+  /*! observed pixel: column (px) */
+  double u = 0, v = 0; //!< observed pixel: row (px)
 };
 
 /*! \brief Every observation of one feature, sorted by frame. */
 struct Track {
-  long id = 0;
-  std::vector<Observation> observations;
+  long id = 0;                           //!< feature id
+  std::vector<Observation> observations; //!< sorted by frame
 };
 
 /*!
@@ -49,7 +50,7 @@ Status statusFromString(const std::string &word);
   Valid (finite) only when `status == Status::Ok`; otherwise the numbers are NaN.
 */
 struct PointEstimate {
-  Status status = Status::TooFewFrames;
+  Status status = Status::TooFewFrames; //!< Whether the estimate is valid, and why not.
   long frame = 0;                 //!< Frame the point is expressed at (the last observation).
   Eigen::Vector3d c_P = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
                                   //!< (Xc, Yc, Zc) in the camera frame at `frame` (m).
@@ -59,6 +60,7 @@ struct PointEstimate {
                                   //!< First-order covariance of c_P (m^2).
   double parallax_px = std::numeric_limits<double>::quiet_NaN(); //!< Parallax used by the gate (px).
 
+  /*! \brief `status == Status::Ok`: the estimate is valid. */
   bool ok() const { return status == Status::Ok; }
   /*! \brief 1-sigma depth uncertainty \f$ \sqrt{\Sigma_{ZZ}} \f$ (m). */
   double sigmaZ() const { return std::sqrt(c_cov(2, 2)); }

@@ -16,16 +16,17 @@ namespace yawdepth {
 
 /*! \brief One detected feature: its id and observed (distorted) pixel. */
 struct DetectedFeature {
-  long id = 0;
-  double u = 0, v = 0;
+  long id = 0;         //!< feature id (pattern.h)
+  /*! observed pixel: column (px) */
+  double u = 0, v = 0; //!< observed pixel: row (px)
 };
 
 /*! \brief Detection result of one image. */
 struct FrameDetection {
-  long frame = 0;
+  long frame = 0;             //!< frame number given to detect()
   bool found = false;         //!< false: no usable pattern; `reason` says why
   std::string reason;         //!< e.g. "chessboard 5x4 not found", "image unreadable"
-  std::vector<DetectedFeature> features;
+  std::vector<DetectedFeature> features; //!< the detected features (empty when not found)
 };
 
 /*!
@@ -47,7 +48,7 @@ struct DetectorOptions {
   CornerRefinement refinement = CornerRefinement::Gradient; //!< chessboard: method when `subpixel`
   int subpixel_window = 0;      //!< half-size of the refinement window (px); 0 = from the corner spacing
   double apriltag_decimate = 1; //!< ViSP quad decimation (1 = full resolution, most accurate)
-  int threads = 1;
+  int threads = 1;              //!< number of threads of the detection
 };
 
 /*!
@@ -81,7 +82,9 @@ public:
       ViSP's detector does not have. */
   PatternDetector(const PatternSpec &pattern, const DetectorOptions &options = DetectorOptions());
   ~PatternDetector();
+  /*! \brief Move constructor. */
   PatternDetector(PatternDetector &&) noexcept;
+  /*! \brief Move assignment. */
   PatternDetector &operator=(PatternDetector &&) noexcept;
 
   /*!
@@ -109,6 +112,7 @@ private:
   \param corners Initial estimates (px, pixel centres at integer coordinates), refined in place;
   a corner whose refinement fails or moves by more than a quarter of the spacing keeps its input.
   \param spacing_px Smallest distance between neighbouring corners (px): sets the window.
+  \param method The refinement method.
   \param window Half-size of the window (px); 0 = from `spacing_px`.
 */
 void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corners, double spacing_px,

@@ -66,7 +66,8 @@ struct RefineResult {
   std::vector<std::vector<bool>> outliers; //!< Per track, per observation: flagged as an outlier.
   std::vector<MotionSample> motion;        //!< Refined motion-log rows (same frames as the input).
   int iterations = 0;                      //!< Ceres iterations, all solves together.
-  double initial_cost = 0, final_cost = 0; //!< Of the final (inlier, non-robust) solve.
+  /*! Initial cost of the final (inlier, non-robust) solve. */
+  double initial_cost = 0, final_cost = 0; //!< Final cost of the final (inlier, non-robust) solve.
   bool converged = false;                  //!< Ceres reported convergence of the final solve.
 };
 
@@ -75,6 +76,8 @@ bool refineAvailable();
 
 /*!
   \brief Refine every track's point jointly with the motion.
+  \param camera Camera model (observed pixels are undistorted with it).
+  \param rig Yaw rig.
   \param motion Motion-log rows, strictly increasing frames; every observed frame must be among them.
   \param tracks The features; tracks with fewer than two observations get `too_few_frames`.
   \param initial An initial estimate per track (e.g. from `fused`), same order as `tracks`, used
@@ -83,6 +86,7 @@ bool refineAvailable();
          Each track's candidates (the given estimate, `exact` on its first/second and
          second-to-last/last observations) are scored robustly against all its observations and
          the best one is used, so one gross error at either end does not spoil the start.
+  \param options Noise model, robust loss and solver options.
   \throws yawdepth::Error for inconsistent input (sizes, unknown frames).
 */
 RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
@@ -96,7 +100,10 @@ RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const st
   `tracks`, priors on every increment and yaw reading; frame 0's pose known), evaluated at the
   truth, inverted, and projected on the depth. Only the frames of the observations are used, not
   their pixel values. Returns the 1-sigma bound per track (NaN for tracks with < 2 observations).
-  \param truth True motion rows. \param w_points True points in the world frame, one per track.
+  \param camera Camera model. \param rig Yaw rig.
+  \param truth True motion rows. \param tracks The features (only their observations' frames are used).
+  \param w_points True points in the world frame, one per track.
+  \param noise Pixel, odometry and yaw noise.
   \param joint true: all points and the motion estimated together (the bound for `refine`);
          false: each point alone with the motion (the bound for a per-feature method).
 */

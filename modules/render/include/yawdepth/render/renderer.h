@@ -33,13 +33,22 @@ struct RenderOptions {
   int supersampling = 8;       //!< k x k samples per pixel where the pixel straddles an edge (1..64)
   double blur_sigma_px = 0.0;  //!< Gaussian optical blur (px); 0 = none
   double noise_sigma = 0.0;    //!< Gaussian sensor noise (gray levels); 0 = none
-  double black = 25, white = 230, background = 110; //!< gray levels of the board and of the rest
+  /*! gray level of the board's black parts */
+  double black = 25, white = 230, background = 110; //!< gray level around the board
+  /*!
+    \var white
+    gray level of the board's white parts
+  */
   std::uint64_t seed = 1;      //!< noise seed
 };
 
 /*!
   \brief Render one grayscale view (8-bit, camera's image size) of a board.
+  \param camera Camera model (with an image size).
+  \param rig Yaw rig.
+  \param board The board.
   \param wMb Pose of the board frame in the world (see pattern.h for the board frame).
+  \param options Rendering options.
   \param sample The motion-log row: the vision frame's pose and the camera yaw.
   The camera must have an image size; throws yawdepth::Error for it, bad options or non-finite poses.
   The exact pixel of a board feature is `camera.project()` of its normalised camera-frame point.

@@ -15,16 +15,17 @@ namespace yawdepth {
 
 /*! \brief A measured point of the board in one common frame (the world of the motion log). */
 struct BoardPoint {
-  long id = 0;
+  long id = 0;                                   //!< feature id
   Eigen::Vector3d w_P = Eigen::Vector3d::Zero(); //!< in the world frame (m)
   Eigen::Vector3d c_P = Eigen::Vector3d::Zero(); //!< in the camera frame of its frame (m)
-  long frame = 0;
+  long frame = 0;                                //!< frame the point was estimated at
 };
 
 /*! \brief A distance between two neighbouring features (m). */
 struct BlockLength {
-  long id_a = 0, id_b = 0;
-  double length = 0;
+  /*! id of the first feature */
+  long id_a = 0, id_b = 0; //!< id of the second feature
+  double length = 0;       //!< distance between the two (m)
 };
 
 /*! \brief Metrics of a measured board (lengths in metres). */
@@ -34,10 +35,11 @@ struct BoardMetrics {
   std::vector<BlockLength> vertical;     //!< along the columns / tag left and right edges
   double nominal = 0;                    //!< the true block length (square or tag size)
   Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ(); //!< fitted plane (least squares, SVD)
-  Eigen::Vector3d plane_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d plane_point = Eigen::Vector3d::Zero();   //!< a point of the fitted plane (the points' centroid)
   std::vector<double> plane_distance;    //!< signed distance of each point to the plane, same order as points
   double max_plane_distance = 0;         //!< largest |distance|
-  double min_depth = 0, max_depth = 0;   //!< camera-frame depth range of the points
+  /*! smallest camera-frame depth of the points */
+  double min_depth = 0, max_depth = 0;   //!< largest camera-frame depth of the points
   /*! \brief min, max, mean of a set of block lengths. */
   static Eigen::Vector3d stats(const std::vector<BlockLength> &v);
 };
@@ -45,6 +47,7 @@ struct BoardMetrics {
 /*!
   \brief Compute the metrics from estimated points.
   \param pattern The board's pattern (neighbour structure and nominal length).
+  \param rig Yaw rig.
   \param rows Estimated points (only `ok` ones are used), each at its own frame.
   \param motion The motion log used, to bring every point into its world frame.
   \throws yawdepth::Error when fewer than 3 valid points remain.
@@ -59,6 +62,8 @@ std::string formatBoardMetrics(const BoardMetrics &m);
   \brief Write `report.txt`, `blocks.csv`, `plane.csv` and `figure.png` into `dir` (created).
   The figure has three panels: the points in the fitted plane with each block length, the
   distance of each point to the plane, and the points seen from above (X against depth).
+  \param dir Output folder.
+  \param m The metrics.
   \param title One line for the figure's title.
 */
 void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::string &title);

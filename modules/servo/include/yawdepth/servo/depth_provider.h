@@ -85,7 +85,7 @@ struct DepthProviderOptions {
 
 /*! \brief Everything the provider knows about one feature's depth. */
 struct FeatureDepth {
-  long id = 0;
+  long id = 0;          //!< feature id
   double depth = 1.0;   //!< What apply() sets: the estimate when converged, else the prior (m).
   double sigma = 1.0;   //!< 1-sigma of `depth` (m).
   bool converged = false; //!< `depth` is the estimate.
@@ -97,9 +97,12 @@ struct FeatureDepth {
 /*! \brief Depth of vpFeaturePoint's from the robot's odometry and the image motion (see the file). */
 class DepthProvider {
 public:
-  using Options = DepthProviderOptions;
+  using Options = DepthProviderOptions; //!< The provider's options.
 
-  /*! \param camera Camera model (distortion included); \param rig the yaw mechanism (optical centre offset). */
+  /*!
+    \param camera Camera model (distortion included); \param rig the yaw mechanism (optical centre offset).
+    \param options The provider's options.
+  */
   DepthProvider(const CameraModel &camera, const YawRig &rig, const Options &options = Options());
   /*! \brief Same, from ViSP camera parameters (with or without ViSP's kud distortion). */
   DepthProvider(const vpCameraParameters &camera, const YawRig &rig, const Options &options = Options());
@@ -144,8 +147,11 @@ public:
   long periods() const { return period_; }
   /*! \brief Number of frames given to the estimator (periods with enough motion). */
   long estimatorFrames() const { return frames_used_; }
+  /*! \brief The camera model. */
   const CameraModel &camera() const { return camera_; }
+  /*! \brief The yaw rig. */
   const YawRig &rig() const { return rig_; }
+  /*! \brief The options. */
   const Options &options() const { return o_; }
   /*! \brief The underlying estimator (its frames are the periods fed to it). */
   const FusedEstimator &estimator() const { return fused_; }

@@ -40,7 +40,8 @@ namespace yawdepth {
 struct UnicyclePanRobot {
   double axle_to_yaw = 0.2; //!< yaw axis ahead of the wheel axle (m)
   YawRig rig;               //!< optical centre offset from the yaw axis
-  double x = 0, z = 0;      //!< wheel-axle centre in the world (m)
+  /*! wheel-axle centre in the world: X (m) */
+  double x = 0, z = 0;      //!< wheel-axle centre in the world: Z (m)
   double heading = 0;       //!< about +Y (rad)
   double pan = 0;           //!< camera yaw relative to the robot (rad)
 
@@ -67,37 +68,47 @@ ServoDepthMode servoDepthModeFromString(const std::string &s);
 
 /*! \brief The simulated servo run. */
 struct ServoSimOptions {
-  ServoDepthMode depth = ServoDepthMode::Estimated;
+  ServoDepthMode depth = ServoDepthMode::Estimated; //!< how each feature's depth is obtained
   double constant_error = 0.5;  //!< Constant mode: Z = desired depth x (1 + constant_error)
   bool side_view = false;       //!< false: front view (robot drives toward the tag); true: side view (pan 90 deg, drives past it)
   bool yaw_helper = false;      //!< add recommendYawRate() as a secondary task (large projection operator) while depths are unconverged
   double dt = 0.05;             //!< control period (s)
   double lambda = 1.0;          //!< servo gain (1/s)
-  int max_iterations = 2000;
+  int max_iterations = 2000;    //!< stop after this many control periods
   double tolerance_px = 0.5;    //!< converged when the true mean corner error is below this (px)
-  double max_v = 0.3, max_omega = 1.0, max_pan_rate = 1.0; //!< joint rate limits (m/s, rad/s)
+  /*! joint rate limit: forward speed (m/s) */
+  double max_v = 0.3, max_omega = 1.0, max_pan_rate = 1.0; //!< joint rate limit: pan rate (rad/s)
+  /*!
+    \var max_omega
+    joint rate limit: turn rate (rad/s)
+  */
   double tag_size = 0.2;        //!< tag side (m)
   double desired_depth = 0.6;   //!< camera to tag at the goal (m)
   double sigma_px = 0.3;        //!< pixel noise of the observed corners (px)
   double sigma_odom_rel = 0.02; //!< odometry: relative noise of the measured v and omega per period
   double sigma_pan = 0.0005;    //!< noise of each pan reading (rad)
-  std::uint64_t seed = 1;
+  std::uint64_t seed = 1;       //!< noise seed
   CameraModel camera = defaultCamera(); //!< needs an image size
-  YawRig rig = YawRig(Eigen::Vector3d(0.0, 0.0, 0.03));
-  double axle_to_yaw = 0.2;
+  YawRig rig = YawRig(Eigen::Vector3d(0.0, 0.0, 0.03)); //!< the robot's yaw mechanism
+  double axle_to_yaw = 0.2;     //!< yaw axis ahead of the wheel axle (m)
   DepthProviderOptions provider; //!< Estimated mode
-  YawHelperOptions helper;
+  YawHelperOptions helper;       //!< yaw helper options (when `yaw_helper`)
   /*! \brief 640x480, 600 px focal length, mild barrel distortion (k1 = -0.05). */
   static CameraModel defaultCamera();
 };
 
 /*! \brief One control period of the run. */
 struct ServoSimStep {
-  int iteration = 0;
-  double time = 0;
+  int iteration = 0;                   //!< control iteration (0-based)
+  double time = 0;                     //!< time since the start (s)
   double error_px = 0;                 //!< true mean corner distance to the desired corners (px)
   std::vector<Eigen::Vector2d> pixels; //!< true (noise-free) observed corners (px)
-  std::vector<double> true_Z, used_Z, sigma_Z; //!< per corner (sigma: provider's, 0 otherwise)
+  /*! per corner: true depth (m) */
+  std::vector<double> true_Z, used_Z, sigma_Z; //!< per corner: 1-sigma of used_Z (provider's, 0 otherwise)
+  /*!
+    \var used_Z
+    per corner: depth given to the control law (m)
+  */
   std::vector<bool> converged;         //!< per corner: estimate in use (Estimated mode)
   std::vector<Status> status;          //!< per corner: the estimator's status (Estimated mode)
   std::vector<double> estimate_Z;      //!< per corner: the estimate, converged or not (NaN if none)
@@ -108,12 +119,12 @@ struct ServoSimStep {
 
 /*! \brief Outcome of a run. */
 struct ServoSimResult {
-  bool converged = false;
+  bool converged = false;      //!< the error fell below tolerance_px
   int iterations = 0;          //!< control iterations run
   double final_error_px = 0;   //!< true mean corner error at the end (px)
   std::string reason;          //!< "converged", "max_iterations", "lost_features", "not_finite"
-  std::vector<Eigen::Vector2d> desired_pixels;
-  std::vector<ServoSimStep> steps;
+  std::vector<Eigen::Vector2d> desired_pixels; //!< the corners at the goal (px)
+  std::vector<ServoSimStep> steps;             //!< every control period
 };
 
 /*! \brief Run the servo (see the file). `on_step` (optional) is called after each period. Throws yawdepth::Error for bad options. */

@@ -52,7 +52,8 @@ namespace yawdepth {
 
 /*! \brief One feature as the helper sees it: its undistorted normalised position, depth and weight. */
 struct YawHelperFeature {
-  double x = 0, y = 0; //!< normalised (undistorted) image coordinates in the current camera frame
+  /*! normalised (undistorted) image coordinate x in the current camera frame */
+  double x = 0, y = 0; //!< normalised (undistorted) image coordinate y in the current camera frame
   double Z = 1;        //!< depth (m), > 0: the estimate, or the prior
   double weight = 1;   //!< weight of its parallax (>= 0), e.g. min(1, sigma_Z/Z / threshold)
 };
@@ -65,7 +66,8 @@ struct YawHelperOptions {
   double gain = 2.0;              //!< rate = gain * (target - current) (1/s), clamped
   double centring_weight = 0.5;   //!< w_c of the visibility term
   double margin_px = 40;          //!< features must stay this far inside the image (px)
-  double min_yaw = -M_PI, max_yaw = M_PI; //!< the pan joint's range (rad)
+  /*! the pan joint's range: lower end (rad) */
+  double min_yaw = -M_PI, max_yaw = M_PI; //!< the pan joint's range: upper end (rad)
   /*! \brief Throws yawdepth::Error for invalid options. */
   void validate() const;
 };
@@ -87,6 +89,7 @@ struct YawRecommendation {
   \param v_velocity Velocity of the vision frame's origin expressed in the vision frame (m/s),
          (vx, vy, vz); for a robot driving forward at v: (0, 0, v).
   \param features The tracked features (at least one).
+  \param options The helper's options.
 */
 YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig, double yaw,
                                    const Eigen::Vector3d &v_velocity, const std::vector<YawHelperFeature> &features,

@@ -26,7 +26,7 @@ struct SceneOptions {
   double turn_rate = 0.0;     //!< Heading change per frame (rad).
   int points = 30;            //!< Number of 3D points.
   double min_depth = 0.5;     //!< Points' depth range in the first camera frame (m).
-  double max_depth = 3.0;
+  double max_depth = 3.0;     //!< Upper end of the depth range (m).
   double margin_px = 20.0;    //!< Points start at least this far inside the image border (px).
   NoiseModel noise{0.0, 0.0, 0.0, 0.0}; //!< Noise added to pixels and to the motion log (default: none).
   std::uint64_t seed = 1;     //!< Random seed.
