@@ -3,6 +3,7 @@
   \brief Camera calibration: OpenCV's Brown model, ViSP's two models, diagnostics.
 */
 #include <yawdepth/calibration/camera_calibration.h>
+#include <yawdepth/camera/quiet_visp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -134,37 +135,6 @@ double homographySpread(const std::map<long, Eigen::Vector3d> &pts, const std::v
   return spread;
 }
 
-/*!
-  Silences std::cout, std::cerr and std::clog while alive: vpXmlParserCamera::save prints "Found
-  camera with name ..." when it adds the second model, and the library must not print. Process-wide;
-  calls from here are serialised by a mutex.
-*/
-class SilenceStdStreams {
-public:
-  SilenceStdStreams() : cout_(std::cout.rdbuf(&null_)), cerr_(std::cerr.rdbuf(&null_)), clog_(std::clog.rdbuf(&null_)) {}
-  ~SilenceStdStreams()
-  {
-    std::cout.rdbuf(cout_);
-    std::cerr.rdbuf(cerr_);
-    std::clog.rdbuf(clog_);
-  }
-  SilenceStdStreams(const SilenceStdStreams &) = delete;
-  SilenceStdStreams &operator=(const SilenceStdStreams &) = delete;
-
-private:
-  struct NullBuf : std::streambuf {
-    int overflow(int c) override { return traits_type::not_eof(c); }
-    std::streamsize xsputn(const char *, std::streamsize n) override { return n; }
-  };
-  NullBuf null_;
-  std::streambuf *cout_, *cerr_, *clog_;
-};
-
-std::mutex &vispMutex()
-{
-  static std::mutex m;
-  return m;
-}
 
 struct OpenCvSolution {
   cv::Mat K, dist;
@@ -424,8 +394,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
   // ViSP's two models, fitted by vpCalibration as ViSP's calibration tool does, from OpenCV's result.
   if (options.fit_visp) {
     try {
-      std::lock_guard<std::mutex> lock(vispMutex()); // vpCalibration's gain is a static
-      SilenceStdStreams silence;
+      const detail::QuietVisp quiet; // vpCalibration prints, and its gain is a static
       std::vector<vpCalibration> table;
       for (std::size_t i : used) {
         vpCalibration calib;
@@ -511,8 +480,7 @@ void saveVispCameraXml(const std::string &path, const CameraCalibration &calibra
   const std::string name = camera_name.empty() ? std::string("Camera") : camera_name;
   const unsigned w = calibration.camera.width(), h = calibration.camera.height();
   try {
-    std::lock_guard<std::mutex> lock(vispMutex());
-    SilenceStdStreams silence;
+    const detail::QuietVisp quiet; // save() prints "Found camera with name ..."
     vpXmlParserCamera xml;
     if (xml.save(calibration.visp_without, tmp.string(), name, w, h) != vpXmlParserCamera::SEQUENCE_OK)
       throw Error(path + ": cannot write the ViSP camera (model without distortion)");

@@ -3,6 +3,7 @@
   \brief Camera files: ViSP XML through vpXmlParserCamera, OpenCV YAML/XML through cv::FileStorage.
 */
 #include <yawdepth/camera/camera_file.h>
+#include <yawdepth/camera/quiet_visp.h>
 
 #include <algorithm>
 #include <cctype>
@@ -170,44 +171,12 @@ std::string joinNames(const std::vector<std::string> &names) {
   return r;
 }
 
-/*!
-  \brief Silences std::cout, std::cerr and std::clog while alive: vpXmlParserCamera::parse prints
-  "Found camera with name ..." to std::cout (and its error traces to std::cerr), and the library
-  must not print. Process-wide and not thread-safe with respect to other printing threads; calls
-  from yawdepth itself are serialised by a mutex.
-*/
-class SilenceStdStreams {
-public:
-  SilenceStdStreams()
-      : cout_(std::cout.rdbuf(&null_)), cerr_(std::cerr.rdbuf(&null_)), clog_(std::clog.rdbuf(&null_)) {}
-  ~SilenceStdStreams() {
-    std::cout.rdbuf(cout_);
-    std::cerr.rdbuf(cerr_);
-    std::clog.rdbuf(clog_);
-  }
-  SilenceStdStreams(const SilenceStdStreams &) = delete;
-  SilenceStdStreams &operator=(const SilenceStdStreams &) = delete;
-
-private:
-  struct NullBuf : std::streambuf {
-    int overflow(int c) override { return traits_type::not_eof(c); }
-    std::streamsize xsputn(const char *, std::streamsize n) override { return n; }
-  };
-  NullBuf null_;
-  std::streambuf *cout_, *cerr_, *clog_;
-};
-
-std::mutex &vispParserMutex() {
-  static std::mutex m;
-  return m;
-}
 
 /*! \brief One vpXmlParserCamera::parse call, silenced; false when ViSP reports an error. */
 bool vispParse(const std::string &path, const std::string &name,
                vpCameraParameters::vpCameraParametersProjType model, vpCameraParameters &cam, unsigned &w,
                unsigned &h) {
-  std::lock_guard<std::mutex> lock(vispParserMutex());
-  SilenceStdStreams silence;
+  const detail::QuietVisp quiet; // parse() prints "Found camera with name ..."
   vpXmlParserCamera parser;
   vpCameraParameters c;
   if (parser.parse(c, path, name, model, 0, 0) != vpXmlParserCamera::SEQUENCE_OK)

@@ -1,0 +1,32 @@
+#pragma once
+/*!
+  \file quiet_visp.h
+  \brief Run ViSP calls that print without printing (the library never prints).
+*/
+#include <iosfwd>
+#include <mutex>
+
+namespace yawdepth {
+namespace detail {
+
+/*!
+  \brief While alive: holds a process-wide lock and sends std::cout, std::cerr and std::clog to
+  nowhere. vpXmlParserCamera::parse/save print "Found camera with name ..." and vpCalibration
+  prints its iterations; yawdepth wraps those calls in one QuietVisp. The lock serialises
+  yawdepth's own ViSP calls (and vpCalibration's static gain); other threads that print through
+  the standard streams meanwhile are silenced too.
+*/
+class QuietVisp {
+public:
+  QuietVisp();
+  ~QuietVisp();
+  QuietVisp(const QuietVisp &) = delete;
+  QuietVisp &operator=(const QuietVisp &) = delete;
+
+private:
+  std::unique_lock<std::mutex> lock_;
+  std::streambuf *cout_, *cerr_, *clog_;
+};
+
+} // namespace detail
+} // namespace yawdepth
