@@ -18,7 +18,9 @@ namespace detail {
 */
 class QuietVisp {
 public:
+  /*! \brief Take the lock, then silence the standard streams. */
   QuietVisp();
+  /*! \brief Restore the standard streams, then release the lock. */
   ~QuietVisp();
   QuietVisp(const QuietVisp &) = delete;
   QuietVisp &operator=(const QuietVisp &) = delete;
