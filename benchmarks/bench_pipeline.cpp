@@ -52,12 +52,7 @@ int main(int argc, char **argv)
     motion[k].z = 0.09 * k / (frames - 1); // 90 mm in all, whatever the frame count
     motion[k].yaw = M_PI / 2;
   }
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  fromVisp(wMc(rig, motion[0]), R, t);
-  Eigen::Isometry3d wMc0 = Eigen::Isometry3d::Identity();
-  wMc0.linear() = R;
-  wMc0.translation() = t;
+  const Eigen::Isometry3d wMc0 = toIsometry(wMc(rig, motion[0]));
   Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity();
   cMb.translation() = Eigen::Vector3d(-0.06 - 0.045, -0.04, 1.0); // pattern centre 45 mm left
   const Eigen::Isometry3d wMb = wMc0 * cMb;

@@ -45,13 +45,7 @@ Eigen::Isometry3d boardPose(const YawRig &rig, const MotionSample &first, const 
   Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity();
   cMb.linear() = rotY(a.board_tilt);
   cMb.translation() = Eigen::Vector3d(a.board_offset_x, a.board_offset_y, a.board_distance) - cMb.linear() * centre;
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  fromVisp(wMc(rig, first), R, t);
-  Eigen::Isometry3d wMc0 = Eigen::Isometry3d::Identity();
-  wMc0.linear() = R;
-  wMc0.translation() = t;
-  return wMc0 * cMb;
+  return toIsometry(wMc(rig, first)) * cMb;
 }
 
 } // namespace

@@ -14,6 +14,17 @@ vpHomogeneousMatrix toVisp(const Eigen::Matrix3d &R, const Eigen::Vector3d &t)
   return M;
 }
 
+Eigen::Isometry3d toIsometry(const vpHomogeneousMatrix &M)
+{
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  fromVisp(M, R, t);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() = t;
+  return T;
+}
+
 void fromVisp(const vpHomogeneousMatrix &M, Eigen::Matrix3d &R, Eigen::Vector3d &t)
 {
   for (unsigned i = 0; i < 3; ++i) {

@@ -157,13 +157,7 @@ cv::Mat renderBoard(const CameraModel &camera, const YawRig &rig, const MotionSa
   validate(camera, options);
   const int W = static_cast<int>(camera.width()), H = static_cast<int>(camera.height());
 
-  Eigen::Matrix3d wRc;
-  Eigen::Vector3d wtc;
-  fromVisp(wMc(rig, sample), wRc, wtc);
-  Eigen::Isometry3d wMc_e = Eigen::Isometry3d::Identity();
-  wMc_e.linear() = wRc;
-  wMc_e.translation() = wtc;
-  const Eigen::Isometry3d bMc = wMb.inverse() * wMc_e;
+  const Eigen::Isometry3d bMc = wMb.inverse() * toIsometry(wMc(rig, sample));
   const Eigen::Matrix3d bRc = bMc.linear();
   const Eigen::Vector3d o = bMc.translation();
   if (!bRc.allFinite() || !o.allFinite())

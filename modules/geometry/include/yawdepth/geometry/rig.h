@@ -16,6 +16,7 @@
   All lengths are metres, all angles radians.
 */
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <visp3/core/vpColVector.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpRotationMatrix.h>
@@ -140,6 +141,9 @@ void relativeMotion(const Eigen::Vector3d &v_t0, const MotionSample &prev, const
   R = rotY<T>(yp - dh - yc);
   t = rotY<T>(yc).transpose() * (rotY<T>(dh).transpose() * (rotY<T>(yp) * t0 - d)) - t0;
 }
+
+/*! \brief A ViSP homogeneous matrix as an Eigen isometry. */
+Eigen::Isometry3d toIsometry(const vpHomogeneousMatrix &M);
 
 /*! \brief The ViSP homogeneous matrix `[R | t]`. */
 vpHomogeneousMatrix toVisp(const Eigen::Matrix3d &R, const Eigen::Vector3d &t);
