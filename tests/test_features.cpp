@@ -36,20 +36,10 @@ CameraModel wideCamera() {
 }
 YawRig paperRig() { return YawRig(Eigen::Vector3d(-0.1503, 0.0, 0.0)); }
 
-Eigen::Isometry3d toIso(const vpHomogeneousMatrix &M) {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  fromVisp(M, R, t);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  T.translation() = t;
-  return T;
-}
-
 /*! True (distorted) pixel of every board feature, by id; false when one is behind the camera. */
 bool truthPixels(const CameraModel &cam, const YawRig &rig, const MotionSample &s, const BoardLayout &board,
                  const Eigen::Isometry3d &wMb, std::map<long, Eigen::Vector2d> &out) {
-  const Eigen::Isometry3d cMb = toIso(wMc(rig, s)).inverse() * wMb;
+  const Eigen::Isometry3d cMb = toIsometry(wMc(rig, s)).inverse() * wMb;
   out.clear();
   for (const auto &f : board.features()) {
     const Eigen::Vector3d c = cMb * f.second;
@@ -75,7 +65,7 @@ Eigen::Isometry3d boardPose(const YawRig &rig, const MotionSample &s, const Boar
   Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity();
   cMb.linear() = R;
   cMb.translation() = Eigen::Vector3d(off_x, off_y, depth) - R * centre;
-  return toIso(wMc(rig, s)) * cMb;
+  return toIsometry(wMc(rig, s)) * cMb;
 }
 
 bool allInside(const std::map<long, Eigen::Vector2d> &px, const CameraModel &cam, double margin) {
