@@ -15,7 +15,7 @@
   --yaw-helper adds yawdepth::recommendYawRate() as a secondary task (ViSP's large projection
   operator) while some depth has not converged.
 
-  Writes a PNG (--png, default servo_ibvs_yawing_camera.png): the corners' image trajectories and
+  Writes a PNG only when asked (--png FILE; nothing by default): the corners' image trajectories and
   the depths over time. --display opens a ViSP window. The last line is
     converged iterations=N final_error=E      (E: true mean corner error in pixels)
   or  diverged iterations=N final_error=E reason=R
@@ -111,7 +111,7 @@ void writePlot(const std::string &path, const yawdepth::ServoSimOptions &o, cons
 int main(int argc, char **argv)
 {
   yawdepth::ServoSimOptions o;
-  std::string png = "servo_ibvs_yawing_camera.png";
+  std::string png = "none"; // write nothing unless asked: a run must not litter the current folder
   bool display = false, quiet = false, verbose = false;
   try {
     for (int i = 1; i < argc; ++i) {

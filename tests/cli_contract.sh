@@ -444,5 +444,119 @@ for s in '45.84 %' '25.42 %' '13.17 %' '18.17 %' '5.15 %' '5.30 %' '0.15 %' 0.14
   if grep -q -F -e "$s" "$W/ea.out"; then pass; else fail "error-analysis --paper output lacks '$s'"; fi
 done
 
+# ---------------------------------------------------------------------------
+# 9. Files: no output replaces an input, another output, a device or a read-only file; no input is
+#    read without bound; a failed run writes nothing.
+F="$W/files"; mkdir -p "$F"
+cp "$T" "$F/t.csv"; cp "$M" "$F/m.csv"; cp "$F/t.csv" "$F/t.orig"; cp "$F/m.csv" "$F/m.orig"
+ln "$F/t.csv" "$F/t_hard.csv"; ln -s t.csv "$F/t_soft.csv"
+EF=(estimate --camera "$XML" --rig "$RIG" --motion "$F/m.csv" --tracks "$F/t.csv")
+# refused NAME WORDS ARGS...: non-zero exit, one line on stderr holding WORDS, inputs unchanged.
+refused() {
+  local name=$1 words=$2; shift 2
+  run "$F/$name" "$@"
+  local rc; rc=$(rc_of "$F/$name")
+  local msg=""
+  [ "$rc" -eq 0 ] && msg="$msg exit 0;"
+  [ "$rc" -ge 124 ] && msg="$msg exit $rc (crash or timeout);"
+  [ "$(lines_of "$F/$name.err")" -ne 1 ] && msg="$msg $(lines_of "$F/$name.err") lines on stderr;"
+  grep -q -F -e "$words" "$F/$name.err" || msg="$msg stderr lacks '$words';"
+  cmp -s "$F/t.csv" "$F/t.orig" || msg="$msg the tracks input changed;"
+  cmp -s "$F/m.csv" "$F/m.orig" || msg="$msg the motion input changed;"
+  if [ -z "$msg" ]; then pass; else fail "files $name:$msg stderr: $(first "$F/$name.err")"; fi
+  cp "$F/t.orig" "$F/t.csv"; cp "$F/m.orig" "$F/m.csv"
+}
+refused out_is_tracks "is the input --tracks" "${EF[@]}" --out "$F/t.csv"
+refused out_is_tracks_dot "is the input --tracks" "${EF[@]}" --out "$F/./t.csv"
+refused out_is_tracks_hardlink "is the input --tracks" "${EF[@]}" --out "$F/t_hard.csv"
+refused out_is_tracks_symlink "is the input --tracks" "${EF[@]}" --out "$F/t_soft.csv"
+refused out_is_motion "is the input --motion" "${EF[@]}" --out "$F/m.csv"
+refused outliers_is_tracks "is the input --tracks" "${EF[@]}" --method fused --outliers "$F/t.csv" --out "$F/p.csv"
+refused outliers_is_out "are the same file" "${EF[@]}" --method fused --outliers "$F/p.csv" --out "$F/p.csv"
+[ -e "$F/p.csv" ] && fail "files: a refused run created its output" || pass
+refused out_is_rig "is the input --rig" estimate --camera "$XML" --rig "$F/rig.yaml" --motion "$F/m.csv" \
+  --tracks "$F/t.csv" --out "$F/rig.yaml" 2>/dev/null < <(cp "$RIG" "$F/rig.yaml")
+refused outliers_empty "empty file name" "${EF[@]}" --method fused --outliers ""
+# Devices and endless inputs: refused at once, never read.
+for what in motion tracks camera rig; do
+  case $what in
+    motion) args=(estimate --camera "$XML" --rig "$RIG" --motion /dev/zero --tracks "$F/t.csv") ;;
+    tracks) args=(estimate --camera "$XML" --rig "$RIG" --motion "$F/m.csv" --tracks /dev/zero) ;;
+    camera) args=(estimate --camera /dev/zero --rig "$RIG" --motion "$F/m.csv" --tracks "$F/t.csv") ;;
+    rig) args=(estimate --camera "$XML" --rig /dev/urandom --motion "$F/m.csv" --tracks "$F/t.csv") ;;
+  esac
+  { timeout 30 "$YAWDEPTH" "${args[@]}" >"$F/dev_$what.out" 2>"$F/dev_$what.err"; } 2>/dev/null
+  rc=$?
+  if [ "$rc" -ne 0 ] && [ "$rc" -lt 124 ] && grep -q "character device" "$F/dev_$what.err" &&
+     [ "$(lines_of "$F/dev_$what.err")" -eq 1 ]; then pass; else
+    fail "files: --$what on a device: exit $rc: $(first "$F/dev_$what.err")"; fi
+done
+# An endless pipe ends at the size limit, in a one-line error.
+{ awk 'BEGIN { print "frame,id,u,v"; for (i = 0; ; i++) print "0," i ",300.5,200.5" }' | timeout 60 "$YAWDEPTH" "${EF[@]:0:7}" --tracks /dev/stdin --max-input-mb 1 \
+    >"$F/endless.out" 2>"$F/endless.err"; } 2>/dev/null
+rc=$?
+if [ "$rc" -ne 0 ] && [ "$rc" -lt 124 ] && grep -q "larger than 1 MiB" "$F/endless.err"; then pass; else
+  fail "files: an endless tracks pipe: exit $rc: $(first "$F/endless.err")"; fi
+# A 2 MB line is refused without being held (1 MiB per line).
+{ printf 'frame,id,u,v\n1,2,'; head -c 2000000 /dev/zero | tr '\0' 7; printf ',4\n'; } >"$F/longline.csv"
+refused long_line "line longer than 1 MiB" "${EF[@]:0:7}" --tracks "$F/longline.csv"
+# A pipe is read like a file (a FIFO with a writer, and process substitution).
+run "$F/reg" "${EF[@]}"
+mkfifo "$F/fifo.csv"
+( cat "$F/t.csv" >"$F/fifo.csv" ) &
+run "$F/fifo" "${EF[@]:0:7}" --tracks "$F/fifo.csv"
+wait
+if [ "$(rc_of "$F/fifo")" -eq 0 ] && cmp -s "$F/reg.out" "$F/fifo.out"; then pass; else
+  fail "files: tracks from a FIFO differ from the file: exit $(rc_of "$F/fifo"): $(first "$F/fifo.err")"; fi
+run "$F/procsub" "${EF[@]:0:7}" --tracks <(cat "$F/t.csv")
+if [ "$(rc_of "$F/procsub")" -eq 0 ] && cmp -s "$F/reg.out" "$F/procsub.out"; then pass; else
+  fail "files: tracks by process substitution: exit $(rc_of "$F/procsub"): $(first "$F/procsub.err")"; fi
+# Outputs onto devices are written through; the device stays a device.
+run "$F/null" "${EF[@]}" --out /dev/null
+if [ "$(rc_of "$F/null")" -eq 0 ] && [ -c /dev/null ]; then pass; else fail "files: --out /dev/null: exit $(rc_of "$F/null"), $(ls -l /dev/null)"; fi
+if [ -c /dev/full ]; then
+  refused out_dev_full "No space left" "${EF[@]}" --out /dev/full
+  [ -c /dev/full ] && pass || fail "files: /dev/full is no longer a device"
+  { "$YAWDEPTH" "${EF[@]}" >/dev/full 2>"$F/stdout_full.err"; } 2>/dev/null
+  rc=$?
+  if [ "$rc" -ne 0 ] && grep -q -e "standard output" -e "cannot write" "$F/stdout_full.err"; then pass; else
+    fail "files: stdout onto /dev/full: exit $rc: $(first "$F/stdout_full.err")"; fi
+fi
+# A symbolic link is followed (its target replaced, the link kept); a read-only file is refused.
+echo old >"$F/target.csv"; ln -s target.csv "$F/link.csv"
+run "$F/link" "${EF[@]}" --out "$F/link.csv"
+if [ "$(rc_of "$F/link")" -eq 0 ] && [ -L "$F/link.csv" ] && cmp -s "$F/reg.out" "$F/target.csv"; then pass; else
+  fail "files: --out onto a symbolic link: exit $(rc_of "$F/link"), link kept: $([ -L "$F/link.csv" ] && echo yes || echo no)"; fi
+echo keep >"$F/ro.csv"; chmod 444 "$F/ro.csv"
+refused out_read_only "is read-only" "${EF[@]}" --out "$F/ro.csv"
+[ "$(cat "$F/ro.csv")" = keep ] && [ ! -w "$F/ro.csv" -o "$(id -u)" -eq 0 ] && pass || fail "files: a read-only output was changed"
+# measure, calibrate-camera, calibrate-rig: outputs onto inputs or onto each other.
+MEF=(measure --quiet --camera "$YML" --rig "$RIG" --pattern chessboard:5x4:0.02)
+cp "$PE/motion.csv" "$F/pe_motion.orig"
+refused measure_out_is_motion "is the input --motion" "${MEF[@]}" --motion "$PE/motion.csv" --out "$PE/motion.csv"
+refused measure_out_is_image "is the input --motion's image" "${MEF[@]}" --motion "$PE/motion.csv" --out "$PE/frame_0001.png"
+refused measure_tracks_out_is_out "are the same file" "${MEF[@]}" --motion "$PE/motion.csv" --tracks-out "$F/q.csv" --out "$F/q.csv"
+cmp -s "$PE/motion.csv" "$F/pe_motion.orig" && pass || fail "files: measure changed its motion log"
+refused calcam_coverage_is_image "is the input image" calibrate-camera --pattern chessboard:5x4:0.02 --out "$F/cal" \
+  --coverage "$PE/frame_0000.png" "$PE/frame_0000.png" "$PE/frame_0001.png"
+refused calcam_empty_prefix "not a file prefix" calibrate-camera --pattern chessboard:5x4:0.02 --out "" "$PE/frame_0000.png"
+mkdir -p "$F/calx.xml"
+refused calcam_xml_is_folder "is a folder" calibrate-camera --pattern chessboard:5x4:0.02 --out "$F/calx" "$PE/frame_0000.png"
+[ -e "$F/calx.yaml" ] && fail "files: calibrate-camera wrote PREFIX.yaml though PREFIX.xml is a folder" || pass
+refused calrig_out_is_motion "is the input --motion" calibrate-rig --camera "$YML" --motion "$PE/motion.csv" \
+  --pattern chessboard:5x4:0.02 --out "$PE/motion.csv"
+cmp -s "$PE/motion.csv" "$F/pe_motion.orig" && pass || fail "files: calibrate-rig changed its motion log"
+# An image that is a device, and one whose header declares 32000 x 32000 pixels.
+sed "s|,frame_|,$PE/frame_|" "$PE/motion.csv" >"$F/dev_img_motion.csv"; ln -s /dev/zero "$F/zero.png"
+sed -i "s|[^,]*frame_0001.png|$F/zero.png|" "$F/dev_img_motion.csv"
+refused measure_image_device "character device" "${MEF[@]}" --motion "$F/dev_img_motion.csv"
+{ printf '\x89PNG\r\n\x1a\n\x00\x00\x00\x0dIHDR\x00\x00\x7d\x00\x00\x00\x7d\x00\x08\x00\x00\x00\x00'; head -c 1000 /dev/zero; } >"$F/huge.png"
+sed "s|,frame_|,$PE/frame_|" "$PE/motion.csv" >"$F/huge_img_motion.csv"
+sed -i "s|[^,]*frame_0001.png|$F/huge.png|" "$F/huge_img_motion.csv"
+refused measure_image_huge "32000 x 32000" "${MEF[@]}" --motion "$F/huge_img_motion.csv"
+# No stray temporary files anywhere.
+left=$(find "$W" -name '.*.tmp*' | head -3)
+[ -z "$left" ] && pass || fail "files: temporary files left: $left"
+
 echo "$PASSED passed, $FAILED failed"
 [ "$FAILED" -eq 0 ]

@@ -297,20 +297,6 @@ TEST_CASE("renderer: exact coverage, background, determinism and speed", "[rende
   CHECK(cv::countNonZero(n1 != n2) == 0);
   ro.seed = 2;
   CHECK(cv::countNonZero(renderBoard(cam, rig, s, b, wMb, ro) != n1) > 0);
-  // Speed: 640x480, distortion, blur and noise.
-  const CameraModel paper = paperCamera();
-  const auto t0 = std::chrono::steady_clock::now();
-  const int frames = 5;
-  for (int i = 0; i < frames; ++i) {
-    MotionSample si;
-    si.z = 0.008 * i;
-    renderBoard(paper, paperRig(), si, b, wMb, ro);
-  }
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / frames;
-  std::printf("render: %.1f ms per 640x480 frame\n", ms);
-#ifdef NDEBUG // timing only in optimised builds (not in the sanitizer tree)
-  CHECK(ms < 500);
-#endif
   RenderOptions badopt;
   badopt.supersampling = 0;
   CHECK_THROWS_AS(renderBoard(cam, rig, s, b, wMb, badopt), yawdepth::Error);

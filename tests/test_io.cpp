@@ -364,18 +364,29 @@ TEST_CASE("csv: no crash on binary garbage and huge lines", "[io][robustness]")
     CHECK(m3.find('\n') == std::string::npos);
     CHECK(m3.rfind(p, 0) == 0);
   }
-  // A 20 MB line in the header, and one in a number.
+  // A 20 MB line in the header, and one in a number: over the 1 MiB line limit, refused before
+  // the line is held whole.
   const std::string huge(20u << 20, '7');
   const std::string p1 = dir.write("huge1.csv", huge + "\n1\n");
-  requireError(errorOf([&] { readTracksCsv(p1); }), p1 + ":1: ", "missing column");
+  requireError(errorOf([&] { readTracksCsv(p1); }), p1 + ":1: ", "line longer than 1 MiB");
   const std::string p2 = dir.write("huge2.csv", "frame,id,u,v\n1,2," + huge + ",4\n");
   const std::string m = errorOf([&] { readTracksCsv(p2); });
-  requireError(m, p2 + ":2: ", "out of range");
+  requireError(m, p2 + ":2: ", "line longer than 1 MiB");
   CHECK(m.size() < 300);
-  const std::string p3 = dir.write("huge3.csv", "frame,id,u,v\n1,2,3," + huge + "x\n");
+  // A long line within the limit is read: the number in it is out of range.
+  const std::string long_number(100000, '7');
+  const std::string p3 = dir.write("huge3.csv", "frame,id,u,v\n1,2,3," + long_number + "\n");
   const std::string m3 = errorOf([&] { readTracksCsv(p3); });
-  requireError(m3, p3 + ":2: ", "not a number");
+  requireError(m3, p3 + ":2: ", "out of range");
   CHECK(m3.size() < 300);
+  // A raised line limit reads the 20 MB number and names it as out of range.
+  InputLimits big;
+  big.max_line_bytes = 64u << 20;
+  requireError(errorOf([&] { readTracksCsv(p2, big); }), p2 + ":2: ", "out of range");
+  // The size limit: a file over it is refused, naming the limit.
+  InputLimits small;
+  small.max_bytes = 1u << 20;
+  requireError(errorOf([&] { readTracksCsv(p2, small); }), p2 + ": ", "larger than 1 MiB");
 }
 
 // ------------------------------------------------------------------------------------------ tracks

@@ -376,7 +376,9 @@ TEST_CASE("refine flags gross outliers and stays near the inlier bound", "[refin
   CHECK(pooled.ratio() <= kMaxOutlierRmseOverCrlb);
 }
 
-TEST_CASE("refine timing: 30 points x 10 frames", "[refine][speed]")
+// The speed of this problem is measured by bench_accuracy (section 3, SPEED), not by a timed test:
+// here, that it converges, and in few iterations, every time.
+TEST_CASE("refine: 30 points x 10 frames converge in few iterations", "[refine]")
 {
   if (unavailableChecked())
     return;
@@ -385,25 +387,13 @@ TEST_CASE("refine timing: 30 points x 10 frames", "[refine][speed]")
   RefineOptions opt;
   opt.noise = issueNoise();
   opt.threads = 1;
-  const Scene s = simulateScene(camera, rig, sceneOptions(45 * kDeg, 1 * kDeg, 77));
-  std::vector<double> ms;
-  int iterations = 0;
-  for (int rep = 0; rep < 30; ++rep) {
-    const auto t0 = std::chrono::steady_clock::now();
+  constexpr int kMaxIterations = 20;
+  for (std::uint64_t seed : {77u, 78u, 79u}) {
+    const Scene s = simulateScene(camera, rig, sceneOptions(45 * kDeg, 1 * kDeg, seed));
     const RefineResult r = refineWindow(camera, rig, s.measured, s.tracks, {}, opt);
-    const auto t1 = std::chrono::steady_clock::now();
-    ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-    iterations = r.iterations;
     REQUIRE(r.converged);
+    CHECK(r.iterations <= kMaxIterations);
   }
-  std::sort(ms.begin(), ms.end());
-  std::printf("refine timing: min %.2f ms, median %.2f ms (%d Ceres iterations)\n", ms.front(), ms[ms.size() / 2],
-              iterations);
-#ifdef NDEBUG
-  CHECK(ms.front() < 5.0);
-#else
-  CHECK(ms.front() < 100.0);
-#endif
 }
 
 namespace {

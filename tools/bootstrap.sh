@@ -53,19 +53,36 @@ demo() {
   cat "$out/ten/points.csv"
 }
 
-# The Release ctest output is also kept in $build_dir/ctest.log for the summary line at the end.
-run_tests() {
-  ctest --test-dir "$build_dir" --output-on-failure -j "$jobs" 2>&1 | tee "$build_dir/ctest.log"
+# ctest with every test's TIMEOUT (tests/CMakeLists.txt; --timeout is only the fallback for a test
+# without one). The output is kept in <tree>/ctest.log; a test that timed out is named on stderr.
+run_ctest() { # tree
+  local tree=$1 rc=0
+  ctest --test-dir "$tree" --output-on-failure -j "$jobs" --timeout 600 2>&1 | tee "$tree/ctest.log" || rc=$?
+  local timed_out
+  timed_out=$(grep -E '\*\*\*Timeout' "$tree/ctest.log" | sed -E 's/^ *[0-9]+\/[0-9]+ Test +#[0-9]+: ([^ ]+).*/\1/' || true)
+  if [ -n "$timed_out" ]; then
+    echo "bootstrap: these tests timed out (hung, or far slower than they should be):" >&2
+    sed 's/^/  /' <<<"$timed_out" >&2
+  fi
+  return "$rc"
 }
+run_tests() { run_ctest "$build_dir"; }
 
-# "N passed, M failed" from ctest's "... tests passed, M tests failed out of T" line.
-tests_summary() {
-  local line failed total
-  line=$(grep -E '^[0-9]+% tests passed, [0-9]+ tests? failed out of [0-9]+' "$build_dir/ctest.log" | tail -1)
-  [ -n "$line" ] || { echo "bootstrap: no ctest summary in $build_dir/ctest.log" >&2; return 1; }
-  failed=$(sed -E 's/.* ([0-9]+) tests? failed out of.*/\1/' <<<"$line")
-  total=$(sed -E 's/.* out of ([0-9]+).*/\1/' <<<"$line")
-  echo "$((total - failed)) passed, $failed failed"
+# "N passed, M failed" over both test trees (from ctest's "... tests passed, M tests failed out of T"
+# lines), each other stage (fuzzing, clang-tidy, doxygen) counting as one check; a tree whose tests
+# did not run counts as one failure.
+passed=0 failed=0
+count_ctest() { # tree
+  local line f t
+  line=$(grep -E '^[0-9]+% tests passed, [0-9]+ tests? failed out of [0-9]+' "$1/ctest.log" 2>/dev/null | tail -1)
+  if [ -z "$line" ]; then
+    echo "bootstrap: no ctest summary in $1/ctest.log" >&2
+    failed=$((failed + 1))
+    return
+  fi
+  f=$(sed -E 's/.* ([0-9]+) tests? failed out of.*/\1/' <<<"$line")
+  t=$(sed -E 's/.* out of ([0-9]+).*/\1/' <<<"$line")
+  passed=$((passed + t - f)) failed=$((failed + f))
 }
 
 # Sanitizer reports are fatal (-fno-sanitize-recover), with symbolised stacks.
@@ -83,9 +100,7 @@ build_sanitized() {
   cmake --build "$asan_dir" -j "$jobs"
 }
 
-run_sanitized_tests() {
-  ctest --test-dir "$asan_dir" --output-on-failure -j "$jobs"
-}
+run_sanitized_tests() { run_ctest "$asan_dir"; }
 
 # Each fuzz target for FUZZ_SECONDS, up to JOBS at a time, from its seed corpus (fuzz/corpus/) and
 # the inputs that once crashed it (tests/data/regress/); new inputs go to $asan_dir/fuzz-corpus,
@@ -97,7 +112,8 @@ run_fuzzers() {
     local dirs=("$asan_dir/fuzz-corpus/$t" "$here/fuzz/corpus/$t")
     [ -d "$here/tests/data/regress/$t" ] && dirs+=("$here/tests/data/regress/$t")
     mkdir -p "$asan_dir/fuzz-corpus/$t"
-    "$asan_dir/fuzz/fuzz_$t" -max_total_time="$fuzz_seconds" -timeout=10 -rss_limit_mb=2048 -max_len=8192 \
+    timeout --kill-after=10 $((fuzz_seconds + 120)) \
+      "$asan_dir/fuzz/fuzz_$t" -max_total_time="$fuzz_seconds" -timeout=10 -rss_limit_mb=2048 -max_len=8192 \
         -print_final_stats=1 -artifact_prefix="$asan_dir/fuzz-artifacts/$t-" "${dirs[@]}" \
         >"$asan_dir/fuzz-$t.log" 2>&1 &
     pids+=($!) names+=("$t")
@@ -133,26 +149,40 @@ run_doxygen() {
   echo "doxygen: $build_dir/doc/html/index.html"
 }
 
+# Runs a stage and reports its time; returns its status without stopping the script.
 timed() {
-  local t0=$SECONDS
+  local t0=$SECONDS rc=0
   stage "$1"
-  "${@:2}"
-  echo "== bootstrap: $1 done in $((SECONDS - t0)) s" >&2
+  "${@:2}" || rc=$?
+  echo "== bootstrap: $1 $([ "$rc" -eq 0 ] && echo done || echo FAILED) in $((SECONDS - t0)) s" >&2
+  return "$rc"
+}
+
+# The whole suite. A failed build stops it (nothing to test); a failed test stage does not: every
+# stage runs, and the closing line counts them all.
+test_all() {
+  local t0=$SECONDS
+  install_missing
+  timed "Release build" build || { echo "0 passed, 1 failed (the Release build failed)"; return 1; }
+  timed "Release tests" run_tests || true
+  count_ctest "$build_dir"
+  if timed "sanitizer build (ASan + UBSan, clang)" build_sanitized; then
+    timed "sanitizer tests" run_sanitized_tests || true
+    count_ctest "$asan_dir"
+    if timed "fuzzing (${fuzz_seconds} s per target)" run_fuzzers; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
+  else
+    failed=$((failed + 2))
+  fi
+  if timed "clang-tidy" run_clang_tidy; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
+  if timed "doxygen" run_doxygen; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
+  echo "== bootstrap: the whole suite took $((SECONDS - t0)) s" >&2
+  echo "$passed passed, $failed failed"
+  [ "$failed" -eq 0 ]
 }
 
 case "$what" in
   demo) install_missing; build; demo ;;
-  test)
-    install_missing
-    timed "Release build" build
-    timed "Release tests" run_tests
-    timed "sanitizer build (ASan + UBSan, clang)" build_sanitized
-    timed "sanitizer tests" run_sanitized_tests
-    timed "fuzzing (${fuzz_seconds} s per target)" run_fuzzers
-    timed "clang-tidy" run_clang_tidy
-    timed "doxygen" run_doxygen
-    tests_summary
-    ;;
+  test) test_all ;;
   build) install_missing; build ;;
   *) echo "usage: tools/bootstrap.sh [demo|test|build]" >&2; exit 2 ;;
 esac

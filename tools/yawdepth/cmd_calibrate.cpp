@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -74,6 +75,7 @@ struct RigArgs {
   double initial_yaw_offset = 0, min_yaw_span_deg = 20, tag_gap = -1;
   int first_tag_id = 0;
   bool board_square = false, fixed_axis = false, quiet = false;
+  InputOptions input;
 };
 
 } // namespace
@@ -101,7 +103,21 @@ Runner addCalibrateCamera(CLI::App &app)
   sub->add_flag("--quiet", a->quiet, "Print only the RMS reprojection error (and problems on stderr)");
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
 
-  return [a]() {
+  return [a, sub]() {
+    // The three outputs, checked before anything is read or written: none may be an input (an
+    // image) or another output, and a prefix must name a file ("" or "folder/" would write hidden
+    // files such as ./.yaml).
+    const std::filesystem::path prefix(a->out);
+    if (a->out.empty() || !prefix.has_filename() || prefix.filename() == "." || prefix.filename() == "..")
+      throw Error("--out '" + a->out + "': not a file prefix (e.g. --out calib/mycam writes calib/mycam.yaml and .xml)");
+    const std::string yaml = a->out + ".yaml", xml = a->out + ".xml";
+    const std::string coverage = sub->count("--coverage") > 0 ? a->coverage : a->out + "_coverage.png";
+    {
+      std::vector<NamedPath> inputs;
+      for (const std::string &path : a->images)
+        inputs.push_back({"image", path});
+      checkOutputs(inputs, {{"--out (.yaml)", yaml}, {"--out (.xml)", xml}, {"--coverage", coverage}});
+    }
     const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
     std::vector<cv::Mat> images;
     for (const std::string &path : a->images)
@@ -136,11 +152,13 @@ Runner addCalibrateCamera(CLI::App &app)
          << "<global_reprojection_error><without_distortion>" << cal.visp_rms_without
          << "</without_distortion><with_distortion>" << cal.visp_rms_with
          << "</with_distortion></global_reprojection_error>";
-    const std::string yaml = a->out + ".yaml", xml = a->out + ".xml";
-    const std::string coverage = a->coverage.empty() ? a->out + "_coverage.png" : a->coverage;
-    saveCameraYaml(yaml, cal.camera);
-    saveVispCameraXml(xml, cal, a->camera_name, info.str());
-    writeCoverageImage(coverage, cal, det.views);
+    // All three files or none.
+    AtomicFiles files;
+    files.add(yaml, cameraYamlText(cal.camera));
+    files.add(xml, vispCameraXmlText(cal, a->camera_name, info.str()));
+    const std::string ext = std::filesystem::path(coverage).extension().string();
+    files.add(coverage, coverageImageBytes(cal, det.views, ext.empty() ? std::string(".png") : ext));
+    files.commit();
 
     std::cout << "RMS reprojection error: " << fixed(cal.rms_px, 4) << " px (" << cal.views_used << " views, "
               << points << " points)\n";
@@ -215,14 +233,22 @@ Runner addCalibrateRig(CLI::App &app)
       ->check(FiniteNonNegative)
       ->capture_default_str();
   sub->add_flag("--quiet", a->quiet, "No per-frame detection messages");
+  addInputOptions(sub, a->input);
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
 
   return [a]() {
     const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
-    const MotionLog motion = readMotionCsv(a->motion);
+    const MotionLog motion = readMotionCsv(a->motion, std::nullopt, a->input.limits());
     if (motion.images.empty())
       throw Error(a->motion + ": no 'image' column: calibrate-rig needs the image of each frame");
+    {
+      std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};
+      for (const std::string &image : motion.images)
+        if (!image.empty())
+          inputs.push_back({"--motion's image", image});
+      checkOutputs(inputs, {{"--out", a->out}});
+    }
     PatternDetector detector(board.pattern);
     detector.setCamera(camera);
     std::vector<RigView> views;

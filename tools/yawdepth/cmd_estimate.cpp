@@ -13,7 +13,9 @@ namespace {
 
 struct EstimateArgs {
   std::string camera, camera_name, rig, motion, tracks, out, outliers;
+  bool outliers_given = false;
   MethodArgs method;
+  InputOptions input;
 };
 
 } // namespace
@@ -29,18 +31,27 @@ Runner addEstimate(CLI::App &app)
   sub->add_option("--tracks", args->tracks, "Feature tracks CSV (frame,id,u,v)")->required();
   addMethodOptions(sub, args->method, "exact");
   sub->add_option("--outliers", args->outliers,
-                  "fused/refine: also write the observations rejected as outliers (CSV frame,id,u,v)");
-  sub->add_option("--out", args->out, "Output points CSV (default: standard output)");
+                  "fused/refine: also write the observations rejected as outliers (CSV frame,id,u,v)")
+      ->each([args](const std::string &) { args->outliers_given = true; });
+  sub->add_option("--out", args->out, "Output points CSV (default: standard output); never one of the inputs");
+  addInputOptions(sub, args->input);
 
   return [args]() {
     args->method.noise.validate();
     args->method.gates.validate();
+    // Before anything is read or written: no output may replace an input or another output.
+    const std::vector<NamedPath> inputs = {
+        {"--camera", args->camera}, {"--rig", args->rig}, {"--motion", args->motion}, {"--tracks", args->tracks}};
+    std::vector<NamedPath> outputs = {{"--out", args->out.empty() ? std::string("-") : args->out}};
+    if (args->outliers_given)
+      outputs.push_back({"--outliers", args->outliers});
+    checkOutputs(inputs, outputs);
     const CameraModel camera = loadCameraFile(args->camera, args->camera_name);
     const RigFile rig_file = readRigFile(args->rig);
     const YawRig rig(rig_file.camera_offset);
-    MotionLog motion = readMotionCsv(args->motion, rig_file.yaw);
+    MotionLog motion = readMotionCsv(args->motion, rig_file.yaw, args->input.limits());
     applyRigFile(rig_file, motion.samples);
-    const std::vector<Track> tracks = readTracksCsv(args->tracks);
+    const std::vector<Track> tracks = readTracksCsv(args->tracks, args->input.limits());
     checkTracksAgainstMotion(tracks, motion, args->tracks);
 
     std::vector<std::vector<bool>> flags;
@@ -49,7 +60,7 @@ Runner addEstimate(CLI::App &app)
     rows.reserve(tracks.size());
     for (std::size_t i = 0; i < tracks.size(); ++i)
       rows.push_back({tracks[i].id, estimates[i]});
-    if (!args->outliers.empty())
+    if (args->outliers_given)
       writeTracksCsv(args->outliers, rejectedObservations(tracks, flags));
     if (args->out.empty() || args->out == "-")
       writePointsCsv(std::cout, rows);

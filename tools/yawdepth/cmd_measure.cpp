@@ -19,6 +19,7 @@ namespace {
 struct MeasureArgs {
   std::string camera, camera_name, rig, motion, pattern, out, report, tracks_out, outliers;
   MethodArgs method;
+  InputOptions input;
   bool quiet = false;
 };
 
@@ -42,18 +43,38 @@ Runner addMeasure(CLI::App &app)
   sub->add_option("--tracks-out", a->tracks_out, "Also write the detected features as a tracks CSV (frame,id,u,v)");
   sub->add_option("--outliers", a->outliers, "fused/refine: also write the observations rejected as outliers");
   sub->add_flag("--quiet", a->quiet, "No progress or per-frame detection messages on stderr");
+  addInputOptions(sub, a->input);
 
-  return [a]() {
+  return [a, sub]() {
     a->method.noise.validate();
     a->method.gates.validate();
     const PatternSpec pattern = PatternSpec::parse(a->pattern);
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
     const RigFile rig_file = readRigFile(a->rig);
     const YawRig rig(rig_file.camera_offset);
-    MotionLog motion = readMotionCsv(a->motion, rig_file.yaw);
+    MotionLog motion = readMotionCsv(a->motion, rig_file.yaw, a->input.limits());
     applyRigFile(rig_file, motion.samples);
     if (motion.images.empty())
       throw Error(a->motion + ": no 'image' column: measure needs the image of each frame");
+    // Before anything is written: no output may replace an input (the images too) or another output.
+    {
+      std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--rig", a->rig}, {"--motion", a->motion}};
+      for (const std::string &image : motion.images)
+        if (!image.empty())
+          inputs.push_back({"--motion's image", image});
+      std::vector<NamedPath> outputs = {{"--out", a->out.empty() ? std::string("-") : a->out}};
+      for (const auto &[option, value] : {std::pair<const char *, std::string *>{"--tracks-out", &a->tracks_out},
+                                          {"--outliers", &a->outliers}})
+        if (sub->count(option) > 0)
+          outputs.push_back({option, *value});
+      if (sub->count("--report") > 0) {
+        if (a->report.empty())
+          throw Error("--report: empty folder name");
+        for (const std::string &f : boardReportFiles(a->report))
+          outputs.push_back({"--report", f});
+      }
+      checkOutputs(inputs, outputs);
+    }
 
     PatternDetector detector(pattern);
     detector.setCamera(camera);
@@ -91,7 +112,7 @@ Runner addMeasure(CLI::App &app)
       for (const std::string &f : failures)
         std::cerr << f << "\n";
     const std::vector<Track> tracks = PatternDetector::toTracks(detections);
-    if (!a->tracks_out.empty())
+    if (sub->count("--tracks-out") > 0)
       writeTracksCsv(a->tracks_out, tracks);
 
     std::vector<std::vector<bool>> flags;
@@ -102,7 +123,7 @@ Runner addMeasure(CLI::App &app)
       rows.push_back({tracks[i].id, estimates[i]});
       pairs.emplace_back(tracks[i].id, estimates[i]);
     }
-    if (!a->outliers.empty())
+    if (sub->count("--outliers") > 0)
       writeTracksCsv(a->outliers, rejectedObservations(tracks, flags));
     if (!a->report.empty()) {
       const BoardMetrics m = boardMetrics(pattern, rig, motion.samples, pairs);

@@ -122,6 +122,13 @@ Runner addSimulate(CLI::App &app)
     if (ec)
       throw Error(a->out_dir + ": cannot create folder: " + ec.message());
     const std::filesystem::path dir(a->out_dir);
+    {
+      const std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--rig", a->rig}};
+      std::vector<NamedPath> outputs;
+      for (const char *name : {"motion.csv", "motion_truth.csv", "tracks.csv", "truth.csv"})
+        outputs.push_back({"--out-dir", (dir / name).string()});
+      checkOutputs(inputs, outputs);
+    }
 
     std::vector<long> ids;
     std::vector<Eigen::Vector3d> w_points;
@@ -158,8 +165,12 @@ Runner addSimulate(CLI::App &app)
         char name[32];
         std::snprintf(name, sizeof name, "frame_%04zu.png", k);
         const std::string path = (dir / name).string();
-        if (!cv::imwrite(path, img))
-          throw Error(path + ": cannot write the image");
+        std::vector<unsigned char> png;
+        if (!cv::imencode(".png", img, png))
+          throw Error(path + ": cannot encode the image");
+        if (sameFile(path, a->camera) || sameFile(path, a->rig))
+          throw Error("--out-dir: " + path + " is an input (refusing to overwrite it)");
+        writeFileAtomically(path, std::string(png.begin(), png.end()));
         measured.images.push_back(path);
         truth.images.push_back(path);
       }

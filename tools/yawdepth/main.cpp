@@ -7,6 +7,10 @@
 #include <new>
 #include <string>
 #include <vector>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
 namespace yawdepth::cli {
@@ -26,6 +30,15 @@ static std::string finiteCheck(const std::string &text, bool non_negative)
     return "'" + text + "' is not a number";
   }
   return {};
+}
+
+void addInputOptions(CLI::App *sub, InputOptions &options)
+{
+  sub->add_option("--max-input-mb", options.max_input_mb,
+                  "Largest motion log or tracks CSV read (MiB; lines at most 1 MiB). Inputs are read as streams: a "
+                  "regular file or a pipe (a FIFO with no writer waits for one, as cat does), not a device")
+      ->check(CLI::Range(1.0, 1048576.0))
+      ->capture_default_str();
 }
 
 const CLI::Validator Finite([](std::string &s) { return finiteCheck(s, false); }, "FINITE");
@@ -94,11 +107,23 @@ int main(int argc, char **argv)
     return 2;
   }
 
+  // An interrupted run leaves no temporary file behind (the outputs are written atomically).
+  yawdepth::removeTemporaryFilesOnSignals();
   for (auto &[sub, run] : commands) {
     if (!sub->parsed())
       continue;
     try {
-      return run();
+      const int status = run();
+      // Standard output is an output too: a full disk or /dev/full is an error, not a success.
+      errno = 0;
+      std::cout.flush();
+      if (!std::cout || std::fflush(stdout) != 0 || std::ferror(stdout)) {
+        const int err = errno;
+        std::cerr << "yawdepth " << sub->get_name() << ": error: cannot write to standard output"
+                  << (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) << "\n";
+        return 1;
+      }
+      return status;
     } catch (const yawdepth::Error &e) {
       std::cerr << "yawdepth " << sub->get_name() << ": error: " << oneLine(e.what()) << "\n";
       return 1;

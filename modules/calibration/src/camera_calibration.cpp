@@ -6,8 +6,11 @@
 #include <yawdepth/camera/quiet_visp.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -22,6 +25,7 @@
 #include <visp3/core/vpImagePoint.h>
 #include <visp3/core/vpXmlParserCamera.h>
 #include <visp3/vision/vpCalibration.h>
+#include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
 namespace yawdepth {
@@ -464,41 +468,51 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
   return result;
 }
 
-void saveVispCameraXml(const std::string &path, const CameraCalibration &calibration, const std::string &camera_name,
-                       const std::string &additional_info)
+std::string vispCameraXmlText(const CameraCalibration &calibration, const std::string &camera_name,
+                              const std::string &additional_info)
 {
   if (!calibration.visp_fitted)
-    throw Error(path + ": the ViSP models were not fitted");
+    throw Error("ViSP camera file: the ViSP models were not fitted");
+  // vpXmlParserCamera only writes to a path: a private folder, read back, then removed.
   namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw Error(path + ": folder does not exist");
-  const fs::path tmp = dir / (target.filename().string() + ".tmp" + std::to_string(::getpid()) + ".xml");
-  fs::remove(tmp, ec);
+  std::string templ = (fs::temp_directory_path(ec) / "yawdepth-xml-XXXXXX").string();
+  if (ec)
+    templ = "/tmp/yawdepth-xml-XXXXXX";
+  std::vector<char> buf(templ.begin(), templ.end());
+  buf.push_back('\0');
+  if (!::mkdtemp(buf.data()))
+    throw Error(std::string("ViSP camera file: cannot create a temporary folder (") + std::strerror(errno) + ")");
+  const fs::path dir(buf.data());
+  struct RemoveDir {
+    fs::path dir;
+    ~RemoveDir()
+    {
+      std::error_code e;
+      fs::remove_all(dir, e);
+    }
+  } cleanup{dir};
+  const std::string tmp = (dir / "camera.xml").string();
   const std::string name = camera_name.empty() ? std::string("Camera") : camera_name;
   const unsigned w = calibration.camera.width(), h = calibration.camera.height();
   try {
     const detail::QuietVisp quiet; // save() prints "Found camera with name ..."
     vpXmlParserCamera xml;
-    if (xml.save(calibration.visp_without, tmp.string(), name, w, h) != vpXmlParserCamera::SEQUENCE_OK)
-      throw Error(path + ": cannot write the ViSP camera (model without distortion)");
+    if (xml.save(calibration.visp_without, tmp, name, w, h) != vpXmlParserCamera::SEQUENCE_OK)
+      throw Error("ViSP camera file: cannot write the model without distortion");
     vpXmlParserCamera xml2;
-    if (xml2.save(calibration.visp_with, tmp.string(), name, w, h, additional_info) != vpXmlParserCamera::SEQUENCE_OK)
-      throw Error(path + ": cannot write the ViSP camera (model with distortion)");
+    if (xml2.save(calibration.visp_with, tmp, name, w, h, additional_info) != vpXmlParserCamera::SEQUENCE_OK)
+      throw Error("ViSP camera file: cannot write the model with distortion");
   } catch (const vpException &e) {
-    fs::remove(tmp, ec);
-    throw Error(path + ": cannot write the ViSP camera: " + oneLine(e.getStringMessage()));
-  } catch (...) {
-    fs::remove(tmp, ec);
-    throw;
+    throw Error("ViSP camera file: " + oneLine(e.getStringMessage()));
   }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw Error(path + ": cannot write the ViSP camera file (rename failed)");
-  }
+  return readTextFile(tmp, std::size_t(16) << 20);
+}
+
+void saveVispCameraXml(const std::string &path, const CameraCalibration &calibration, const std::string &camera_name,
+                       const std::string &additional_info)
+{
+  writeFileAtomically(path, vispCameraXmlText(calibration, camera_name, additional_info));
 }
 
 cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<CalibrationView> &views)
@@ -548,18 +562,27 @@ cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<Ca
   return img;
 }
 
+std::string coverageImageBytes(const CameraCalibration &calibration, const std::vector<CalibrationView> &views,
+                               const std::string &extension)
+{
+  const cv::Mat img = coverageImage(calibration, views);
+  std::vector<unsigned char> bytes;
+  bool ok = false;
+  try {
+    ok = cv::imencode(extension, img, bytes);
+  } catch (const cv::Exception &e) {
+    throw Error("coverage picture: cannot encode as '" + extension + "' (" + oneLine(e.err) + ")");
+  }
+  if (!ok)
+    throw Error("coverage picture: cannot encode as '" + extension + "'");
+  return std::string(bytes.begin(), bytes.end());
+}
+
 void writeCoverageImage(const std::string &path, const CameraCalibration &calibration,
                         const std::vector<CalibrationView> &views)
 {
-  const cv::Mat img = coverageImage(calibration, views);
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, img);
-  } catch (const cv::Exception &e) {
-    throw Error(path + ": cannot write the coverage picture (" + oneLine(e.err) + ")");
-  }
-  if (!ok)
-    throw Error(path + ": cannot write the coverage picture");
+  const std::string ext = std::filesystem::path(path).extension().string();
+  writeFileAtomically(path, coverageImageBytes(calibration, views, ext.empty() ? std::string(".png") : ext));
 }
 
 } // namespace yawdepth

@@ -3,6 +3,7 @@
   \brief Camera files: ViSP XML through vpXmlParserCamera, OpenCV YAML/XML through cv::FileStorage.
 */
 #include <yawdepth/camera/camera_file.h>
+#include <yawdepth/core/files.h>
 #include <yawdepth/camera/quiet_visp.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include <string>
 #include <vector>
 #include <visp3/core/vpXmlParserCamera.h>
+#include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
 namespace yawdepth {
@@ -62,14 +64,8 @@ std::string readWholeFile(const std::string &path) {
     throw Error(path + ": camera file not found");
   if (std::filesystem::is_directory(st))
     throw Error(path + ": is a directory, not a camera file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw Error(path + ": cannot open camera file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad())
-    throw Error(path + ": cannot read camera file");
-  std::string text = ss.str();
+  // A regular file or a pipe, at most 16 MiB (a camera file is a few kB): not a device that never ends.
+  std::string text = yawdepth::readTextFile(path, std::size_t(16) << 20);
   if (text.size() >= 3 && static_cast<unsigned char>(text[0]) == 0xEF &&
       static_cast<unsigned char>(text[1]) == 0xBB && static_cast<unsigned char>(text[2]) == 0xBF)
     text.erase(0, 3); // UTF-8 byte order mark
@@ -462,7 +458,8 @@ CameraModel loadCameraFile(const std::string &path, const std::string &camera_na
   }
 }
 
-void saveCameraYaml(const std::string &path, const CameraModel &camera) {
+std::string cameraYamlText(const CameraModel &camera) {
+  const std::string path = "camera file";
   // ViSP's kud model is Brown with k1 = kud, so every model has an exact OpenCV form.
   std::vector<double> d;
   if (camera.distortion() != CameraModel::Distortion::None) {
@@ -496,13 +493,11 @@ void saveCameraYaml(const std::string &path, const CameraModel &camera) {
   } catch (const std::exception &e) {
     throw Error(path + ": cannot write camera file: " + oneLine(e.what()));
   }
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out)
-    throw Error(path + ": cannot open for writing");
-  out << text;
-  out.close();
-  if (!out)
-    throw Error(path + ": write failed");
+  return text;
+}
+
+void saveCameraYaml(const std::string &path, const CameraModel &camera) {
+  writeFileAtomically(path, cameraYamlText(camera));
 }
 
 } // namespace yawdepth

@@ -3,7 +3,10 @@
   \brief Chessboard corners (OpenCV detection, own sub-pixel refinement, stable ids) and AprilTags
   (ViSP's vpDetectorAprilTag), with failure reasons.
 */
+#include <cctype>
 #include <cerrno>
+#include <cstdint>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <fcntl.h>
@@ -24,6 +27,7 @@
 #include <visp3/core/vpImage.h>
 #include <visp3/core/vpImageConvert.h>
 #include <visp3/detection/vpDetectorAprilTag.h>
+#include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
 namespace yawdepth {
@@ -588,18 +592,99 @@ std::vector<Track> PatternDetector::toTracks(const std::vector<FrameDetection> &
   return out;
 }
 
+namespace {
+
+/* An image's size from its header (PNG, JPEG, PGM/PPM/PBM, BMP), without decoding it; false for
+   other formats or a header too damaged to tell (the decoder then has the last word). */
+bool headerSize(const std::vector<unsigned char> &b, std::uint64_t &w, std::uint64_t &h) {
+  const std::size_t n = b.size();
+  auto be32 = [&](std::size_t i) {
+    return (std::uint64_t(b[i]) << 24) | (std::uint64_t(b[i + 1]) << 16) | (std::uint64_t(b[i + 2]) << 8) | b[i + 3];
+  };
+  auto le32 = [&](std::size_t i) {
+    return std::uint64_t(std::uint32_t(b[i]) | (std::uint32_t(b[i + 1]) << 8) | (std::uint32_t(b[i + 2]) << 16) |
+                         (std::uint32_t(b[i + 3]) << 24));
+  };
+  if (n >= 24 && b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G') {
+    w = be32(16);
+    h = be32(20);
+    return true;
+  }
+  if (n >= 4 && b[0] == 0xFF && b[1] == 0xD8) { // JPEG: the first start-of-frame marker
+    std::size_t i = 2;
+    while (i + 9 < n) {
+      if (b[i] != 0xFF) {
+        ++i;
+        continue;
+      }
+      const unsigned char m = b[i + 1];
+      if (m == 0xFF || m == 0x01 || (m >= 0xD0 && m <= 0xD9)) {
+        i += (m == 0xFF) ? 1 : 2;
+        continue;
+      }
+      const std::size_t len = (std::size_t(b[i + 2]) << 8) | b[i + 3];
+      if (m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC) {
+        h = (std::uint64_t(b[i + 5]) << 8) | b[i + 6];
+        w = (std::uint64_t(b[i + 7]) << 8) | b[i + 8];
+        return true;
+      }
+      i += 2 + len;
+    }
+    return false;
+  }
+  if (n >= 26 && b[0] == 'B' && b[1] == 'M') {
+    w = le32(18);
+    const std::uint32_t hh = static_cast<std::uint32_t>(le32(22));
+    h = static_cast<std::uint64_t>(std::abs(static_cast<std::int64_t>(static_cast<std::int32_t>(hh))));
+    return true;
+  }
+  if (n >= 3 && b[0] == 'P' && b[1] >= '1' && b[1] <= '6') { // PNM: two numbers after comments
+    std::size_t i = 2;
+    std::uint64_t v[2] = {0, 0};
+    for (int k = 0; k < 2; ++k) {
+      for (;;) {
+        while (i < n && std::isspace(b[i]))
+          ++i;
+        if (i < n && b[i] == '#') {
+          while (i < n && b[i] != '\n')
+            ++i;
+          continue;
+        }
+        break;
+      }
+      if (i >= n || !std::isdigit(b[i]))
+        return false;
+      while (i < n && std::isdigit(b[i]) && v[k] < (std::uint64_t(1) << 40))
+        v[k] = v[k] * 10 + (b[i++] - '0');
+    }
+    w = v[0];
+    h = v[1];
+    return true;
+  }
+  return false;
+}
+
+} // namespace
+
 cv::Mat readGrayImage(const std::string &path) {
-  // Read the bytes ourselves (clear messages for missing or empty files), then decode in memory.
+  // Read the bytes ourselves (clear messages for missing, empty, endless or huge files; only a
+  // regular file or a pipe), check the size its header declares, then decode in memory.
   // The decoders of OpenCV and libpng/libjpeg print their own complaints on stderr for damaged
   // files; the library must not print, so stderr is silenced while decoding.
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw Error(path + ": cannot read image (" + std::strerror(errno) + ")");
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad())
-    throw Error(path + ": cannot read image (read error)");
-  if (bytes.empty())
-    throw Error(path + ": cannot read image (empty file)");
+  constexpr std::size_t kMaxImageBytes = std::size_t(512) << 20;
+  constexpr std::uint64_t kMaxImagePixels = std::uint64_t(1) << 28; // 268 Mpx: 16384 x 16384
+  std::vector<unsigned char> bytes;
+  try {
+    bytes = readBinaryFile(path, kMaxImageBytes);
+  } catch (const Error &e) {
+    const std::string what = e.what();
+    const std::string rest = what.compare(0, path.size() + 2, path + ": ") == 0 ? what.substr(path.size() + 2) : what;
+    throw Error(path + ": cannot read image (" + rest + ")");
+  }
+  std::uint64_t w = 0, h = 0;
+  if (headerSize(bytes, w, h) && (w == 0 || h == 0 || w * h > kMaxImagePixels))
+    throw Error(path + ": cannot read image (its header declares " + std::to_string(w) + " x " + std::to_string(h) +
+                " pixels; at most " + std::to_string(kMaxImagePixels) + " pixels are read)");
   cv::Mat img;
   {
     static std::mutex stderr_mutex;

@@ -115,32 +115,6 @@ void throwError(const std::string &message)
   throw Error(line);
 }
 
-std::string readWholeFile(const std::string &path, std::size_t max_bytes)
-{
-  if (path.empty())
-    throwError("(empty file name): cannot open");
-  errno = 0;
-  std::unique_ptr<std::FILE, int (*)(std::FILE *)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f)
-    throwError(path + ": cannot open (" + std::strerror(errno) + ")");
-  std::string data;
-  char buf[1 << 16];
-  for (;;) {
-    const std::size_t n = std::fread(buf, 1, sizeof(buf), f.get());
-    if (n > 0) {
-      if (data.size() + n > max_bytes)
-        throwError(path + ": file too large");
-      data.append(buf, n);
-    }
-    if (n < sizeof(buf)) {
-      if (std::ferror(f.get()))
-        throwError(path + ": cannot read (" + std::strerror(errno) + ")");
-      break;
-    }
-  }
-  return data;
-}
-
 // ---------------------------------------------------------------------------------------------
 
 static bool isBlank(char c) { return c == ' ' || c == '\t'; }
@@ -154,14 +128,16 @@ static std::string_view trim(std::string_view s)
   return s;
 }
 
-CsvReader::CsvReader(const std::string &path) : path_(path)
+CsvReader::CsvReader(const std::string &path, const InputLimits &limits) : path_(path)
 {
-  data_ = readWholeFile(path);
-  if (data_.size() >= 3 && data_.compare(0, 3, "\xEF\xBB\xBF") == 0)
-    pos_ = 3;
+  input_ = std::make_unique<TextInput>(path, limits);
   std::string_view text;
   bool found = false;
+  bool first = true;
   while (nextLine(text)) {
+    if (first && text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF")
+      text.remove_prefix(3); // UTF-8 byte order mark
+    first = false;
     if (!trim(text).empty()) {
       found = true;
       break;
@@ -170,6 +146,8 @@ CsvReader::CsvReader(const std::string &path) : path_(path)
   if (!found)
     failFile("empty file (a header row is required)");
   header_line_ = line_;
+  if (text.find('\r') != std::string_view::npos)
+    fail("carriage return inside the header: the file has old-Mac (CR-only) line ends; convert them to LF");
   split(text, names_);
   for (std::size_t i = 0; i < names_.size(); ++i) {
     if (names_[i].empty())
@@ -182,16 +160,12 @@ CsvReader::CsvReader(const std::string &path) : path_(path)
 
 bool CsvReader::nextLine(std::string_view &text)
 {
-  if (pos_ >= data_.size())
+  if (!input_->getline(text_))
     return false;
-  std::size_t end = data_.find('\n', pos_);
-  if (end == std::string::npos)
-    end = data_.size();
-  text = std::string_view(data_).substr(pos_, end - pos_);
+  line_ = input_->lineNumber();
+  text = text_;
   if (!text.empty() && text.back() == '\r')
     text.remove_suffix(1);
-  pos_ = end + 1;
-  line_ = next_line_++;
   return true;
 }
 

@@ -8,7 +8,9 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <memory>
 #include <vector>
+#include <yawdepth/core/files.h>
 
 namespace yawdepth {
 namespace io_detail {
@@ -40,21 +42,15 @@ std::string excerpt(std::string_view text, std::size_t max_chars = 40);
 [[noreturn]] void throwError(const std::string &message);
 
 /*!
-  \brief Read a whole file; throws yawdepth::Error "<path>: cannot open/read ..." on failure, or
-  when it exceeds `max_bytes`.
-*/
-std::string readWholeFile(const std::string &path, std::size_t max_bytes = std::size_t(-1));
-
-/*!
-  \brief A strict CSV reader over a whole file: header row required (after an optional UTF-8 BOM),
-  CRLF or LF line endings, fields trimmed of spaces and tabs, blank lines skipped, every data row
-  with exactly as many fields as the header.
+  \brief A strict CSV reader, streaming within InputLimits (core/files.h: a regular file or a pipe
+  only): header row required (after an optional UTF-8 BOM), CRLF or LF line endings, fields trimmed
+  of spaces and tabs, blank lines skipped, every data row with exactly as many fields as the header.
 */
 class CsvReader {
 public:
   /*! \brief Open and read `path` and its header; throws on a missing, unreadable or empty file,
       or a duplicated column name. */
-  explicit CsvReader(const std::string &path);
+  explicit CsvReader(const std::string &path, const InputLimits &limits = InputLimits());
 
   /*! \brief The file's path, as given. */
   const std::string &path() const { return path_; }
@@ -90,9 +86,8 @@ private:
   void split(std::string_view text, std::vector<std::string> &out) const;
 
   std::string path_;
-  std::string data_;
-  std::size_t pos_ = 0;
-  std::size_t next_line_ = 1;
+  std::unique_ptr<TextInput> input_;
+  std::string text_; // the current line
   std::size_t line_ = 0;
   std::size_t header_line_ = 0;
   std::vector<std::string> names_;

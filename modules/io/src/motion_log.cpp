@@ -30,9 +30,9 @@ const MotionSample *MotionLog::find(long frame) const
   return i < 0 ? nullptr : &samples[static_cast<std::size_t>(i)];
 }
 
-MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw)
+MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw, const InputLimits &limits)
 {
-  CsvReader csv(path);
+  CsvReader csv(path, limits);
   const std::size_t c_frame = csv.requireColumn("frame");
   const std::size_t c_x = csv.requireColumn("x");
   const std::size_t c_y = csv.requireColumn("y");

@@ -50,7 +50,7 @@ void writePointsCsv(std::ostream &out, const std::vector<PointRow> &rows)
   out.write(text.data(), static_cast<std::streamsize>(text.size()));
   out.flush();
   if (!out)
-    throwError("cannot write the points");
+    throwError("cannot write the points (standard output or the stream given)");
 }
 
 void writePointsCsv(const std::string &path, const std::vector<PointRow> &rows)
@@ -58,9 +58,9 @@ void writePointsCsv(const std::string &path, const std::vector<PointRow> &rows)
   writeFileAtomically(path, pointsText(rows));
 }
 
-std::vector<PointRow> readPointsCsv(const std::string &path)
+std::vector<PointRow> readPointsCsv(const std::string &path, const InputLimits &limits)
 {
-  CsvReader csv(path);
+  CsvReader csv(path, limits);
   const std::size_t c_id = csv.requireColumn("id");
   const std::size_t c_frame = csv.requireColumn("frame");
   const char *const names[7] = {"x", "y", "z", "xc", "yc", "zc", "sigma_zc"};

@@ -50,7 +50,7 @@ double finiteNumber(const std::string &path, const YAML::Node &node, const std::
 
 RigFile readRigFile(const std::string &path)
 {
-  const std::string text = io_detail::readWholeFile(path, kMaxRigFileBytes);
+  const std::string text = readTextFile(path, kMaxRigFileBytes);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos)
     throwError(path + ": empty file");
   if (text.find('\0') != std::string::npos)

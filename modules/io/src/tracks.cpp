@@ -13,9 +13,9 @@ using io_detail::CsvReader;
 using io_detail::formatNumber;
 using io_detail::throwError;
 
-std::vector<Track> readTracksCsv(const std::string &path)
+std::vector<Track> readTracksCsv(const std::string &path, const InputLimits &limits)
 {
-  CsvReader csv(path);
+  CsvReader csv(path, limits);
   const std::size_t c_frame = csv.requireColumn("frame");
   const std::size_t c_id = csv.requireColumn("id");
   const std::size_t c_u = csv.requireColumn("u");

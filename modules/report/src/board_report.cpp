@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
 namespace yawdepth {
@@ -186,6 +187,8 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
   if (ec)
     throw Error(dir + ": cannot create the report folder: " + ec.message());
   const std::filesystem::path d(dir);
+  // The four files are committed together, after the figure is drawn: all or nothing.
+  AtomicFiles files;
 
   // Tables.
   {
@@ -206,16 +209,9 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
                     p.w_P.y(), p.w_P.z(), p.c_P.x(), p.c_P.y(), p.c_P.z(), m.plane_distance[i]);
       plane << buf;
     }
-    auto write = [](const std::filesystem::path &path, const std::string &s) {
-      const std::filesystem::path tmp = path.string() + ".tmp";
-      FILE *f = std::fopen(tmp.c_str(), "wb");
-      if (!f || std::fwrite(s.data(), 1, s.size(), f) != s.size() || std::fclose(f) != 0)
-        throw Error(path.string() + ": cannot write");
-      std::filesystem::rename(tmp, path);
-    };
-    write(d / "report.txt", title + "\n\n" + formatBoardMetrics(m));
-    write(d / "blocks.csv", blocks.str());
-    write(d / "plane.csv", plane.str());
+    files.add((d / "report.txt").string(), title + "\n\n" + formatBoardMetrics(m));
+    files.add((d / "blocks.csv").string(), blocks.str());
+    files.add((d / "plane.csv").string(), plane.str());
   }
 
   // Figure: 1200 x 640, three panels.
@@ -314,14 +310,24 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
        0.4);
 
   const std::string png = (d / "figure.png").string();
+  std::vector<unsigned char> bytes;
   bool ok = false;
   try {
-    ok = cv::imwrite(png, img);
+    ok = cv::imencode(".png", img, bytes);
   } catch (const cv::Exception &e) {
-    throw Error(png + ": cannot write the figure: " + e.what());
+    throw Error(png + ": cannot encode the figure: " + e.what());
   }
   if (!ok)
-    throw Error(png + ": cannot write the figure");
+    throw Error(png + ": cannot encode the figure");
+  files.add(png, std::string(bytes.begin(), bytes.end()));
+  files.commit();
+}
+
+std::vector<std::string> boardReportFiles(const std::string &dir)
+{
+  const std::filesystem::path d(dir);
+  return {(d / "report.txt").string(), (d / "blocks.csv").string(), (d / "plane.csv").string(),
+          (d / "figure.png").string()};
 }
 
 } // namespace yawdepth

@@ -97,10 +97,15 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
                                   int height, const CameraCalibrationOptions &options = CameraCalibrationOptions());
 
 /*!
-  \brief Write the ViSP camera XML (vpXmlParserCamera::save) with both models under `camera_name`
-  and the image size, atomically. Throws yawdepth::Error when the ViSP models were not fitted or on
+  \brief The ViSP camera XML (vpXmlParserCamera::save) with both models under `camera_name` (empty:
+  "Camera") and the image size. Throws yawdepth::Error when the ViSP models were not fitted or on
   failure.
+  \param calibration The result. \param camera_name The camera's name. \param additional_info XML
+  added to the camera's entry.
 */
+std::string vispCameraXmlText(const CameraCalibration &calibration, const std::string &camera_name = "",
+                              const std::string &additional_info = "");
+/*! \brief vispCameraXmlText() written to `path` atomically (core/files.h). */
 void saveVispCameraXml(const std::string &path, const CameraCalibration &calibration,
                        const std::string &camera_name = "Camera", const std::string &additional_info = "");
 
@@ -109,7 +114,13 @@ void saveVispCameraXml(const std::string &path, const CameraCalibration &calibra
   (a colour per view, outlier views as red crosses), an 8 x 6 grid whose empty cells are shaded.
 */
 cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<CalibrationView> &views);
-/*! \brief coverageImage() written as a PNG (or any format cv::imwrite knows); throws yawdepth::Error on failure. */
+/*!
+  \brief coverageImage() encoded as a file's bytes. \param calibration The result. \param views Its views.
+  \param extension The format, as for cv::imencode (".png").
+*/
+std::string coverageImageBytes(const CameraCalibration &calibration, const std::vector<CalibrationView> &views,
+                               const std::string &extension);
+/*! \brief coverageImage() written as a PNG (or the format of the path's extension), atomically; throws yawdepth::Error on failure. */
 void writeCoverageImage(const std::string &path, const CameraCalibration &calibration,
                         const std::vector<CalibrationView> &views);
 

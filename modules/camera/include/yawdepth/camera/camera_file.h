@@ -22,7 +22,12 @@ namespace yawdepth {
 */
 CameraModel loadCameraFile(const std::string &path, const std::string &camera_name = "");
 
-/*! \brief Write an OpenCV YAML camera file (the format loadCameraFile() reads). */
+/*! \brief An OpenCV YAML camera file's text (the format loadCameraFile() reads). \param camera The camera. */
+std::string cameraYamlText(const CameraModel &camera);
+/*!
+  \brief Write cameraYamlText() to `path` atomically (core/files.h).
+  \param path The file. \param camera The camera.
+*/
 void saveCameraYaml(const std::string &path, const CameraModel &camera);
 
 } // namespace yawdepth

@@ -12,6 +12,7 @@
 #include <ostream>
 #include <string>
 #include <vector>
+#include <yawdepth/core/files.h>
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
 
@@ -56,16 +57,18 @@ struct MotionLog {
 /*!
   \brief Read a motion log CSV: columns frame,x,y,z,heading,yaw (+ optional image); column order
   free, unknown columns ignored. When the file has no `yaw` column, `fixed_yaw` is used for every
-  row; without either, it is an error.
+  row; without either, it is an error. Read as a stream within `limits` (core/files.h: a regular
+  file or a pipe, 256 MiB and 1 MiB per line by default).
 */
-MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw = std::nullopt);
+MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw = std::nullopt,
+                        const InputLimits &limits = InputLimits());
 
 /*!
   \brief Read feature tracks CSV: columns frame,id,u,v (any order, unknown columns ignored).
   Returns the tracks sorted by id, each track's observations sorted by frame. A repeated
-  (frame, id) pair is an error.
+  (frame, id) pair is an error. Read as a stream within `limits`, as readMotionCsv().
 */
-std::vector<Track> readTracksCsv(const std::string &path);
+std::vector<Track> readTracksCsv(const std::string &path, const InputLimits &limits = InputLimits());
 
 /*!
   \brief Check that every observation names a frame of the motion log; throws yawdepth::Error
@@ -91,12 +94,6 @@ void writePointsCsv(std::ostream &out, const std::vector<PointRow> &rows);
 */
 void writePointsCsv(const std::string &path, const std::vector<PointRow> &rows);
 
-/*!
-  \brief Write `contents` to `path` atomically (temporary file in the same folder, then rename).
-  Throws yawdepth::Error on failure.
-*/
-void writeFileAtomically(const std::string &path, const std::string &contents);
-
 /*! \brief Write a motion log CSV (frame,x,y,z,heading,yaw[,image]), atomically, 17 significant digits. */
 void writeMotionCsv(const std::string &path, const MotionLog &motion);
 /*! \brief Write feature tracks CSV (frame,id,u,v), rows ordered by frame then id, atomically. */
@@ -111,6 +108,6 @@ void writeRigFile(const std::string &path, const RigFile &rig);
   `c_cov(2, 2) = sigma_zc^2`, so that `sigmaZ()` returns `sigma_zc` exactly. A file with a header and
   no rows is valid (no points).
 */
-std::vector<PointRow> readPointsCsv(const std::string &path);
+std::vector<PointRow> readPointsCsv(const std::string &path, const InputLimits &limits = InputLimits());
 
 } // namespace yawdepth

@@ -68,4 +68,7 @@ std::string formatBoardMetrics(const BoardMetrics &m);
 */
 void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::string &title);
 
+/*! \brief The files writeBoardReport() writes into `dir` (for checks before writing). \param dir The folder. */
+std::vector<std::string> boardReportFiles(const std::string &dir);
+
 } // namespace yawdepth
