@@ -398,6 +398,19 @@ bad rig_two_values estimate --camera "$XML" --rig "$B/rig_two.yaml" --motion "$M
 bad unknown_option "${EST[@]}" --motion "$M" --tracks "$T" --no-such-option
 bad unknown_option_value "${EST[@]}" --motion "$M" --tracks "$T" --no-such-option 3
 bad unknown_subcommand --no-out frobnicate --camera "$XML"
+# Numbers that would give NaN or a raw library error instead of a reason.
+bad refine_sigma_px_zero "${EST[@]}" --motion "$M" --tracks "$T" --method refine --sigma-px 0
+bad fused_sigma_px_tiny "${EST[@]}" --motion "$M" --tracks "$T" --method fused --sigma-px 1e-300
+bad refine_robust_zero "${EST[@]}" --motion "$M" --tracks "$T" --method refine --robust-threshold-px 0
+bad simulate_huge_blur --no-out simulate --camera "$YML" --rig "$RIG" --out-dir "$B/outs/blur" --frames 2 \
+  --pattern chessboard:5x4:0.02 --blur 1e300
+tr '\n' '\r' <"$T" >"$B/tracks_cr_only.csv"
+bad tracks_cr_only "${EST[@]}" --motion "$M" --tracks "$B/tracks_cr_only.csv"
+grep -q "CR-only" "$B/tracks_cr_only.err" && pass || fail "CR-only tracks: $(first "$B/tracks_cr_only.err")"
+mkdir -p "$B/dir_image"; sed "s|,frame_|,$PE/frame_|; s|[^,]*frame_0001.png|$B/dir_image|" "$PE/motion.csv" >"$B/motion_dir_image.csv"
+bad measure_image_is_folder measure --camera "$YML" --rig "$RIG" --pattern chessboard:5x4:0.02 --motion "$B/motion_dir_image.csv"
+grep -q "dir_image: cannot read image (.*is a folder" "$B/measure_image_is_folder.err" && pass ||
+  fail "image folder: $(first "$B/measure_image_is_folder.err")"
 bad unknown_subcommand_out frobnicate --camera "$XML"
 bad unknown_method "${EST[@]}" --motion "$M" --tracks "$T" --method foo
 bad negative_sigma_px "${EST[@]}" --motion "$M" --tracks "$T" --sigma-px -1

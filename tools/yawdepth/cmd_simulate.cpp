@@ -115,6 +115,8 @@ Runner addSimulate(CLI::App &app)
     SceneOptions so = a->scene;
     if (board_mode)
       so.points = 0;
+    if (board_mode)
+      checkRenderOptions(camera, a->render); // before the output folder is created
     const Scene scene = simulateScene(camera, rig, so);
 
     std::error_code ec;

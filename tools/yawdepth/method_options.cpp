@@ -55,6 +55,14 @@ std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &ri
   const bool refine = args.method == "refine";
   if (refine && !refineAvailable())
     throw Error("method refine is unavailable: this yawdepth was built without Ceres");
+  // fused and refine weigh every observation by the pixel noise: zero (or a denormal) would give
+  // infinite weights and NaN uncertainties, not an answer.
+  constexpr double kMinSigmaPx = 1e-6;
+  if ((refine || args.method == "fused") && !(args.noise.sigma_px >= kMinSigmaPx))
+    throw Error("--sigma-px " + std::to_string(args.noise.sigma_px) + ": methods fused and refine need a pixel noise of "
+                "at least 1e-6 px (they weigh every observation by it)");
+  if (refine && !(args.robust_px >= kMinSigmaPx))
+    throw Error("--robust-threshold-px must be at least 1e-6 px for refine (the scale of its robust loss)");
   TrackEstimatorOptions options;
   options.method = refine ? Method::Fused : methodFromString(args.method);
   options.two_view.noise = args.noise;

@@ -134,7 +134,9 @@ double radicalInverse(unsigned i) {
   return r;
 }
 
-void validate(const CameraModel &camera, const RenderOptions &o) {
+} // namespace
+
+void checkRenderOptions(const CameraModel &camera, const RenderOptions &o) {
   if (camera.width() == 0 || camera.height() == 0)
     throw Error("render: the camera has no image size (width and height must be > 0)");
   if (camera.width() > 20000 || camera.height() > 20000)
@@ -142,19 +144,18 @@ void validate(const CameraModel &camera, const RenderOptions &o) {
                 " is too large (at most 20000x20000)");
   if (o.supersampling < 1 || o.supersampling > 64)
     throw Error("render: supersampling must be 1..64 (samples per pixel side)");
-  if (!std::isfinite(o.blur_sigma_px) || o.blur_sigma_px < 0)
-    throw Error("render: blur sigma must be finite and >= 0");
+  // A blur wider than the image is a flat gray picture (and OpenCV's kernel size overflows).
+  if (!std::isfinite(o.blur_sigma_px) || o.blur_sigma_px < 0 || o.blur_sigma_px > 1000)
+    throw Error("render: blur sigma must be 0 to 1000 px");
   if (!std::isfinite(o.noise_sigma) || o.noise_sigma < 0)
     throw Error("render: noise sigma must be finite and >= 0");
   if (!std::isfinite(o.black) || !std::isfinite(o.white) || !std::isfinite(o.background))
     throw Error("render: gray levels must be finite");
 }
 
-} // namespace
-
 cv::Mat renderBoard(const CameraModel &camera, const YawRig &rig, const MotionSample &sample,
                     const BoardLayout &board, const Eigen::Isometry3d &wMb, const RenderOptions &options) {
-  validate(camera, options);
+  checkRenderOptions(camera, options);
   const int W = static_cast<int>(camera.width()), H = static_cast<int>(camera.height());
 
   const Eigen::Isometry3d bMc = wMb.inverse() * toIsometry(wMc(rig, sample));

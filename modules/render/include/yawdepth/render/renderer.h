@@ -43,6 +43,14 @@ struct RenderOptions {
 };
 
 /*!
+  \brief Throws yawdepth::Error when renderBoard() would refuse `camera` or `options` (no image size,
+  an image over 20000 px a side, supersampling outside 1..64, blur outside 0..1000 px, negative or
+  non-finite noise or gray levels): for a check before any file is written.
+  \param camera The camera. \param options The options.
+*/
+void checkRenderOptions(const CameraModel &camera, const RenderOptions &options);
+
+/*!
   \brief Render one grayscale view (8-bit, camera's image size) of a board.
   \param camera Camera model (with an image size).
   \param rig Yaw rig.
