@@ -551,3 +551,32 @@ TEST_CASE("camera file: deep nesting is rejected before OpenCV parses it", "[cam
   CHECK_NOTHROW(yawdepth::loadCameraFile(ok));
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("camera files: implausible cameras are refused with the reason", "[camera][io]") {
+  const std::string dir = (std::filesystem::temp_directory_path() /
+                           ("yawdepth_implausible_" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  auto camera = [&](const std::string &name, const std::string &K, const std::string &D, int w = 640, int h = 480) {
+    const std::string path = dir + "/" + name + ".yaml";
+    std::ofstream(path, std::ios::binary)
+        << "%YAML:1.0\nimage_width: " << w << "\nimage_height: " << h
+        << "\ncamera_matrix: !!opencv-matrix { rows: 3, cols: 3, dt: d, data: [ " << K
+        << " ] }\ndistortion_coefficients: !!opencv-matrix { rows: 1, cols: 4, dt: d, data: [ " << D << " ] }\n";
+    return path;
+  };
+  const std::string K = "600, 0, 320, 0, 600, 240, 0, 0, 1";
+  // Real lenses, strong barrel distortion included, load.
+  CHECK_NOTHROW(yawdepth::loadCameraFile(camera("ok", K, "-0.11042, 0.43607, -0.00084, 0.00035")));
+  CHECK_NOTHROW(yawdepth::loadCameraFile(camera("barrel", K, "-0.35, 0.12, 0.001, -0.001")));
+  CHECK_NOTHROW(yawdepth::loadCameraFile(YAWDEPTH_CALIB_DIR "/paper_camera.yaml"));
+  CHECK_NOTHROW(yawdepth::loadCameraFile(YAWDEPTH_CALIB_DIR "/paper_camera.xml"));
+  // k1 = 1e6 squeezes the whole image into a 1 degree field; k1 = -1e6 folds it back.
+  requireRejected(camera("k1_big", K, "1e6, 0, 0, 0"), "", "implausible camera: the distortion maps pixel");
+  requireRejected(camera("k1_negative", K, "-1e6, 0, 0, 0"), "", "implausible camera: the distortion");
+  requireRejected(camera("k1_folds", K, "-2, 0, 0, 0"), "", "implausible camera: the distortion");
+  requireRejected(camera("fx_huge", "1e308, 0, 320, 0, 600, 240, 0, 0, 1", "0, 0, 0, 0"), "", "focal length 1e+308");
+  requireRejected(camera("aspect", "6000, 0, 320, 0, 60, 240, 0, 0, 1", "0, 0, 0, 0"), "", "differ by more than 10x");
+  requireRejected(camera("u0_far", "600, 0, 1e7, 0, 600, 240, 0, 0, 1", "0, 0, 0, 0"), "", "principal point");
+  requireRejected(camera("wide", K, "0, 0, 0, 0", 2147483647, 480), "", "image size 2147483647x480");
+  std::filesystem::remove_all(dir);
+}

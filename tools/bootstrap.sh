@@ -59,7 +59,7 @@ run_ctest() { # tree
   local tree=$1 rc=0
   ctest --test-dir "$tree" --output-on-failure -j "$jobs" --timeout 600 2>&1 | tee "$tree/ctest.log" || rc=$?
   local timed_out
-  timed_out=$(grep -E '\*\*\*Timeout' "$tree/ctest.log" | sed -E 's/^ *[0-9]+\/[0-9]+ Test +#[0-9]+: ([^ ]+).*/\1/' || true)
+  timed_out=$(grep -E '\*\*\*Timeout' "$tree/ctest.log" | sed -E 's/^ *[0-9]+\/[0-9]+ Test +#[0-9]+: (.*[^ .]) *\.+ *\*\*\*Timeout.*/\1/' || true)
   if [ -n "$timed_out" ]; then
     echo "bootstrap: these tests timed out (hung, or far slower than they should be):" >&2
     sed 's/^/  /' <<<"$timed_out" >&2

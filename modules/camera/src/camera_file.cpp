@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <Eigen/LU>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -426,6 +427,69 @@ Format detectFormat(const std::string &text) {
   return Format::Unknown;
 }
 
+/*!
+  \brief Throws yawdepth::Error for a camera that parses but cannot be a real one: focal lengths
+  outside 1e-3..1e6 px or with an aspect ratio beyond 10, an image side over 65535 px, a principal
+  point more than half an image outside the image, or (image size known) a distortion that is not
+  invertible over the image (not monotonic along a ray from the centre, Newton's inverse failing)
+  or that maps the image to a field more than 10x wider or narrower than the pinhole would.
+*/
+void checkPlausible(const std::string &path, const CameraModel &c) {
+  auto fail = [&](const std::string &why) { throw Error(path + ": implausible camera: " + why); };
+  auto num = [](double v) {
+    std::ostringstream ss;
+    ss.precision(6);
+    ss << v;
+    return ss.str();
+  };
+  for (const double f : {c.kx(), c.ky()})
+    if (!(f >= 1e-3 && f <= 1e6))
+      fail("focal length " + num(f) + " px (expected 1e-3 to 1e6)");
+  if (c.kx() > 10 * c.ky() || c.ky() > 10 * c.kx())
+    fail("focal lengths " + num(c.kx()) + " and " + num(c.ky()) + " px differ by more than 10x");
+  constexpr unsigned kMaxSide = 65535;
+  if (c.width() > kMaxSide || c.height() > kMaxSide)
+    fail("image size " + std::to_string(c.width()) + "x" + std::to_string(c.height()) + " (at most 65535 a side)");
+  const double w = c.width(), h = c.height();
+  if (c.width() > 0 && c.height() > 0) {
+    if (!(c.u0() >= -0.5 * w && c.u0() <= 1.5 * w && c.v0() >= -0.5 * h && c.v0() <= 1.5 * h))
+      fail("principal point (" + num(c.u0()) + ", " + num(c.v0()) + ") far outside the " + std::to_string(c.width()) +
+           "x" + std::to_string(c.height()) + " image");
+  } else if (!(std::abs(c.u0()) <= kMaxSide && std::abs(c.v0()) <= kMaxSide)) {
+    fail("principal point (" + num(c.u0()) + ", " + num(c.v0()) + ") beyond 65535 px");
+  }
+  if (c.distortion() == CameraModel::Distortion::None || c.width() == 0 || c.height() == 0)
+    return;
+  // Every pixel of a grid over the image (its border included) must undistort, and the ray
+  // from the principal point to it must be monotonic: the distorted radius grows with the
+  // undistorted one, with a positive Jacobian determinant all along.
+  constexpr int kNu = 17, kNv = 13, kSteps = 64;
+  for (int j = 0; j < kNv; ++j) {
+    for (int i = 0; i < kNu; ++i) {
+      const Eigen::Vector2d uv(-0.5 + (w) * i / (kNu - 1), -0.5 + (h) * j / (kNv - 1));
+      const Eigen::Vector2d md((uv.x() - c.u0()) / c.kx(), (uv.y() - c.v0()) / c.ky());
+      Eigen::Vector2d m;
+      if (!c.undistort(uv, m) || !m.allFinite())
+        fail("the distortion cannot be inverted at pixel (" + num(uv.x()) + ", " + num(uv.y()) + ")");
+      const double rd = md.norm(), ru = m.norm();
+      if (rd > 1e-3 && (ru > 10 * rd || ru < 0.1 * rd))
+        fail("the distortion maps pixel (" + num(uv.x()) + ", " + num(uv.y()) + ") " + num(ru / rd) +
+             "x as far from the centre as the pinhole would (expected 0.1 to 10)");
+      const Eigen::Vector2d dir = rd > 1e-12 ? Eigen::Vector2d(md / rd) : Eigen::Vector2d(1, 0);
+      double last = 0;
+      for (int k = 1; k <= kSteps; ++k) {
+        Eigen::Matrix2d J;
+        const Eigen::Vector2d d = c.distortNormalized(m * (double(k) / kSteps), &J);
+        const double r = d.dot(dir);
+        if (!(J.determinant() > 0) || (rd > 1e-3 && !(r > last)))
+          fail("the distortion is not monotonic between the image centre and pixel (" + num(uv.x()) + ", " +
+               num(uv.y()) + ")");
+        last = r;
+      }
+    }
+  }
+}
+
 } // namespace
 
 CameraModel loadCameraFile(const std::string &path, const std::string &camera_name) {
@@ -438,12 +502,17 @@ CameraModel loadCameraFile(const std::string &path, const std::string &camera_na
     if (text.find('\0') != std::string::npos)
       throw Error(path + ": not a camera file (it holds a NUL byte)");
     switch (detectFormat(text)) {
-    case Format::ViSPXml:
-      return loadVispXml(path, text, camera_name);
+    case Format::ViSPXml: {
+      const CameraModel c = loadVispXml(path, text, camera_name);
+      checkPlausible(path, c);
+      return c;
+    }
     case Format::OpenCvXml:
-      return loadOpenCv(path, text, false);
-    case Format::OpenCvYaml:
-      return loadOpenCv(path, text, true);
+    case Format::OpenCvYaml: {
+      const CameraModel c = loadOpenCv(path, text, detectFormat(text) == Format::OpenCvYaml);
+      checkPlausible(path, c);
+      return c;
+    }
     case Format::Unknown:
       break;
     }
