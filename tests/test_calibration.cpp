@@ -474,6 +474,24 @@ TEST_CASE("calibrate-rig rejects too small a yaw spread and too few views", "[ca
   CHECK_THROWS_WITH(calibrateRig(camera, board, two), Catch::Contains("too few views"));
 }
 
+TEST_CASE("calibrate-rig refuses a failed fit: wrong yaw sign, degrees, shuffled readings", "[calibration][rig]")
+{
+  const CameraModel camera = wideCamera();
+  const BoardLayout board = chessboard(6, 5, 0.03);
+  const RigTruth truth;
+  const std::vector<RigView> views = renderRig(camera, board, truth, boardAhead(board, 0.75, 0.0),
+                                               {Eigen::Vector3d::Zero()}, yawReadings(-30, 30, 5));
+  REQUIRE_NOTHROW(calibrateRig(camera, board, views));
+  std::vector<RigView> flipped = views, degrees = views, shuffled = views;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    flipped[i].sample.yaw = -views[i].sample.yaw;
+    degrees[i].sample.yaw = views[i].sample.yaw / kDeg;
+    shuffled[i].sample.yaw = views[(i + 2) % views.size()].sample.yaw;
+  }
+  for (const auto *bad : {&flipped, &degrees, &shuffled})
+    CHECK_THROWS_WITH(calibrateRig(camera, board, *bad), Catch::Contains("calibrate-rig: the fit failed"));
+}
+
 // Not run by CTest: writes the rendered calibration images and a rig sequence for trying the
 // command line, into $YAWDEPTH_CALIB_DUMP (default /tmp/yawdepth_calib_dump):
 //   build/tests/test_calibration "[.dump]"

@@ -72,7 +72,7 @@ struct CameraArgs {
 struct RigArgs {
   std::string camera, camera_name, motion, pattern, out, tags = "1x1";
   std::vector<double> initial_offset;
-  double initial_yaw_offset = 0, min_yaw_span_deg = 20, tag_gap = -1;
+  double initial_yaw_offset = 0, min_yaw_span_deg = 20, tag_gap = -1, max_rms_px = RigCalibrationOptions().max_rms_px;
   int first_tag_id = 0;
   bool board_square = false, fixed_axis = false, quiet = false;
   InputOptions input;
@@ -232,6 +232,10 @@ Runner addCalibrateRig(CLI::App &app)
   sub->add_option("--min-yaw-span", a->min_yaw_span_deg, "Smallest accepted span of the yaw readings (degrees)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option("--max-rms-px", a->max_rms_px,
+                  "A fit with a larger reprojection RMS failed and writes nothing (px)")
+      ->check(CLI::PositiveNumber & Finite)
+      ->capture_default_str();
   sub->add_flag("--quiet", a->quiet, "No per-frame detection messages");
   addInputOptions(sub, a->input);
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
@@ -288,6 +292,7 @@ Runner addCalibrateRig(CLI::App &app)
     opt.board_square = a->board_square;
     opt.estimate_axis = !a->fixed_axis;
     opt.min_yaw_span = a->min_yaw_span_deg * kDeg;
+    opt.max_rms_px = a->max_rms_px;
     const RigCalibration rig = calibrateRig(camera, board, views, opt);
     writeFileAtomically(a->out, rigCalibrationYaml(rig));
 

@@ -406,6 +406,19 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
     out.yaw_axis_sigma = Ca.diagonal().cwiseMax(0.0).cwiseSqrt();
   }
   out.v0Mb = pb.board(p);
+
+  // A failed fit is an error, not a rig file: its RMS, size or uncertainty says so.
+  auto mm = [](double v) { return std::to_string(static_cast<long long>(std::llround(1000 * v))) + " mm"; };
+  if (!(out.rms_px <= options.max_rms_px))
+    throw Error("calibrate-rig: the fit failed: reprojection RMS " + std::to_string(out.rms_px) + " px (at most " +
+                std::to_string(options.max_rms_px) +
+                " px); check the yaw readings (sign, radians, order against the images) and the camera file");
+  if (!out.camera_offset.allFinite() || !(out.camera_offset.norm() <= options.max_offset))
+    throw Error("calibrate-rig: the fit failed: a camera offset of " + mm(out.camera_offset.norm()) +
+                " from the yaw axis (at most " + mm(options.max_offset) + "); check --initial-offset and the yaw readings");
+  if (!(out.camera_offset_sigma.maxCoeff() <= options.max_offset_sigma))
+    throw Error("calibrate-rig: the offset is not determined: 1-sigma " + mm(out.camera_offset_sigma.maxCoeff()) +
+                " (at most " + mm(options.max_offset_sigma) + "); take images over a wider span of yaws");
   return out;
 }
 

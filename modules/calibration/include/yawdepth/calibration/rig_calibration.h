@@ -51,6 +51,11 @@ struct RigCalibrationOptions {
   int min_distinct_yaws = 3;       //!< ... with at least this many distinct values (0.2 deg apart)
   double min_baseline = 0.02;      //!< robot translation (m) from which the yaw offset is estimated
   int min_points_per_view = 4;     //!< views with fewer points are not used
+  /*! A fit whose reprojection RMS is larger failed (wrong yaw sign or unit, shuffled readings, a
+      wrong camera): calibrateRig() refuses it rather than return a rig that looks valid. */
+  double max_rms_px = 3.0;
+  double max_offset = 2.0;         //!< a camera offset longer than this (m) is refused the same way
+  double max_offset_sigma = 0.05;  //!< ... and one this uncertain (m, 1-sigma of x or z)
 };
 
 /*! \brief How the yaw offset was obtained. */
