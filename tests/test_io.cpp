@@ -539,7 +539,7 @@ TEST_CASE("rig file: good files", "[io][rig]")
   REQUIRE(f.yaw.has_value());
   CHECK(*f.yaw == 0.25);
 
-  const RigFile g = readRigFile(dir.write("block.yaml", "%YAML 1.2\n---\nother: {a: 1}\ncamera_offset:\n  - 1\n  - -2.5e-1\n  - +3\n"));
+  const RigFile g = readRigFile(dir.write("block.yaml", "%YAML 1.2\n---\ncamera_offset:\n  - 1\n  - -2.5e-1\n  - +3\n"));
   CHECK(g.camera_offset == Eigen::Vector3d(1, -0.25, 3));
   CHECK_FALSE(g.yaw.has_value());
 
@@ -721,6 +721,27 @@ TEST_CASE("atomic write: replaces an existing file, no partial file on failure",
   CHECK_THROWS_AS(writeFileAtomically(folder + "/", "x"), Error);
   CHECK(dir.count() == 2);
   CHECK(slurp(p) == "third\n");
+}
+
+TEST_CASE("rig file: unknown keys and a yaw axis the estimators do not model are refused", "[io][rig]")
+{
+  TempDir dir;
+  const std::string typo = dir.write("typo.yaml", "camera_ofset: [-0.15, 0, 0]\n");
+  requireError(errorOf([&] { readRigFile(typo); }), typo + ":1: ", "unknown key 'camera_ofset' (known: camera_offset");
+  const std::string other = dir.write("other.yaml", "camera_offset: [-0.15, 0, 0]\nother: {a: 1}\n");
+  requireError(errorOf([&] { readRigFile(other); }), other + ":2: ", "unknown key 'other'");
+  const std::string pose = dir.write("pose.yaml", "camera_pose: [0, 0, 0, 0, 0, 0]\n");
+  requireError(errorOf([&] { readRigFile(pose); }), pose + ":1: ", "'camera_pose' (a fixed 6-DoF camera mount) is not supported");
+  const std::string sideways = dir.write("axis.yaml", "camera_offset: [-0.15, 0, 0]\nyaw_axis: [1, 0, 0]\n");
+  requireError(errorOf([&] { readRigFile(sideways); }), sideways + ":2: ", "'yaw_axis' is 90.0 deg from the vision frame's +Y");
+  const std::string tilted = dir.write("tilt.yaml", "camera_offset: [-0.15, 0, 0]\nyaw_axis: [0.06, 1, 0]\n");
+  requireError(errorOf([&] { readRigFile(tilted); }), tilted + ":2: ", "3.4 deg from the vision frame's +Y");
+  // What calibrate-rig writes beside the values is known, and a tilt within 2 deg is accepted.
+  const std::string calibrated = dir.write(
+      "cal.yaml", "camera_offset: [-0.15, 0, 0.01]\nyaw_offset: 0.01\nyaw_axis: [0.02, 1, -0.01]\n"
+                  "camera_offset_sigma: [0.0001, 0, 0.0001]\nyaw_offset_sigma: 0.0002\nyaw_offset_estimated: true\n"
+                  "yaw_axis_sigma: [0.001, 0, 0.001]\nreprojection_rms_px: 0.05\n");
+  CHECK_NOTHROW(readRigFile(calibrated));
 }
 
 TEST_CASE("rig file: yaw_offset and yaw_axis", "[io][rig]")

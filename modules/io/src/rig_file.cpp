@@ -1,5 +1,6 @@
 #include "csv.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <yaml-cpp/yaml.h>
@@ -64,15 +65,32 @@ RigFile readRigFile(const std::string &path)
     if (!root.IsMap())
       throwError(where(path, root.Mark()) + "not a YAML map of keys (expected 'camera_offset: [x, y, z]')");
 
+    // Every key is one we know: a typo ('camera_ofset') must not silently drop a setting.
+    // The *_sigma, yaw_offset_estimated and reprojection_rms_px keys are what calibrate-rig
+    // writes beside the values (read as information, not used).
+    static const std::set<std::string> kKnown = {"camera_offset",       "yaw",           "yaw_offset",
+                                                 "yaw_axis",            "camera_offset_sigma",
+                                                 "yaw_offset_sigma",    "yaw_offset_estimated",
+                                                 "yaw_axis_sigma",      "reprojection_rms_px"};
     std::set<std::string> seen;
     YAML::Mark yaw_mark = YAML::Mark::null_mark();
     for (const auto &kv : root) {
       if (!kv.first.IsScalar())
-        continue;
+        throwError(where(path, kv.first.Mark()) + "a key must be a name");
       const std::string &key = kv.first.Scalar();
+      if (key == "camera_pose")
+        throwError(where(path, kv.first.Mark()) +
+                   "'camera_pose' (a fixed 6-DoF camera mount) is not supported by this version: give "
+                   "'camera_offset: [x, y, z]' for a camera on the yaw joint");
+      if (kKnown.count(key) == 0) {
+        std::string known;
+        for (const std::string &k : kKnown)
+          known += (known.empty() ? "" : ", ") + k;
+        throwError(where(path, kv.first.Mark()) + "unknown key '" + excerpt(key) + "' (known: " + known + ")");
+      }
       if (key == "yaw")
         yaw_mark = kv.first.Mark();
-      if (!seen.insert(key).second && (key == "camera_offset" || key == "yaw" || key == "yaw_offset" || key == "yaw_axis"))
+      if (!seen.insert(key).second)
         throwError(where(path, kv.first.Mark()) + "duplicated key '" + key + "'");
     }
 
@@ -108,6 +126,15 @@ RigFile readRigFile(const std::string &path)
       if (!(a.norm() > 1e-9))
         throwError(where(path, axis.Mark()) + "'yaw_axis' must not be zero");
       rig.yaw_axis = a.normalized();
+      // The estimators turn the camera about the vision frame's +Y: an axis far from it would be
+      // silently wrong, so it is refused (a measured tilt of a degree or two is tolerated).
+      constexpr double kMaxAxisTiltDeg = 2.0;
+      const double tilt = std::acos(std::clamp(rig.yaw_axis->y(), -1.0, 1.0)) * 180.0 / M_PI;
+      if (!(tilt <= kMaxAxisTiltDeg))
+        throwError(where(path, axis.Mark()) + "'yaw_axis' is " + std::to_string(static_cast<int>(tilt)) + "." +
+                   std::to_string(static_cast<int>(std::lround(tilt * 10)) % 10) +
+                   " deg from the vision frame's +Y; the estimators model the yaw axis along +Y, within 2 deg: "
+                   "level the mechanism or correct the file");
     }
   } catch (const YAML::Exception &e) {
     throwError(where(path, e.mark) + "not valid YAML (" + e.msg + ")");

@@ -38,8 +38,10 @@ struct RigFile {
 void applyRigFile(const RigFile &rig, std::vector<MotionSample> &motion);
 
 /*!
-  \brief Read a rig YAML file. Required key `camera_offset` (3 finite numbers); optional `yaw`.
-  Unknown keys are ignored.
+  \brief Read a rig YAML file. Required key `camera_offset` (3 finite numbers); optional `yaw`,
+  `yaw_offset`, `yaw_axis` (refused when more than 2 degrees from +Y, which is the axis the
+  estimators model), and the uncertainties calibrate-rig writes beside them. Any other key is an
+  error naming it (a typo must not drop a setting silently).
 */
 RigFile readRigFile(const std::string &path);
 
