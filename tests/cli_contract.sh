@@ -398,6 +398,20 @@ bad rig_two_values estimate --camera "$XML" --rig "$B/rig_two.yaml" --motion "$M
 bad unknown_option "${EST[@]}" --motion "$M" --tracks "$T" --no-such-option
 bad unknown_option_value "${EST[@]}" --motion "$M" --tracks "$T" --no-such-option 3
 bad unknown_subcommand --no-out frobnicate --camera "$XML"
+# Files that parse but cannot be right: a typo'd rig key, a yaw axis not modelled, a camera whose
+# distortion or intrinsics are not a real lens's.
+echo 'camera_ofset: [-0.1503, 0.0, 0.0]' >"$B/rig_typo.yaml"
+printf 'camera_offset: [-0.1503, 0.0, 0.0]\nyaw_axis: [1, 0, 0]\n' >"$B/rig_axis_x.yaml"
+bad rig_typo_key estimate --camera "$XML" --rig "$B/rig_typo.yaml" --motion "$M" --tracks "$T"
+bad rig_axis_x estimate --camera "$XML" --rig "$B/rig_axis_x.yaml" --motion "$M" --tracks "$T"
+sed 's/-0.11042, 0.43607/1e6, 0.43607/' "$YML" >"$B/k1_huge.yaml"
+sed 's/1734.1, 0., 319.2/1e308, 0., 319.2/' "$YML" >"$B/fx_huge.yaml"
+sed 's/319.2, 0., 1734.5, 241.4/1e7, 0., 1734.5, 241.4/' "$YML" >"$B/u0_far.yaml"
+sed 's/image_width: 640/image_width: 2147483647/' "$YML" >"$B/width_huge.yaml"
+for c in k1_huge fx_huge u0_far width_huge; do
+  bad "camera_$c" estimate --camera "$B/$c.yaml" --rig "$RIG" --motion "$M" --tracks "$T"
+  grep -q -e "implausible camera" -e "image_width" "$B/camera_$c.err" && pass || fail "camera $c: $(first "$B/camera_$c.err")"
+done
 # Numbers that would give NaN or a raw library error instead of a reason.
 bad refine_sigma_px_zero "${EST[@]}" --motion "$M" --tracks "$T" --method refine --sigma-px 0
 bad fused_sigma_px_tiny "${EST[@]}" --motion "$M" --tracks "$T" --method fused --sigma-px 1e-300
