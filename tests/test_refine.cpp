@@ -289,7 +289,9 @@ TEST_CASE("refine is efficient and its sigma_zc honest (Monte Carlo against the 
   const CameraModel camera = paperCamera();
   const YawRig rig = paperRig();
   const NoiseModel noise = issueNoise();
-  constexpr int kTrials = 100; // motion errors are shared by a trial's points: many trials are needed
+  // Motion errors are shared by a trial's points, so the per-scene figures are loose checks (25
+  // trials); the pooled ones over 6 x 25 trials are the tight ones. bench_accuracy runs 200 per scene.
+  constexpr int kTrials = 25;
   Stats pooled;
   for (const McScene &sc : kScenes) {
     Stats st;

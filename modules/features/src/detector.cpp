@@ -641,7 +641,7 @@ bool headerSize(const std::vector<unsigned char> &b, std::uint64_t &w, std::uint
   if (n >= 3 && b[0] == 'P' && b[1] >= '1' && b[1] <= '6') { // PNM: two numbers after comments
     std::size_t i = 2;
     std::uint64_t v[2] = {0, 0};
-    for (int k = 0; k < 2; ++k) {
+    for (std::uint64_t &value : v) {
       for (;;) {
         while (i < n && std::isspace(b[i]))
           ++i;
@@ -654,8 +654,8 @@ bool headerSize(const std::vector<unsigned char> &b, std::uint64_t &w, std::uint
       }
       if (i >= n || !std::isdigit(b[i]))
         return false;
-      while (i < n && std::isdigit(b[i]) && v[k] < (std::uint64_t(1) << 40))
-        v[k] = v[k] * 10 + (b[i++] - '0');
+      while (i < n && std::isdigit(b[i]) && value < (std::uint64_t(1) << 40))
+        value = value * 10 + (b[i++] - '0');
     }
     w = v[0];
     h = v[1];
