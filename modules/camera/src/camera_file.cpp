@@ -503,13 +503,13 @@ CameraModel loadCameraFile(const std::string &path, const std::string &camera_na
       throw Error(path + ": not a camera file (it holds a NUL byte)");
     switch (detectFormat(text)) {
     case Format::ViSPXml: {
-      const CameraModel c = loadVispXml(path, text, camera_name);
+      CameraModel c = loadVispXml(path, text, camera_name);
       checkPlausible(path, c);
       return c;
     }
     case Format::OpenCvXml:
     case Format::OpenCvYaml: {
-      const CameraModel c = loadOpenCv(path, text, detectFormat(text) == Format::OpenCvYaml);
+      CameraModel c = loadOpenCv(path, text, detectFormat(text) == Format::OpenCvYaml);
       checkPlausible(path, c);
       return c;
     }
