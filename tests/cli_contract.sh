@@ -549,6 +549,10 @@ if [ -c /dev/full ]; then
   if [ "$rc" -ne 0 ] && grep -q -e "standard output" -e "cannot write" "$F/stdout_full.err"; then pass; else
     fail "files: stdout onto /dev/full: exit $rc: $(first "$F/stdout_full.err")"; fi
 fi
+# /dev/stdout onto a pipe is written through (the link leads to a pipe, not to a file to replace).
+"$YAWDEPTH" "${EF[@]}" --out /dev/stdout 2>"$F/devstdout.err" | cat >"$F/devstdout.out"
+if [ "${PIPESTATUS[0]}" -eq 0 ] && cmp -s "$F/reg.out" "$F/devstdout.out"; then pass; else
+  fail "files: --out /dev/stdout into a pipe: $(first "$F/devstdout.err")"; fi
 # A symbolic link is followed (its target replaced, the link kept); a read-only file is refused.
 echo old >"$F/target.csv"; ln -s target.csv "$F/link.csv"
 run "$F/link" "${EF[@]}" --out "$F/link.csv"

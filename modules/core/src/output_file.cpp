@@ -179,6 +179,16 @@ void AtomicFiles::add(const std::string &path, const std::string &contents)
   Entry e;
   e.shown = path;
   e.target = path;
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0 && (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode))) {
+    // A device or a pipe, possibly through a link (/dev/stdout to a pipe): written through at
+    // commit(), by the path as given, never replaced by a regular file.
+    if (::access(path.c_str(), W_OK) != 0)
+      fail(path + ": cannot write (" + errnoText(errno) + ")");
+    e.contents = contents;
+    entries_.push_back(std::move(e));
+    return;
+  }
   struct stat lst;
   if (::lstat(path.c_str(), &lst) == 0 && S_ISLNK(lst.st_mode)) {
     // A symbolic link is followed on purpose: the file it points to is replaced, the link stays.
@@ -195,18 +205,9 @@ void AtomicFiles::add(const std::string &path, const std::string &contents)
       fail(path + ": written twice in one commit");
 
   mode_t mode = 0666 & ~currentUmask();
-  struct stat st;
   if (::stat(e.target.c_str(), &st) == 0) {
     if (S_ISDIR(st.st_mode))
       fail(path + ": is a folder, not a file");
-    if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) {
-      // A device or a pipe is written through at commit(), never replaced by a regular file.
-      if (::access(e.target.c_str(), W_OK) != 0)
-        fail(path + ": cannot write (" + errnoText(errno) + ")");
-      e.contents = contents;
-      entries_.push_back(std::move(e));
-      return;
-    }
     if (!S_ISREG(st.st_mode))
       fail(path + ": is not a regular file, a character device or a pipe: not written");
     // Read-only stays read-only, for root too (access() would let root through).
