@@ -585,6 +585,9 @@ refused measure_image_device "character device" "${MEF[@]}" --motion "$F/dev_img
 sed "s|,frame_|,$PE/frame_|" "$PE/motion.csv" >"$F/huge_img_motion.csv"
 sed -i "s|[^,]*frame_0001.png|$F/huge.png|" "$F/huge_img_motion.csv"
 refused measure_image_huge "32000 x 32000" "${MEF[@]}" --motion "$F/huge_img_motion.csv"
+printf 'P5\n99999999999999 99999999999999\n255\n' >"$F/huge.pgm"
+sed "s|,frame_|,$PE/frame_|; s|[^,]*frame_0001.png|$F/huge.pgm|" "$PE/motion.csv" >"$F/huge_pgm_motion.csv"
+refused measure_image_huge_pgm "pixels are read" "${MEF[@]}" --motion "$F/huge_pgm_motion.csv"
 # No stray temporary files anywhere.
 left=$(find "$W" -name '.*.tmp*' | head -3)
 [ -z "$left" ] && pass || fail "files: temporary files left: $left"

@@ -682,7 +682,8 @@ cv::Mat readGrayImage(const std::string &path) {
     throw Error(path + ": cannot read image (" + rest + ")");
   }
   std::uint64_t w = 0, h = 0;
-  if (headerSize(bytes, w, h) && (w == 0 || h == 0 || w * h > kMaxImagePixels))
+  if (headerSize(bytes, w, h) && (w == 0 || h == 0 || w > kMaxImagePixels || h > kMaxImagePixels ||
+                                  w * h > kMaxImagePixels)) // (each side first: the product must not overflow)
     throw Error(path + ": cannot read image (its header declares " + std::to_string(w) + " x " + std::to_string(h) +
                 " pixels; at most " + std::to_string(kMaxImagePixels) + " pixels are read)");
   cv::Mat img;
