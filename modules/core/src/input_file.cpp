@@ -8,19 +8,13 @@
 #include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
+#include "fail.h"
+
 namespace yawdepth {
 
 namespace {
 
-/* One line: control characters of user text (a path) would break the one-line contract. */
-[[noreturn]] void fail(const std::string &message)
-{
-  std::string line = message;
-  for (char &c : line)
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
-      c = '?';
-  throw Error(line);
-}
+using core_detail::fail;
 
 std::string shown(const std::string &path) { return path.empty() ? std::string("(empty file name)") : path; }
 

@@ -16,20 +16,15 @@
 #include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
+#include "fail.h"
+
 namespace yawdepth {
 
 namespace {
 
 namespace fs = std::filesystem;
 
-[[noreturn]] void fail(const std::string &message)
-{
-  std::string line = message;
-  for (char &c : line)
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
-      c = '?';
-  throw Error(line);
-}
+using core_detail::fail;
 
 std::string errnoText(int err) { return std::strerror(err); }
 
