@@ -204,6 +204,22 @@ if [ "$res" = OK ]; then pass; else fail "measure paper setup block lengths: $re
 res=$(compare_points "$PE/points.csv" "$PE/truth.csv" 2e-3 0.99)
 case $res in OK*) pass ;; *) fail "measure paper setup against truth: $(echo "$res" | head -n 2 | tr '\n' ';')" ;; esac
 
+# The same on photo-like renders (JPEG, gamma, vignetting, Bayer, defocus) of a board whose outer
+# squares are half as wide: every corner found and measured, blocks within 0.3 mm.
+PH="$W/paper_photo"
+run "$PH.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$PH" --frames 2 --step -0.0565685 --yaw 0.785398 \
+    --pattern chessboard:5x4:0.02 --board-distance 0.62 --photo --outer-square 0.01
+run "$PH.m" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PH/motion.csv" --pattern chessboard:5x4:0.02 \
+    --sigma-px 0.05 --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-yaw 1e-6 --report "$PH/report" --out "$PH/points.csv"
+res=$(awk -F, 'NR > 1 && $10 == "ok" { k++ } END { print k+0 }' "$PH/points.csv" 2>/dev/null)
+if [ "$(rc_of "$PH.m")" -eq 0 ] && [ "$res" = 20 ]; then pass; else
+  fail "measure on photo-like renders: exit $(rc_of "$PH.m"), $res of 20 corners ok: $(first "$PH.m.err")"; fi
+res=$(awk -F, 'NR > 1 { e = $5; if (e < 0) e = -e; if (e > w) w = e; n++ } END { if (n == 31 && w < 0.0003) print "OK"; else print n " blocks, worst error " w " m" }' "$PH/report/blocks.csv" 2>/dev/null)
+if [ "$res" = OK ]; then pass; else fail "measure on photo-like renders, block lengths: $res"; fi
+run "$PH.bad" simulate --camera "$YML" --rig "$RIG" --out-dir "$W/photo_bad" --frames 2 --pattern chessboard:5x4:0.02 --outer-square 0.03
+if [ "$(rc_of "$PH.bad")" -ne 0 ] && [ "$(wc -l < "$PH.bad.err")" -eq 1 ] && grep -q "outer" "$PH.bad.err"; then pass; else
+  fail "simulate --outer-square wider than a square: exit $(rc_of "$PH.bad"): $(first "$PH.bad.err")"; fi
+
 AT="$W/apriltag"
 run "$AT.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$AT" --frames 4 --step 0.01 --yaw 1.5708 \
     --pattern apriltag:36h11:0.05 --tags 2x1 --board-distance 0.6 --board-offset-x -0.02 --blur 0.6 --image-noise 1

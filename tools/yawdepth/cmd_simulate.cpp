@@ -20,6 +20,9 @@ namespace yawdepth::cli {
 
 namespace {
 
+struct SimulateArgs;
+bool findGiven(const SimulateArgs &a, const char *name);
+
 struct SimulateArgs {
   std::string camera, camera_name, rig, out_dir;
   SceneOptions scene;
@@ -28,8 +31,19 @@ struct SimulateArgs {
   double board_distance = 0.62, board_tilt = 0.0, board_offset_x = 0.0, board_offset_y = 0.0;
   std::string tags = "2x2";
   double tag_gap = -1;
+  double outer_square = 0;
+  bool photo = false;
   RenderOptions render;
+  std::vector<CLI::Option *> photo_options; //!< the options --photo sets when they are not given
 };
+
+/* True when the option `name` of --photo's group was given on the command line. */
+bool findGiven(const SimulateArgs &a, const char *name) {
+  for (const CLI::Option *o : a.photo_options)
+    if (o->check_name(name))
+      return o->count() > 0;
+  return false;
+}
 
 /* Pose of the board in the world: facing the first camera, its pattern centred on the optical
    axis at `distance`, turned by `tilt` about the board's vertical axis. */
@@ -103,6 +117,30 @@ Runner addSimulate(CLI::App &app)
   sub->add_option("--image-noise", a->render.noise_sigma, "Sensor noise, Gaussian sigma (gray levels)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option("--outer-square", a->outer_square, "Chessboard: width of the outer squares (m; default a full square)")
+      ->check(FiniteNonNegative);
+  sub->add_flag("--photo", a->photo,
+                "Make the images look like a consumer camera's photographs (the options below, unless given): "
+                "light gradient 0.3, vignetting 0.35, defocus 1.5 px, Bayer, shot noise 0.15, image noise 1.5, "
+                "gamma 2.2, JPEG 85, blur 0.6");
+  a->photo_options = {
+      sub->add_option("--light-gradient", a->render.light_gradient, "Relative change of the light across the image (0..1)")
+          ->check(CLI::Range(0.0, 1.0)),
+      sub->add_option("--vignetting", a->render.vignetting, "Relative fall-off of the light at the image corners (0..1)")
+          ->check(CLI::Range(0.0, 1.0)),
+      sub->add_option("--defocus", a->render.defocus_px,
+                      "Defocus blur sigma (px) = DEFOCUS x |focus distance / depth - 1|")
+          ->check(CLI::Range(0.0, 1000.0)),
+      sub->add_option("--shot-noise", a->render.shot_noise, "Shot noise variance per gray level of signal")
+          ->check(FiniteNonNegative),
+      sub->add_option("--gamma", a->render.gamma, "Response curve: out = 255 (in / 255)^(1 / GAMMA)")->check(CLI::Range(0.1, 10.0)),
+      sub->add_option("--jpeg-quality", a->render.jpeg_quality, "JPEG round trip at this quality (1..100; 0 = none)")
+          ->check(CLI::Range(0, 100)),
+      sub->add_flag("--bayer", a->render.bayer, "Bayer mosaic (RGGB) and demosaicing"),
+      sub->get_option("--image-noise"),
+      sub->get_option("--blur")};
+  sub->add_option("--focus-distance", a->render.focus_distance, "Depth in focus for --defocus (m; default the board distance)")
+      ->check(FiniteNonNegative);
   sub->add_option("--supersampling", a->render.supersampling, "Anti-aliasing samples per pixel side")
       ->check(CLI::Range(1, 32))
       ->capture_default_str();
@@ -115,8 +153,34 @@ Runner addSimulate(CLI::App &app)
     SceneOptions so = a->scene;
     if (board_mode)
       so.points = 0;
-    if (board_mode)
+    if (board_mode) {
+      if (a->photo) {
+        const RenderOptions p = photoLikeRenderOptions(a->board_distance);
+        RenderOptions &r = a->render;
+        const auto unset = [&](const char *name) { return a->photo_options.size() && !findGiven(*a, name); };
+        if (unset("--light-gradient"))
+          r.light_gradient = p.light_gradient;
+        if (unset("--vignetting"))
+          r.vignetting = p.vignetting;
+        if (unset("--defocus"))
+          r.defocus_px = p.defocus_px;
+        if (unset("--shot-noise"))
+          r.shot_noise = p.shot_noise;
+        if (unset("--gamma"))
+          r.gamma = p.gamma;
+        if (unset("--jpeg-quality"))
+          r.jpeg_quality = p.jpeg_quality;
+        if (unset("--bayer"))
+          r.bayer = p.bayer;
+        if (unset("--image-noise"))
+          r.noise_sigma = p.noise_sigma;
+        if (unset("--blur"))
+          r.blur_sigma_px = p.blur_sigma_px;
+      }
+      if (a->render.defocus_px > 0 && !(a->render.focus_distance > 0))
+        a->render.focus_distance = a->board_distance;
       checkRenderOptions(camera, a->render); // before the output folder is created
+    }
     const Scene scene = simulateScene(camera, rig, so);
 
     std::error_code ec;
@@ -142,6 +206,11 @@ Runner addSimulate(CLI::App &app)
     if (board_mode) {
       BoardLayout board;
       board.pattern = PatternSpec::parse(a->pattern);
+      if (a->outer_square > 0) {
+        if (board.pattern.kind != PatternSpec::Kind::Chessboard || a->outer_square > board.pattern.square)
+          throw Error("--outer-square: a chessboard's outer squares, at most one square wide");
+        board.outer_square = a->outer_square;
+      }
       if (board.pattern.kind == PatternSpec::Kind::AprilTag) {
         int tx = 0, ty = 0;
         char x = 0;

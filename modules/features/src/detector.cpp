@@ -103,6 +103,90 @@ bool refineGradient(const RefineContext &c, cv::Point2d &q, double sigma) {
   return true;
 }
 
+bool refineSaddle(const RefineContext &c, cv::Point2d &q, double sigma);
+
+/*!
+  \brief How far the window around q departs from the X-junction's point symmetry: the RMS of
+  I(x) - I(2q - x) over the Gaussian window (mirror by bilinear interpolation), divided by the
+  window's weighted standard deviation of I (its contrast). Noise alone gives about
+  sqrt(2) sigma_noise / contrast at any window size; anything else in the window (the board's outer
+  edge, a narrow outer square, a highlight, an occluder, the image border) raises it. -1 when the
+  window or its mirror leaves the image.
+*/
+double asymmetry(const RefineContext &c, cv::Point2d q, double sigma) {
+  const int R = static_cast<int>(std::ceil(2.5 * sigma));
+  const double inv2s2 = 1.0 / (2 * sigma * sigma);
+  const int cx = static_cast<int>(std::lround(q.x)), cy = static_cast<int>(std::lround(q.y));
+  if (cx - R - 1 < 0 || cy - R - 1 < 0 || cx + R + 2 > c.f.cols - 1 || cy + R + 2 > c.f.rows - 1)
+    return -1;
+  double sw = 0, sd2 = 0, si = 0, si2 = 0;
+  for (int y = cy - R; y <= cy + R; ++y) {
+    const float *fr = c.f.ptr<float>(y);
+    const double dy = y - q.y;
+    const double my = 2 * q.y - y;
+    const int y0 = static_cast<int>(std::floor(my));
+    const double ay = my - y0;
+    const float *m0 = c.f.ptr<float>(y0), *m1 = c.f.ptr<float>(y0 + 1);
+    for (int x = cx - R; x <= cx + R; ++x) {
+      const double dx = x - q.x;
+      const double w = std::exp(-(dx * dx + dy * dy) * inv2s2);
+      const double mx = 2 * q.x - x;
+      const int x0 = static_cast<int>(std::floor(mx));
+      const double ax = mx - x0;
+      const double mirror = (1 - ay) * ((1 - ax) * m0[x0] + ax * m0[x0 + 1]) + ay * ((1 - ax) * m1[x0] + ax * m1[x0 + 1]);
+      const double d = fr[x] - mirror;
+      sw += w;
+      sd2 += w * d * d;
+      si += w * fr[x];
+      si2 += w * fr[x] * fr[x];
+    }
+  }
+  const double var = si2 / sw - (si / sw) * (si / sw);
+  if (!(var > 0))
+    return -1;
+  return std::sqrt(0.5 * sd2 / sw / var);
+}
+
+/*!
+  \brief One corner by `refine` (gradient orthogonality or the saddle fit) with the window chosen
+  per corner: Gaussian windows
+  from sigma 1 px up to `sigma_max`, each started from the previous one's corner, the largest kept
+  whose asymmetry() stays within 1.3x (+0.01) of the least seen so far. A large window averages
+  noise and the sensor's or JPEG's per-pixel errors; it stops before anything that is not the
+  X-junction (the board's outer edge beyond a narrow outer square, a highlight, the image border).
+  False when even the smallest window fails.
+*/
+template <class Refine>
+bool refineAdaptive(const RefineContext &c, cv::Point2d &q, double sigma_max, Refine refine) {
+  std::vector<double> ladder;
+  for (double s = sigma_max; s >= 1.0 - 1e-9; s /= std::sqrt(2.0))
+    ladder.push_back(s);
+  if (ladder.empty())
+    ladder.push_back(sigma_max);
+  std::reverse(ladder.begin(), ladder.end());
+  cv::Point2d cur = q, best;
+  bool have = false;
+  double amin = std::numeric_limits<double>::infinity();
+  for (double s : ladder) {
+    cv::Point2d p = cur;
+    if (!refine(c, p, s))
+      break;
+    const double a = asymmetry(c, p, s);
+    if (a < 0)
+      break;
+    if (have && a > 1.3 * amin + 0.01)
+      break;
+    amin = std::min(amin, a);
+    best = p;
+    cur = p;
+    have = true;
+  }
+  if (!have)
+    return false;
+  q = best;
+  return true;
+}
+
 /*! \brief One corner by an iterated Gaussian-weighted quadratic (saddle) fit; false when it fails. */
 bool refineSaddle(const RefineContext &c, cv::Point2d &q, double sigma) {
   const int R = static_cast<int>(std::ceil(2.5 * sigma));
@@ -167,7 +251,9 @@ void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corn
     throw Error("refineChessboardCorners: the corner spacing must be > 0");
   const double max_move = 0.25 * spacing_px;
   if (method == CornerRefinement::OpenCV) {
-    const int half = window > 0 ? window : std::clamp(static_cast<int>(std::lround(0.4 * spacing_px)), 2, 15);
+    // At most 11 x 11: a window past half the spacing reaches beyond the narrow outer squares many
+    // printed boards have, and drags the outer corners by pixels.
+    const int half = window > 0 ? window : std::clamp(static_cast<int>(std::lround(0.2 * spacing_px)), 2, 5);
     std::vector<cv::Point2f> pts;
     pts.reserve(corners.size());
     for (const auto &p : corners)
@@ -189,7 +275,8 @@ void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corn
   }
   for (auto &p : corners) {
     cv::Point2d q = p;
-    const bool ok = method == CornerRefinement::Gradient ? refineGradient(c, q, sigma) : refineSaddle(c, q, sigma);
+    const auto one = method == CornerRefinement::Gradient ? refineGradient : refineSaddle;
+    const bool ok = window > 0 ? one(c, q, sigma) : refineAdaptive(c, q, sigma, one);
     if (ok && std::hypot(q.x - p.x, q.y - p.y) <= max_move)
       p = q;
   }

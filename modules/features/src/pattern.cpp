@@ -255,6 +255,8 @@ void checkLayout(const BoardLayout &b) {
   if (b.pattern.kind == PatternSpec::Kind::Chessboard) {
     if (b.pattern.cols < 1 || b.pattern.rows < 1 || !(b.pattern.square > 0))
       throw Error("board: invalid chessboard " + b.pattern.toString());
+    if (!(b.outer_square >= 0 && b.outer_square <= b.pattern.square))
+      throw Error("board: the outer squares' width must be 0 (full) to one square");
   } else {
     if (!(b.pattern.tag_size > 0) || b.tags_x < 1 || b.tags_y < 1 || !(b.gap >= 0) || b.first_tag_id < 0)
       throw Error("board: invalid AprilTag layout (tag size > 0, tags_x, tags_y >= 1, gap >= 0, first id >= 0)");
@@ -300,8 +302,8 @@ Eigen::Vector4d BoardLayout::extent() const {
   checkLayout(*this);
   const double m = boardMargin(*this);
   if (pattern.kind == PatternSpec::Kind::Chessboard) {
-    const double s = pattern.square;
-    return Eigen::Vector4d(-s - m, -s - m, pattern.cols * s + m, pattern.rows * s + m);
+    const double s = pattern.square, o = outer_square > 0 ? outer_square : s;
+    return Eigen::Vector4d(-o - m, -o - m, (pattern.cols - 1) * s + o + m, (pattern.rows - 1) * s + o + m);
   }
   const double pitch = pattern.tag_size + gap;
   return Eigen::Vector4d(-m, -m, tags_x * pitch - gap + m, tags_y * pitch - gap + m);
@@ -311,11 +313,12 @@ double BoardLayout::reflectance(double X, double Y) const {
   if (!std::isfinite(X) || !std::isfinite(Y))
     return -1;
   if (pattern.kind == PatternSpec::Kind::Chessboard) {
-    const double s = pattern.square;
+    const double s = pattern.square, o = outer_square > 0 ? outer_square : s;
     const double m = margin > 0 ? margin : s;
-    if (X < -s - m || Y < -s - m || X > pattern.cols * s + m || Y > pattern.rows * s + m)
+    const double xmax = (pattern.cols - 1) * s + o, ymax = (pattern.rows - 1) * s + o;
+    if (X < -o - m || Y < -o - m || X > xmax + m || Y > ymax + m)
       return -1;
-    if (X < -s || Y < -s || X >= pattern.cols * s || Y >= pattern.rows * s)
+    if (X < -o || Y < -o || X >= xmax || Y >= ymax)
       return 1; // white margin
     const long i = static_cast<long>(std::floor(X / s)), j = static_cast<long>(std::floor(Y / s));
     return ((i + j) % 2 == 0) ? 0.0 : 1.0; // square (-1, -1) beyond corner 0 is black

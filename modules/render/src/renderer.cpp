@@ -2,7 +2,7 @@
   \file renderer.cpp
   \brief renderBoard(): exact back-projection of every pixel through the camera's distortion onto the
   board plane, anti-aliasing by supersampling the pixel's footprint where it straddles an edge,
-  then optional Gaussian blur and noise.
+  then what makes it a photograph (light, defocus, mosaic, noise, response curve, JPEG), each optional.
 */
 #include <yawdepth/render/renderer.h>
 
@@ -14,6 +14,7 @@
 #include <random>
 #include <vector>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <yawdepth/error.h>
 
@@ -45,11 +46,15 @@ EdgeGrid makeEdgeGrid(const BoardLayout &board) {
   g.xs = {e[0], e[2]};
   g.ys = {e[1], e[3]};
   if (board.pattern.kind == PatternSpec::Kind::Chessboard) {
-    const double s = board.pattern.square;
-    for (int k = -1; k <= board.pattern.cols; ++k)
+    const double s = board.pattern.square, o = board.outer_square > 0 ? board.outer_square : s;
+    g.xs.push_back(-o);
+    g.ys.push_back(-o);
+    for (int k = 0; k < board.pattern.cols; ++k)
       g.xs.push_back(k * s);
-    for (int k = -1; k <= board.pattern.rows; ++k)
+    for (int k = 0; k < board.pattern.rows; ++k)
       g.ys.push_back(k * s);
+    g.xs.push_back((board.pattern.cols - 1) * s + o);
+    g.ys.push_back((board.pattern.rows - 1) * s + o);
   } else {
     const AprilTagFamilyInfo f = aprilTagFamilyInfo(board.pattern.family);
     const double s = board.pattern.tag_size, pitch = s + board.gap, cell = s / f.width_at_border;
@@ -151,7 +156,168 @@ void checkRenderOptions(const CameraModel &camera, const RenderOptions &o) {
     throw Error("render: noise sigma must be finite and >= 0");
   if (!std::isfinite(o.black) || !std::isfinite(o.white) || !std::isfinite(o.background))
     throw Error("render: gray levels must be finite");
+  if (!(o.light_gradient >= 0 && o.light_gradient <= 1) || !std::isfinite(o.light_angle))
+    throw Error("render: the light gradient must be 0 to 1 (and its angle finite)");
+  if (!(o.vignetting >= 0 && o.vignetting <= 1))
+    throw Error("render: vignetting must be 0 to 1");
+  if (!(o.defocus_px >= 0 && o.defocus_px <= 1000))
+    throw Error("render: defocus must be 0 to 1000 px");
+  if (o.defocus_px > 0 && !(o.focus_distance > 0 && std::isfinite(o.focus_distance)))
+    throw Error("render: defocus needs a focus distance > 0 (m)");
+  if (!(o.shot_noise >= 0) || !std::isfinite(o.shot_noise))
+    throw Error("render: shot noise must be finite and >= 0");
+  if (!(o.gamma >= 0.1 && o.gamma <= 10))
+    throw Error("render: gamma must be 0.1 to 10");
+  if (o.jpeg_quality < 0 || o.jpeg_quality > 100)
+    throw Error("render: JPEG quality must be 0 (none) to 100");
 }
+
+RenderOptions photoLikeRenderOptions(double focus_distance) {
+  RenderOptions o;
+  o.blur_sigma_px = 0.6;
+  o.noise_sigma = 1.5;
+  o.light_gradient = 0.3;
+  o.vignetting = 0.35;
+  o.defocus_px = 1.5;
+  o.focus_distance = focus_distance;
+  o.bayer = true;
+  o.shot_noise = 0.15;
+  o.gamma = 2.2;
+  o.jpeg_quality = 85;
+  return o;
+}
+
+namespace {
+
+/*! \brief Blur sigma (px) of each pixel: optical blur and defocus, added in quadrature. */
+cv::Mat blurSigmas(const cv::Mat &depth, const RenderOptions &o) {
+  cv::Mat sig(depth.size(), CV_32F, cv::Scalar(o.blur_sigma_px));
+  if (!(o.defocus_px > 0))
+    return sig;
+  // The background (no board) gets the optical blur alone.
+  for (int v = 0; v < depth.rows; ++v) {
+    const float *z = depth.ptr<float>(v);
+    float *s = sig.ptr<float>(v);
+    for (int u = 0; u < depth.cols; ++u) {
+      const double d = z[u] > 0 ? o.defocus_px * std::abs(o.focus_distance / z[u] - 1.0) : 0.0;
+      s[u] = static_cast<float>(std::sqrt(o.blur_sigma_px * o.blur_sigma_px + d * d));
+    }
+  }
+  return sig;
+}
+
+/*! \brief Spatially varying Gaussian blur: the image blurred at a ladder of sigmas, each pixel
+    interpolated linearly between the two levels around its own sigma. */
+cv::Mat varyingBlur(const cv::Mat &img, const cv::Mat &sigmas) {
+  double smin = 0, smax = 0;
+  cv::minMaxLoc(sigmas, &smin, &smax);
+  if (!(smax > 0))
+    return img;
+  if (smax - smin < 1e-6) {
+    cv::Mat out;
+    cv::GaussianBlur(img, out, cv::Size(0, 0), smax, smax, cv::BORDER_REPLICATE);
+    return out;
+  }
+  // levels 0, step, 2 step, ... up to smax (step 0.25 px, at most 64 levels)
+  const double step = std::max(0.25, smax / 64);
+  const int n = static_cast<int>(std::ceil(smax / step)) + 1;
+  std::vector<cv::Mat> levels(static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) {
+    const double s = k * step;
+    if (s < smin - step || s > smax + step)
+      continue;
+    if (s <= 0)
+      levels[static_cast<std::size_t>(k)] = img;
+    else
+      cv::GaussianBlur(img, levels[static_cast<std::size_t>(k)], cv::Size(0, 0), s, s, cv::BORDER_REPLICATE);
+  }
+  cv::Mat out(img.size(), CV_32F);
+  for (int v = 0; v < img.rows; ++v) {
+    const float *sg = sigmas.ptr<float>(v);
+    float *o = out.ptr<float>(v);
+    for (int u = 0; u < img.cols; ++u) {
+      const double t = sg[u] / step;
+      const int k0 = std::min(static_cast<int>(t), n - 1), k1 = std::min(k0 + 1, n - 1);
+      const double a = t - k0;
+      const float f0 = levels[static_cast<std::size_t>(k0)].ptr<float>(v)[u];
+      const float f1 = levels[static_cast<std::size_t>(k1)].empty() ? f0 : levels[static_cast<std::size_t>(k1)].ptr<float>(v)[u];
+      o[u] = static_cast<float>((1 - a) * f0 + a * f1);
+    }
+  }
+  return out;
+}
+
+/*! \brief From the ideal radiance image (gray levels as linear light) to the 8-bit picture:
+    light, blur, mosaic, noise, demosaicing, response curve, rounding, JPEG (RenderOptions). */
+cv::Mat finishImage(cv::Mat img, const cv::Mat &depth, const RenderOptions &o) {
+  const int W = img.cols, H = img.rows;
+  if (o.light_gradient > 0 || o.vignetting > 0) {
+    const double cu = 0.5 * (W - 1), cv_ = 0.5 * (H - 1), r2max = cu * cu + cv_ * cv_;
+    const double ca = std::cos(o.light_angle), sa = std::sin(o.light_angle);
+    const double extent = std::abs(ca) * W + std::abs(sa) * H; // the image's length along the gradient
+    for (int v = 0; v < H; ++v) {
+      float *row = img.ptr<float>(v);
+      for (int u = 0; u < W; ++u) {
+        const double du = u - cu, dv = v - cv_;
+        const double along = (du * ca + dv * sa) / extent; // -1/2 .. 1/2 across the image
+        const double light = (1 + o.light_gradient * along) * (1 - o.vignetting * (du * du + dv * dv) / r2max);
+        row[u] = static_cast<float>(row[u] * light);
+      }
+    }
+  }
+  img = varyingBlur(img, blurSigmas(depth, o));
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  // Bayer RGGB: raw level of each pixel = its channel's sensitivity x the light; white balance
+  // after demosaicing divides it back, so the noise differs per channel as in a camera.
+  const double sens[3] = {0.55, 1.0, 0.75}; // R, G, B
+  auto channel = [](int u, int v) { return (v % 2 == 0) ? (u % 2 == 0 ? 0 : 1) : (u % 2 == 0 ? 1 : 2); };
+  if (o.noise_sigma > 0 || o.shot_noise > 0 || o.bayer) {
+    for (int v = 0; v < H; ++v) {
+      float *row = img.ptr<float>(v);
+      for (int u = 0; u < W; ++u) {
+        const double s = o.bayer ? sens[channel(u, v)] : 1.0;
+        const double raw = row[u] * s;
+        const double sd = std::sqrt(o.noise_sigma * o.noise_sigma + o.shot_noise * std::max(raw, 0.0));
+        row[u] = static_cast<float>(sd > 0 ? raw + sd * gauss(rng) : raw);
+      }
+    }
+  }
+  if (o.bayer) {
+    cv::Mat raw8;
+    img.convertTo(raw8, CV_8U); // the sensor's 8-bit raw
+    cv::Mat bgr;
+    // OpenCV names Bayer patterns by the second row's first two pixels: RGGB is "BayerBG".
+    cv::demosaicing(raw8, bgr, cv::COLOR_BayerBG2BGR);
+    std::vector<cv::Mat> ch;
+    cv::split(bgr, ch);
+    cv::Mat b, g, r;
+    ch[0].convertTo(b, CV_32F, 1.0 / sens[2]);
+    ch[1].convertTo(g, CV_32F, 1.0 / sens[1]);
+    ch[2].convertTo(r, CV_32F, 1.0 / sens[0]);
+    img = 0.299 * r + 0.587 * g + 0.114 * b;
+  }
+  if (o.gamma != 1) {
+    const double inv = 1.0 / o.gamma;
+    for (int v = 0; v < H; ++v) {
+      float *row = img.ptr<float>(v);
+      for (int u = 0; u < W; ++u)
+        row[u] = static_cast<float>(255.0 * std::pow(std::clamp(row[u] / 255.0, 0.0, 1.0), inv));
+    }
+  }
+  cv::Mat out;
+  img.convertTo(out, CV_8U); // rounds and saturates to 0..255
+  if (o.jpeg_quality > 0) {
+    std::vector<uchar> buf;
+    cv::imencode(".jpg", out, buf, {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality});
+    out = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
+    if (out.empty())
+      throw Error("render: JPEG round trip failed");
+  }
+  return out;
+}
+
+} // namespace
 
 cv::Mat renderBoard(const CameraModel &camera, const YawRig &rig, const MotionSample &sample,
                     const BoardLayout &board, const Eigen::Isometry3d &wMb, const RenderOptions &options) {
@@ -177,6 +343,7 @@ cv::Mat renderBoard(const CameraModel &camera, const YawRig &rig, const MotionSa
   auto gray = [&](double rho) { return rho < 0 ? bg : black + (white - black) * rho; };
 
   cv::Mat img(H, W, CV_32F);
+  cv::Mat depth(H, W, CV_32F, cv::Scalar(0)); // camera Z of the board at each pixel; 0 = background
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range &range) {
     for (int v = range.start; v < range.end; ++v) {
       float *row = img.ptr<float>(v);
@@ -193,6 +360,7 @@ cv::Mat renderBoard(const CameraModel &camera, const YawRig &rig, const MotionSa
         const double s = -o.z() / r.z(); // ray parameter (depth along the ray, camera Z units)
         if (!(s > 0) || !std::isfinite(s))
           continue;
+        depth.ptr<float>(v)[u] = static_cast<float>(s);
         const Eigen::Vector2d P = (o + s * r).head<2>();
         // Board point as a function of (x, y): dP/dm_i = s (R_i - r R_iz / r_z), then the pixel
         // footprint's affine map A = dP/dm * dm/duv.
@@ -221,20 +389,7 @@ cv::Mat renderBoard(const CameraModel &camera, const YawRig &rig, const MotionSa
     }
   });
 
-  if (options.blur_sigma_px > 0)
-    cv::GaussianBlur(img, img, cv::Size(0, 0), options.blur_sigma_px, options.blur_sigma_px, cv::BORDER_REPLICATE);
-  if (options.noise_sigma > 0) {
-    std::mt19937_64 rng(options.seed);
-    std::normal_distribution<double> noise(0.0, options.noise_sigma);
-    for (int v = 0; v < H; ++v) {
-      float *row = img.ptr<float>(v);
-      for (int u = 0; u < W; ++u)
-        row[u] = static_cast<float>(row[u] + noise(rng));
-    }
-  }
-  cv::Mat out;
-  img.convertTo(out, CV_8U); // rounds and saturates to 0..255
-  return out;
+  return finishImage(img, depth, options);
 }
 
 } // namespace yawdepth

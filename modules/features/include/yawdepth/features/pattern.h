@@ -102,6 +102,9 @@ struct BoardLayout {
   double gap = 0;             //!< AprilTag spacing between tags (m)
   int first_tag_id = 0;       //!< AprilTag id of the first tag (row 0, column 0)
   double margin = 0;          //!< White margin around the pattern (m); 0 = one square / the bitmap's ring + one cell
+  /*! Chessboard: width of the outer row and column of squares, around the inner corners (m); 0 = a
+      full square. Many printed boards cut them narrower (OpenCV's sample board: about half). */
+  double outer_square = 0;
 
   /*! \brief Every feature of the board: its id and position in the board frame (m). */
   std::vector<std::pair<long, Eigen::Vector3d>> features() const;

@@ -40,12 +40,37 @@ struct RenderOptions {
     gray level of the board's white parts
   */
   std::uint64_t seed = 1;      //!< noise seed
+
+  /*! \name What makes a render look like a photograph (all off by default)
+      Applied in this order, the gray levels above taken as linear light (0..255):
+      light gradient and vignetting, defocus that grows with the distance to the focused depth (and
+      `blur_sigma_px`), the Bayer mosaic (RGGB, per-channel sensitivity 0.55 / 1 / 0.75), noise
+      (Gaussian `noise_sigma` plus shot noise of variance `shot_noise` times the raw level),
+      bilinear demosaicing and white balance, the response curve (`gamma`), 8-bit rounding and JPEG. */
+  //!@{
+  double light_gradient = 0;   //!< relative change of the light across the image, along `light_angle` (0..1)
+  double light_angle = 0.5;    //!< direction of the light gradient in the image (rad from +u)
+  double vignetting = 0;       //!< relative fall-off of the light at the image corners, quadratic in the radius (0..1)
+  double defocus_px = 0;       //!< defocus blur sigma (px) = defocus_px x |focus_distance / Z - 1|; 0 = none
+  double focus_distance = 0;   //!< depth in focus (camera Z, m); needed when `defocus_px` > 0
+  bool bayer = false;          //!< Bayer mosaic (RGGB) and OpenCV's bilinear demosaicing
+  double shot_noise = 0;       //!< shot noise: variance (gray levels^2) per gray level of raw signal
+  double gamma = 1;            //!< response curve: out = 255 (in / 255)^(1 / gamma); 1 = linear
+  int jpeg_quality = 0;        //!< JPEG round trip at this quality (1..100); 0 = none
+  //!@}
 };
+
+/*! \brief Options that make renders look like photographs from a consumer camera: light gradient
+    0.3, vignetting 0.35, defocus 1.5 px focused at `focus_distance`, Bayer, noise 1.5 + shot noise
+    0.15, gamma 2.2, JPEG 85, optical blur 0.6 px. \param focus_distance Depth in focus (m). */
+RenderOptions photoLikeRenderOptions(double focus_distance);
 
 /*!
   \brief Throws yawdepth::Error when renderBoard() would refuse `camera` or `options` (no image size,
-  an image over 20000 px a side, supersampling outside 1..64, blur outside 0..1000 px, negative or
-  non-finite noise or gray levels): for a check before any file is written.
+  an image over 20000 px a side, supersampling outside 1..64, blur or defocus outside 0..1000 px,
+  negative or non-finite noise or gray levels, light gradient or vignetting outside 0..1, gamma
+  outside 0.1..10, JPEG quality outside 0..100, defocus without a focus distance): for a check
+  before any file is written.
   \param camera The camera. \param options The options.
 */
 void checkRenderOptions(const CameraModel &camera, const RenderOptions &options);

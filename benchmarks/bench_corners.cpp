@@ -1,0 +1,395 @@
+/*!
+  \file bench_corners.cpp
+  \brief Corner accuracy on real photographs (and photo-like renders) without ground truth:
+  yawdepth's detector beside OpenCV's cornerSubPix and findChessboardCornersSB, and the
+  calibration each gives, side by side, per image set.
+
+  Metrics (all in the undistorted image of the set's reference camera, px):
+  - homography RMS: the corners of a planar board, undistorted, fit one homography per image; the
+    residual per coordinate, sqrt(SSE / (2N - 8)), measures corner noise without ground truth.
+  - straightness: RMS distance of each board row's and column's corners to their own fitted line,
+    sqrt(SSE / (N_line - 2)) pooled.
+  The reference camera of a set is OpenCV's calibrateCamera (k1 k2 p1 p2 k3) on the corners of
+  the peer pipeline (findChessboardCorners + cornerSubPix 11x11), so it favours no yawdepth method;
+  any error it leaves is common to every column.
+  Calibration: every method's corners calibrated by OpenCV (5 coefficients) and by yawdepth's
+  calibrateCamera; RMS reprojection error and leave-one-view-out error (each view predicted from a
+  calibration without it, its pose from PnP on its own corners: px per coordinate).
+
+  Usage: bench_corners [--franka DIR] [--renders N] [--csv]
+*/
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <yawdepth/features/detector.h>
+#include <yawdepth/features/pattern.h>
+#include <yawdepth/render/renderer.h>
+#include <random>
+#include <cstdlib>
+
+#include "corner_metrics.h"
+
+using namespace yawdepth;
+using namespace yawdepth::bench;
+
+namespace {
+
+struct ImageSet {
+  std::string name;
+  std::vector<std::string> names;
+  std::vector<cv::Mat> images;
+  int cols = 0, rows = 0;
+  double square = 0;
+  /*! renders only: the true (distorted) pixel of every corner, board row-major, per image */
+  std::vector<std::vector<cv::Point2f>> truth;
+  cv::Mat K, D; //!< renders only: the true camera (OpenCV form)
+};
+
+
+struct Method {
+  std::string name;
+  bool yawdepth = false;
+  CornerRefinement refinement = CornerRefinement::Gradient;
+  int window = 0;
+};
+
+/*! yawdepth's corners, put back in the board's row-major order (board ids are row-major). */
+Corners yawdepthCorners(const cv::Mat &gray, const ImageSet &set, const Method &m) {
+  DetectorOptions o;
+  o.refinement = m.refinement;
+  o.subpixel_window = m.window;
+  PatternDetector det(PatternSpec::parse("chessboard:" + std::to_string(set.cols) + "x" + std::to_string(set.rows) +
+                                         ":" + std::to_string(set.square)),
+                      o);
+  const FrameDetection d = det.detect(gray, 0);
+  if (!d.found)
+    return {};
+  Corners c(static_cast<std::size_t>(set.cols) * set.rows, cv::Point2f(-1, -1));
+  for (const auto &f : d.features)
+    if (f.id >= 0 && f.id < static_cast<long>(c.size()))
+      c[f.id] = cv::Point2f(static_cast<float>(f.u), static_cast<float>(f.v));
+  return c;
+}
+
+/*! Board points (z = 0) in the same row-major order as `corners`: the order of the detected grid is
+    the same for every method only up to the grid's symmetries, so each method's corners are
+    matched to the reference by nearest pixel. */
+std::vector<cv::Point3f> boardPoints(const ImageSet &s) {
+  std::vector<cv::Point3f> b;
+  for (int r = 0; r < s.rows; ++r)
+    for (int c = 0; c < s.cols; ++c)
+      b.emplace_back(static_cast<float>(c * s.square), static_cast<float>(r * s.square), 0.f);
+  return b;
+}
+
+struct Calib {
+  double rms = 0, loo = 0, fx = 0;
+  bool ok = false;
+};
+
+/*! OpenCV calibration of one method's corners (k1 k2 p1 p2 k3) and its leave-one-view-out error. */
+Calib opencvCalib(const std::vector<Corners> &views, const ImageSet &s, cv::Size size, int flags) {
+  std::vector<std::vector<cv::Point3f>> obj;
+  std::vector<Corners> img;
+  for (const auto &v : views)
+    if (!v.empty()) {
+      obj.push_back(boardPoints(s));
+      img.push_back(v);
+    }
+  Calib c;
+  if (img.size() < 4)
+    return c;
+  cv::Mat K, D;
+  std::vector<cv::Mat> rv, tv;
+  c.rms = cv::calibrateCamera(obj, img, size, K, D, rv, tv, flags);
+  c.fx = K.at<double>(0, 0);
+  double sse = 0;
+  long n = 0;
+  for (std::size_t k = 0; k < img.size(); ++k) {
+    std::vector<std::vector<cv::Point3f>> o2;
+    std::vector<Corners> i2;
+    for (std::size_t j = 0; j < img.size(); ++j)
+      if (j != k) {
+        o2.push_back(obj[j]);
+        i2.push_back(img[j]);
+      }
+    cv::Mat K2, D2, r, t;
+    std::vector<cv::Mat> rv2, tv2;
+    cv::calibrateCamera(o2, i2, size, K2, D2, rv2, tv2, flags);
+    cv::solvePnP(obj[k], img[k], K2, D2, r, t, false, cv::SOLVEPNP_ITERATIVE);
+    Corners proj;
+    cv::projectPoints(obj[k], r, t, K2, D2, proj);
+    for (std::size_t i = 0; i < proj.size(); ++i) {
+      const cv::Point2f e = proj[i] - img[k][i];
+      sse += e.dot(e);
+    }
+    n += static_cast<long>(proj.size());
+  }
+  c.loo = std::sqrt(sse / n); // per point, as calibrateCamera's RMS
+  c.ok = true;
+  return c;
+}
+
+bool loadSet(ImageSet &s, const std::vector<std::string> &paths) {
+  for (const auto &p : paths) {
+    cv::Mat m = cv::imread(p, cv::IMREAD_GRAYSCALE);
+    if (m.empty()) {
+      std::fprintf(stderr, "bench_corners: cannot read %s\n", p.c_str());
+      return false;
+    }
+    s.names.push_back(p.substr(p.find_last_of('/') + 1));
+    s.images.push_back(m);
+  }
+  return true;
+}
+
+void runChessboardSet(const ImageSet &s, const std::vector<Method> &methods) {
+  const std::size_t nm = methods.size();
+  std::vector<std::vector<Corners>> corners(nm, std::vector<Corners>(s.images.size()));
+  for (std::size_t i = 0; i < s.images.size(); ++i) {
+    const cv::Mat &g = s.images[i];
+    for (std::size_t m = 0; m < nm; ++m) {
+      const Method &me = methods[m];
+      if (me.yawdepth)
+        corners[m][i] = yawdepthCorners(g, s, me);
+      else if (me.window > 0)
+        corners[m][i] = opencvSubPix(g, s.cols, s.rows, me.window);
+      else
+        corners[m][i] = opencvSB(g, s.cols, s.rows);
+    }
+    if (getenv("DEBUG_CORNERS")) {
+      cv::Mat col;
+      cv::cvtColor(g, col, cv::COLOR_GRAY2BGR);
+      for (std::size_t m = 0; m < nm; ++m) {
+        std::printf("%s %s: %zu corners\n", s.names[i].c_str(), methods[m].name.c_str(), corners[m][i].size());
+        if (m == 2)
+          for (std::size_t k = 0; k < corners[m][i].size(); ++k) {
+            double best = 1e9;
+            for (const auto &q : corners[0][i])
+              best = std::min(best, (double)cv::norm(q - corners[m][i][k]));
+            if (best > 0.3)
+              std::printf("   corner %zu at (%.1f %.1f) %.2f px from cornerSubPix\n", k, corners[m][i][k].x,
+                          corners[m][i][k].y, best);
+          }
+      }
+      for (const auto &q : corners[0][i])
+        cv::circle(col, q, 3, cv::Scalar(0, 255, 0));
+      for (const auto &q : corners[2][i])
+        cv::drawMarker(col, q, cv::Scalar(0, 0, 255), cv::MARKER_CROSS, 8);
+      cv::imwrite("/tmp/dbg_" + std::to_string(i) + ".png", col);
+    }
+    // one order for all: the truth's (board row-major), else the reference method's (index 0)
+    if (!s.truth.empty()) {
+      for (std::size_t m = 0; m < nm; ++m)
+        if (!matchOrder(s.truth[i], corners[m][i]))
+          corners[m][i].clear();
+    } else {
+      for (std::size_t m = 1; m < nm; ++m)
+        if (!corners[0][i].empty() && !matchOrder(corners[0][i], corners[m][i]))
+          corners[m][i].clear();
+    }
+  }
+  const cv::Size size = s.images[0].size();
+  // Reference camera: method 0 (the peer pipeline), 5 coefficients.
+  std::vector<std::vector<cv::Point3f>> obj;
+  std::vector<Corners> img;
+  for (const auto &v : corners[0])
+    if (!v.empty()) {
+      obj.push_back(boardPoints(s));
+      img.push_back(v);
+    }
+  if (img.size() < 4) {
+    std::printf("%s: fewer than 4 images with the board, skipped\n", s.name.c_str());
+    return;
+  }
+  cv::Mat K, D;
+  std::vector<cv::Mat> rv, tv;
+  std::printf("\n## %s: %zu images %dx%d, chessboard %dx%d\n", s.name.c_str(), s.images.size(), size.width,
+              size.height, s.cols, s.rows);
+  if (!s.K.empty()) {
+    K = s.K;
+    D = s.D;
+    std::printf("reference camera: the true one, fx %.2f\n", K.at<double>(0, 0));
+  } else {
+    cv::calibrateCamera(obj, img, size, K, D, rv, tv, 0);
+    std::printf("reference camera (OpenCV, %s corners): fx %.2f fy %.2f u0 %.2f v0 %.2f k1 %.4f k2 %.4f\n",
+                methods[0].name.c_str(), K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2),
+                K.at<double>(1, 2), D.at<double>(0), D.at<double>(1));
+  }
+  std::printf("%-26s %5s %10s %10s %10s %9s %9s %9s %9s %9s\n", "method", "found", "H-rms med", "H-rms max", "straight",
+              "H+smooth", "calib rms", "LOO", "fx", "truth rms");
+  for (std::size_t m = 0; m < nm; ++m) {
+    std::vector<double> h, st, sm;
+    int found = 0;
+    double tsse = 0;
+    long tn = 0;
+    for (std::size_t i = 0; i < s.images.size(); ++i) {
+      if (corners[m][i].empty())
+        continue;
+      ++found;
+      if (!s.truth.empty())
+        for (std::size_t k = 0; k < s.truth[i].size(); ++k) {
+          const cv::Point2f e = corners[m][i][k] - s.truth[i][k];
+          tsse += e.dot(e);
+          tn += 2;
+        }
+      const Fit f = planarFit(corners[m][i], s.cols, s.rows, K, D);
+      h.push_back(f.h_rms);
+      st.push_back(f.straight);
+      sm.push_back(f.smooth_rms);
+    }
+    const Calib c = opencvCalib(corners[m], s, size, 0);
+    std::printf("%-26s %2d/%-2zu %10.4f %10.4f %10.4f %9.4f %9.4f %9.4f %9.2f %9.4f\n", methods[m].name.c_str(), found,
+                s.images.size(), median(h), h.empty() ? NAN : *std::max_element(h.begin(), h.end()), median(st), median(sm), c.rms,
+                c.loo, c.fx, tn ? std::sqrt(tsse / tn) : NAN);
+  }
+}
+
+/*! Photo-like renders of a 9x6 board (25 mm) through a wide lens with strong barrel distortion:
+    seeded random poses, every corner inside the image, truth from the exact projection. */
+ImageSet photoRenders(int count, std::uint64_t seed, bool photo) {
+  ImageSet s;
+  s.name = photo ? "photo-like renders (wide lens, JPEG 85, gamma, vignetting, Bayer, defocus, narrow outer squares)"
+                 : "ideal renders (wide lens, blur 0.7, noise 2)";
+  s.cols = 9;
+  s.rows = 6;
+  s.square = 0.025;
+  const CameraModel cam = CameraModel::brown(600.0, 602.0, 322.5, 238.0, {-0.28, 0.09, 0.0005, -0.0003, -0.012}, 640, 480);
+  s.K = (cv::Mat_<double>(3, 3) << 600.0, 0, 322.5, 0, 602.0, 238.0, 0, 0, 1);
+  s.D = (cv::Mat_<double>(1, 5) << -0.28, 0.09, 0.0005, -0.0003, -0.012);
+  BoardLayout board;
+  board.pattern = PatternSpec::parse("chessboard:9x6:0.025");
+  if (photo)
+    board.outer_square = 0.45 * board.pattern.square; // narrow outer squares, as many printed boards
+  const YawRig rig(Eigen::Vector3d::Zero());
+  const MotionSample sample;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const Eigen::Vector4d e = board.extent();
+  const Eigen::Vector3d centre(0.5 * (e[0] + e[2]), 0.5 * (e[1] + e[3]), 0.0);
+  const double deg = M_PI / 180;
+  int attempts = 0;
+  while (static_cast<int>(s.images.size()) < count && attempts++ < 1000) {
+    const double depth = 0.3 + 0.35 * U(rng);
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd((U(rng) - 0.5) * 30 * deg, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd((U(rng) - 0.5) * 80 * deg, Eigen::Vector3d::UnitX()) *
+                               Eigen::AngleAxisd((U(rng) - 0.5) * 80 * deg, Eigen::Vector3d::UnitY()))
+                                  .toRotationMatrix();
+    Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity();
+    cMb.linear() = R;
+    cMb.translation() = Eigen::Vector3d((U(rng) - 0.5) * 0.3 * depth, (U(rng) - 0.5) * 0.2 * depth, depth) - R * centre;
+    std::vector<cv::Point2f> t;
+    bool inside = true;
+    for (int r = 0; r < s.rows && inside; ++r)
+      for (int c = 0; c < s.cols && inside; ++c) {
+        const Eigen::Vector3d p = cMb * Eigen::Vector3d(c * s.square, r * s.square, 0);
+        if (!(p.z() > 0)) {
+          inside = false;
+          break;
+        }
+        const Eigen::Vector2d uv = cam.project(Eigen::Vector2d(p.x() / p.z(), p.y() / p.z()));
+        inside = uv.x() > 30 && uv.y() > 30 && uv.x() < 610 && uv.y() < 450;
+        t.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()));
+      }
+    if (!inside)
+      continue;
+    RenderOptions o;
+    if (photo) {
+      o = photoLikeRenderOptions(depth);
+      o.light_angle = U(rng) * 2 * M_PI;
+    } else {
+      o.blur_sigma_px = 0.7;
+      o.noise_sigma = 2;
+    }
+    o.seed = seed * 1000 + s.images.size();
+    // board ids are row-major from the board's origin; the board frame is wMb with the camera at
+    // the world origin (rig without offset, zero motion sample)
+    s.images.push_back(renderBoard(cam, rig, sample, board, cMb, o));
+    s.names.push_back("render " + std::to_string(s.images.size()));
+    s.truth.push_back(t);
+  }
+  return s;
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+  std::string franka = "../shared/data/franka-eye-in-hand";
+  int renders = 12;
+  std::vector<std::string> extra;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--franka" && i + 1 < argc)
+      franka = argv[++i];
+    else if (a == "--set" && i + 1 < argc)
+      extra.push_back(argv[++i]);
+    else if (a == "--renders" && i + 1 < argc)
+      renders = std::atoi(argv[++i]);
+    else {
+      std::fprintf(stderr, "usage: bench_corners [--franka DIR]\n");
+      return 2;
+    }
+  }
+  std::vector<Method> methods = {
+      {"cornerSubPix 11x11", false, CornerRefinement::OpenCV, 5},
+      {"SB+ACCURACY", false, CornerRefinement::None, 0},
+      {"yawdepth gradient", true, CornerRefinement::Gradient, 0},
+      {"yawdepth saddle", true, CornerRefinement::Saddle, 0},
+      {"yawdepth cornerSubPix", true, CornerRefinement::OpenCV, 0},
+  };
+  if (getenv("SWEEP")) for (int w : {2, 3, 4, 6, 8, 10, 14, 20}) {
+    methods.push_back({"gradient w" + std::to_string(w), true, CornerRefinement::Gradient, w});
+    methods.push_back({"cornerSubPix w" + std::to_string(w), false, CornerRefinement::OpenCV, w});
+  }
+  for (const auto &spec : extra) {
+    // NAME:COLSxROWS:SQUARE:FILE[,FILE...]
+    ImageSet x;
+    std::vector<std::string> parts;
+    std::size_t a = 0;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t b = spec.find(':', a);
+      if (b == std::string::npos) {
+        std::fprintf(stderr, "bench_corners: --set NAME:COLSxROWS:SQUARE:FILE,FILE,... expected\n");
+        return 2;
+      }
+      parts.push_back(spec.substr(a, b - a));
+      a = b + 1;
+    }
+    x.name = parts[0] + " (real)";
+    if (std::sscanf(parts[1].c_str(), "%dx%d", &x.cols, &x.rows) != 2 || x.cols < 3 || x.rows < 3 ||
+        !(std::atof(parts[2].c_str()) > 0)) {
+      std::fprintf(stderr, "bench_corners: bad set '%s'\n", spec.c_str());
+      return 2;
+    }
+    x.square = std::atof(parts[2].c_str());
+    std::vector<std::string> files;
+    std::string rest = spec.substr(a);
+    for (std::size_t b; (b = rest.find(',')) != std::string::npos; rest = rest.substr(b + 1))
+      files.push_back(rest.substr(0, b));
+    files.push_back(rest);
+    if (!loadSet(x, files))
+      return 1;
+    runChessboardSet(x, methods);
+  }
+  ImageSet f;
+  f.name = "franka-eye-in-hand (real)";
+  f.cols = 9;
+  f.rows = 6;
+  f.square = 0.0236;
+  std::vector<std::string> paths;
+  for (int k = 1; k <= 8; ++k)
+    paths.push_back(franka + "/franka_image-" + std::to_string(k) + ".png");
+  if (!loadSet(f, paths))
+    return 1;
+  runChessboardSet(f, methods);
+  runChessboardSet(photoRenders(renders, 11, true), methods);
+  runChessboardSet(photoRenders(renders, 12, false), methods);
+  return 0;
+}

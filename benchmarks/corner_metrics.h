@@ -1,0 +1,156 @@
+#pragma once
+/*!
+  \file corner_metrics.h
+  \brief Corner accuracy without ground truth (homography fit and straightness of a planar board's
+  corners in the undistorted image) and the stock-OpenCV peer pipelines; shared by bench_corners
+  and the tests.
+*/
+#include <algorithm>
+#include <cmath>
+#include <vector>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace yawdepth {
+namespace bench {
+
+/*! Corners of one image, row-major over the board's grid; empty when not found. */
+using Corners = std::vector<cv::Point2f>;
+
+/*! \brief Median (NaN when empty). */
+inline double median(std::vector<double> v) {
+  if (v.empty())
+    return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+
+/*! The peer pipelines: what a user of stock OpenCV would write. */
+inline Corners opencvSubPix(const cv::Mat &gray, int cols, int rows, int half) {
+  Corners c;
+  if (!cv::findChessboardCorners(gray, cv::Size(cols, rows), c, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE))
+    if (!cv::findChessboardCornersSB(gray, cv::Size(cols, rows), c, cv::CALIB_CB_NORMALIZE_IMAGE))
+      return {};
+  cv::cornerSubPix(gray, c, cv::Size(half, half), cv::Size(-1, -1),
+                   cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+  return c;
+}
+
+inline Corners opencvSB(const cv::Mat &gray, int cols, int rows) {
+  Corners c;
+  if (!cv::findChessboardCornersSB(gray, cv::Size(cols, rows), c, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_ACCURACY))
+    return {};
+  return c;
+}
+
+
+/*! \brief Homography RMS, the same less a smooth field, straightness (px). */
+struct Fit {
+  double h_rms = 0, straight = 0, smooth_rms = 0;
+};
+
+/*! Reorder `c` to the order of `ref` (nearest neighbour, each used once); false when it fails. */
+inline bool matchOrder(const Corners &ref, Corners &c) {
+  if (c.size() != ref.size())
+    return false;
+  Corners out(ref.size());
+  std::vector<bool> used(c.size(), false);
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    double best = 1e30;
+    std::size_t bj = 0;
+    for (std::size_t j = 0; j < c.size(); ++j) {
+      const double d = cv::norm(c[j] - ref[i]);
+      if (!used[j] && d < best) {
+        best = d;
+        bj = j;
+      }
+    }
+    if (best > 3.0)
+      return false;
+    used[bj] = true;
+    out[i] = c[bj];
+  }
+  c = out;
+  return true;
+}
+
+
+
+/*!
+  The corners of a planar board (row-major, `cols` per row), undistorted with (K, dist), against
+  one homography: homography RMS per coordinate sqrt(SSE / (2N - 8)), the same less a quadratic
+  field per axis (what a bent sheet or a lens misfit leaves), and row/column straightness.
+*/
+inline Fit planarFit(const Corners &distorted, int cols, int rows, const cv::Mat &K, const cv::Mat &dist) {
+  struct {
+    int cols, rows;
+  } s{cols, rows};
+  Corners und;
+  cv::undistortPoints(distorted, und, K, dist, cv::noArray(), K);
+  std::vector<cv::Point2f> board;
+  for (int r = 0; r < s.rows; ++r)
+    for (int c = 0; c < s.cols; ++c)
+      board.emplace_back(static_cast<float>(c), static_cast<float>(r));
+  const cv::Mat H = cv::findHomography(board, und, 0);
+  Fit f;
+  std::vector<cv::Point2f> proj;
+  cv::perspectiveTransform(board, proj, H);
+  double sse = 0;
+  for (std::size_t i = 0; i < und.size(); ++i) {
+    const cv::Point2f e = proj[i] - und[i];
+    sse += e.dot(e);
+  }
+  f.h_rms = std::sqrt(sse / (2.0 * und.size() - 8));
+  // The same residuals less a smooth field (quadratic in the board coordinates, per axis): what
+  // is left after a bent sheet or a lens model's misfit, i.e. the corners' own noise.
+  {
+    const int n = static_cast<int>(und.size());
+    cv::Mat A(n, 6, CV_64F), bx(n, 1, CV_64F), by(n, 1, CV_64F);
+    const double sc = 1.0 / std::max(s.cols, s.rows);
+    for (int i = 0; i < n; ++i) {
+      const double x = board[i].x * sc, y = board[i].y * sc;
+      const double row[6] = {1, x, y, x * x, x * y, y * y};
+      for (int k = 0; k < 6; ++k)
+        A.at<double>(i, k) = row[k];
+      bx.at<double>(i) = und[i].x - proj[i].x;
+      by.at<double>(i) = und[i].y - proj[i].y;
+    }
+    cv::Mat cx, cy;
+    cv::solve(A, bx, cx, cv::DECOMP_SVD);
+    cv::solve(A, by, cy, cv::DECOMP_SVD);
+    const cv::Mat rx = bx - A * cx, ry = by - A * cy;
+    f.smooth_rms = std::sqrt((rx.dot(rx) + ry.dot(ry)) / (2.0 * n - 8 - 12));
+  }
+  // lines: rows and columns
+  double lsse = 0;
+  int ldof = 0;
+  auto line = [&](std::vector<cv::Point2f> p) {
+    cv::Vec4f l;
+    cv::fitLine(p, l, cv::DIST_L2, 0, 1e-7, 1e-7);
+    for (const auto &q : p) {
+      const double d = (q.x - l[2]) * -l[1] + (q.y - l[3]) * l[0];
+      lsse += d * d;
+    }
+    ldof += static_cast<int>(p.size()) - 2;
+  };
+  for (int r = 0; r < s.rows; ++r) {
+    std::vector<cv::Point2f> p;
+    for (int c = 0; c < s.cols; ++c)
+      p.push_back(und[r * s.cols + c]);
+    line(p);
+  }
+  for (int c = 0; c < s.cols; ++c) {
+    std::vector<cv::Point2f> p;
+    for (int r = 0; r < s.rows; ++r)
+      p.push_back(und[r * s.cols + c]);
+    line(p);
+  }
+  f.straight = std::sqrt(lsse / ldof);
+  return f;
+}
+
+
+} // namespace bench
+} // namespace yawdepth
