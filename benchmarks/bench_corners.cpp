@@ -28,6 +28,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/features/pattern.h>
 #include <yawdepth/render/renderer.h>
@@ -225,6 +226,7 @@ void runChessboardSet(const ImageSet &s, const std::vector<Method> &methods) {
   }
   std::printf("%-26s %5s %10s %10s %10s %9s %9s %9s %9s %9s\n", "method", "found", "H-rms med", "H-rms max", "straight",
               "H+smooth", "calib rms", "LOO", "fx", "truth rms");
+  const std::vector<Corners> *yawdepth_calib_input = nullptr;
   for (std::size_t m = 0; m < nm; ++m) {
     std::vector<double> h, st, sm;
     int found = 0;
@@ -246,9 +248,41 @@ void runChessboardSet(const ImageSet &s, const std::vector<Method> &methods) {
       sm.push_back(f.smooth_rms);
     }
     const Calib c = opencvCalib(corners[m], s, size, 0);
+    if (methods[m].yawdepth && methods[m].refinement == CornerRefinement::Gradient && methods[m].window == 0)
+      yawdepth_calib_input = &corners[m];
     std::printf("%-26s %2d/%-2zu %10.4f %10.4f %10.4f %9.4f %9.4f %9.4f %9.2f %9.4f\n", methods[m].name.c_str(), found,
                 s.images.size(), median(h), h.empty() ? NAN : *std::max_element(h.begin(), h.end()), median(st), median(sm), c.rms,
                 c.loo, c.fx, tn ? std::sqrt(tsse / tn) : NAN);
+  }
+  // yawdepth's own calibration (distortion model chosen on views left out) of its own corners.
+  if (yawdepth_calib_input) {
+    BoardLayout board;
+    board.pattern = PatternSpec::parse("chessboard:" + std::to_string(s.cols) + "x" + std::to_string(s.rows) + ":" +
+                                       std::to_string(s.square));
+    std::vector<CalibrationView> views;
+    for (std::size_t i = 0; i < yawdepth_calib_input->size(); ++i) {
+      const Corners &c = (*yawdepth_calib_input)[i];
+      if (c.empty())
+        continue;
+      CalibrationView v;
+      v.name = s.names[i];
+      for (std::size_t k = 0; k < c.size(); ++k)
+        v.features.push_back(DetectedFeature{static_cast<long>(k), c[k].x, c[k].y});
+      views.push_back(v);
+    }
+    CameraCalibrationOptions o;
+    o.fit_visp = false;
+    try {
+      const CameraCalibration cal = calibrateCamera(board, views, size.width, size.height, o);
+      double heldout = 0;
+      for (const auto &m : cal.models)
+        if (m.chosen)
+          heldout = m.heldout_rms_px;
+      std::printf("%-26s %5s %10s %10s %10s %9s %9.4f %9.4f %9.2f   model %s\n", "yawdepth calibrate-camera", "", "", "",
+                  "", "", cal.rms_px, heldout, cal.camera.kx(), cal.model_reason.c_str());
+    } catch (const std::exception &e) {
+      std::printf("yawdepth calibrate-camera: %s\n", e.what());
+    }
   }
 }
 

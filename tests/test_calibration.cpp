@@ -11,7 +11,9 @@
 #include <random>
 #include <string>
 #include <vector>
+#include <map>
 #include <unistd.h>
+#include <opencv2/calib3d.hpp>
 #include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/calibration/rig_calibration.h>
 #include <yawdepth/camera/camera_file.h>
@@ -172,9 +174,56 @@ TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard
   CHECK(std::abs(c.v0() - t.v0()) < 1.0);
   CHECK(cal.rms_px < 0.08);
   CHECK(cal.views_used == 14);
-  CHECK(cal.std_devs.size() == 9);
+  CHECK(cal.std_devs.size() == 12);
   CHECK(cal.std_devs[0] > 0);
+  // The truth has k1 k2 p1 p2: the held-out comparison keeps the 4-coefficient model.
+  REQUIRE(cal.models.size() == 3);
+  INFO(cal.model_reason);
+  CHECK(cal.models[0].chosen);
   CHECK(cal.std_devs[8] == 0); // k3 fixed
+  for (const auto &m : cal.models) {
+    CHECK(m.heldout_rms_px > 0);
+    CHECK(m.heldout_rms_px >= 0.9 * m.rms_px); // left-out views are not fitted better than fitted ones
+  }
+  // The covariance (poses marginalised) against OpenCV's own standard deviations of the same fit.
+  {
+    std::vector<std::vector<cv::Point3f>> obj;
+    std::vector<std::vector<cv::Point2f>> img;
+    const BoardLayout &b = set.board;
+    const auto features = b.features();
+    const std::map<long, Eigen::Vector3d> pts(features.begin(), features.end());
+    for (const auto &v : det.views) {
+      obj.emplace_back();
+      img.emplace_back();
+      for (const auto &f : v.features) {
+        const Eigen::Vector3d &P = pts.at(f.id);
+        obj.back().emplace_back(static_cast<float>(P.x()), static_cast<float>(P.y()), 0.f);
+        img.back().emplace_back(static_cast<float>(f.u), static_cast<float>(f.v));
+      }
+    }
+    cv::Mat K, D, sdi, sde, pve;
+    std::vector<cv::Mat> rv, tv;
+    cv::calibrateCamera(obj, img, cv::Size(640, 480), K, D, rv, tv, sdi, sde, pve, cv::CALIB_FIX_K3,
+                        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
+    // OpenCV divides the squared residuals (2 per point) by points - parameters, not by
+    // 2 points - parameters: its deviations are sqrt(~2) too large by that factor alone.
+    double n = 0;
+    for (const auto &v : img)
+      n += static_cast<double>(v.size());
+    const double params = 8 + 6.0 * static_cast<double>(img.size());
+    const double opencv_scale = std::sqrt((2 * n - params) / (n - params));
+    for (int i = 0; i < 8; ++i) {
+      INFO("parameter " << i << ": " << cal.std_devs[static_cast<std::size_t>(i)] << " against OpenCV's " << sdi.at<double>(i));
+      CHECK(std::abs(cal.std_devs[static_cast<std::size_t>(i)] * opencv_scale / sdi.at<double>(i) - 1) < 0.01);
+    }
+  }
+  // Projection uncertainty: everywhere finite and positive, small where the corners were.
+  REQUIRE(cal.uncertainty_grid.size() == 48);
+  for (double u : cal.uncertainty_grid) {
+    CHECK(std::isfinite(u));
+    CHECK(u > 0);
+  }
+  CHECK(projectionUncertainty(cal, 320, 240) < 0.05);
   for (const auto &v : cal.views) {
     CHECK_FALSE(v.outlier);
     CHECK(v.tilt > 15 * kDeg);

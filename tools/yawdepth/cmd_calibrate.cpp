@@ -3,6 +3,7 @@
 // several yaw readings.
 #include "commands.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -62,7 +63,7 @@ void addBoardOptions(CLI::App *sub, std::string &tags, double &tag_gap, int &fir
 }
 
 struct CameraArgs {
-  std::string pattern, out, coverage, camera_name = "Camera", tags = "1x1";
+  std::string pattern, out, coverage, camera_name = "Camera", tags = "1x1", distortion = "auto";
   std::vector<std::string> images;
   bool fix_aspect = false, fix_pp = false, drop_outliers = false, k3 = false, zero_tangent = false, quiet = false;
   double tag_gap = -1;
@@ -98,7 +99,12 @@ Runner addCalibrateCamera(CLI::App &app)
                 "Recalibrate without the outlier views (RMS above 3x the median and above 0.5 px)");
   sub->add_option("--coverage", a->coverage, "Coverage picture (default PREFIX_coverage.png)");
   sub->add_option("--camera-name", a->camera_name, "Camera name in the ViSP XML")->capture_default_str();
-  sub->add_flag("--k3", a->k3, "Also estimate k3 (fixed at 0 by default)");
+  sub->add_option("--distortion", a->distortion,
+                  "Distortion model: k4 (k1 k2 p1 p2), k5 (+ k3), k8 (rational, k1..k6 p1 p2), or auto: the one "
+                  "with the least error on views left out")
+      ->check(CLI::IsMember({"auto", "k4", "k5", "k8"}))
+      ->capture_default_str();
+  sub->add_flag("--k3", a->k3, "The same as --distortion k5");
   sub->add_flag("--zero-tangent", a->zero_tangent, "Fix the tangential distortion p1 = p2 = 0");
   sub->add_flag("--quiet", a->quiet, "Print only the RMS reprojection error (and problems on stderr)");
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
@@ -130,7 +136,10 @@ Runner addCalibrateCamera(CLI::App &app)
     opt.fix_aspect_ratio = a->fix_aspect;
     opt.fix_principal_point = a->fix_pp;
     opt.drop_outliers = a->drop_outliers;
-    opt.estimate_k3 = a->k3;
+    using D = CameraCalibrationOptions::Distortion;
+    if (a->k3 && a->distortion != "auto" && a->distortion != "k5")
+      throw Error("--k3 and --distortion " + a->distortion + " contradict each other");
+    opt.distortion = a->k3 || a->distortion == "k5" ? D::K5 : a->distortion == "k4" ? D::K4 : a->distortion == "k8" ? D::K8 : D::Auto;
     opt.zero_tangential = a->zero_tangent;
     const CameraCalibration cal = calibrateCamera(board, det.views, det.width, det.height, opt);
     if (!cal.visp_fitted) {
@@ -174,7 +183,21 @@ Runner addCalibrateCamera(CLI::App &app)
               << (a->fix_pp ? " (fixed)" : "") << "\n"
               << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
               << "  p1 = " << pm(k[2], sd[6], 6) << "   p2 = " << pm(k[3], sd[7], 6) << "\n"
-              << "  k3 = " << pm(k[4], sd[8], 5) << (a->k3 ? "" : " (fixed)") << "\n";
+              << "  k3 = " << pm(k[4], sd[8], 5) << (sd[8] > 0 ? "" : " (fixed)");
+    if (sd[9] > 0)
+      std::cout << "   k4 = " << pm(k[5], sd[9], 5) << "   k5 = " << pm(k[6], sd[10], 5) << "   k6 = " << pm(k[7], sd[11], 5);
+    std::cout << "\n";
+    std::cout << "Distortion model: " << cal.model_reason << "\n";
+    if (cal.models.size() > 1)
+      for (const auto &m : cal.models)
+        std::cout << "  " << (m.chosen ? "* " : "  ") << m.name << ": RMS " << fixed(m.rms_px, 4)
+                  << " px, on views left out " << fixed(m.heldout_rms_px, 4) << " px\n";
+    if (cal.uncertainty_grid.size() == 48) {
+      const double centre = projectionUncertainty(cal, 0.5 * (c.width() - 1), 0.5 * (c.height() - 1));
+      const double worst = *std::max_element(cal.uncertainty_grid.begin(), cal.uncertainty_grid.end());
+      std::cout << "Projection uncertainty (1 sigma, px): " << fixed(centre, 4) << " at the centre, up to "
+                << fixed(worst, 4) << " over an 8 x 6 grid of the image (per cell in the coverage picture)\n";
+    }
     std::cout << "Per view (RMS reprojection error, board tilt):\n";
     for (const auto &v : cal.views) {
       std::cout << "  " << v.name << ": " << v.points << " points";

@@ -13,11 +13,13 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <streambuf>
 #include <sstream>
 #include <unistd.h>
+#include <Eigen/Dense>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -146,6 +148,95 @@ struct OpenCvSolution {
   cv::Mat std_intrinsics;
 };
 
+using Distortion = CameraCalibrationOptions::Distortion;
+
+int coefficientsOf(Distortion d) { return d == Distortion::K8 ? 8 : d == Distortion::K5 ? 5 : 4; }
+
+std::string modelName(Distortion d) {
+  return d == Distortion::K8 ? "k1..k6 p1 p2 (rational)" : d == Distortion::K5 ? "k1 k2 p1 p2 k3" : "k1 k2 p1 p2";
+}
+
+/*! OpenCV flags of a model under the options' other constraints. */
+int modelFlags(Distortion d, const CameraCalibrationOptions &o) {
+  int flags = 0;
+  if (d == Distortion::K4)
+    flags |= cv::CALIB_FIX_K3;
+  if (d == Distortion::K8)
+    flags |= cv::CALIB_RATIONAL_MODEL;
+  if (o.zero_tangential)
+    flags |= cv::CALIB_ZERO_TANGENT_DIST;
+  if (o.fix_aspect_ratio)
+    flags |= cv::CALIB_FIX_ASPECT_RATIO;
+  if (o.fix_principal_point)
+    flags |= cv::CALIB_FIX_PRINCIPAL_POINT;
+  return flags;
+}
+
+/*!
+  The map from the free parameters of a fit to fx fy u0 v0 k1 k2 p1 p2 k3 k4 k5 k6 (12 x free):
+  fixed parameters have zero rows; with a fixed aspect ratio fx = (fx / fy) fy moves with fy.
+*/
+Eigen::MatrixXd freeParameterMap(Distortion d, const CameraCalibrationOptions &o, double aspect) {
+  std::vector<Eigen::VectorXd> cols;
+  auto unit = [](int i) {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(12);
+    e[i] = 1;
+    return e;
+  };
+  if (o.fix_aspect_ratio) {
+    Eigen::VectorXd e = unit(1);
+    e[0] = aspect;
+    cols.push_back(e);
+  } else {
+    cols.push_back(unit(0));
+    cols.push_back(unit(1));
+  }
+  if (!o.fix_principal_point) {
+    cols.push_back(unit(2));
+    cols.push_back(unit(3));
+  }
+  cols.push_back(unit(4));
+  cols.push_back(unit(5));
+  if (!o.zero_tangential) {
+    cols.push_back(unit(6));
+    cols.push_back(unit(7));
+  }
+  if (d != Distortion::K4)
+    cols.push_back(unit(8));
+  if (d == Distortion::K8)
+    for (int i = 9; i < 12; ++i)
+      cols.push_back(unit(i));
+  Eigen::MatrixXd S(12, static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t j = 0; j < cols.size(); ++j)
+    S.col(static_cast<Eigen::Index>(j)) = cols[j];
+  return S;
+}
+
+/*! d(pixel)/d(fx fy u0 v0 k1..k6) (2N x 12) and d(pixel)/d(rvec tvec) (2N x 6) of OpenCV's projection. */
+void projectionJacobians(const std::vector<cv::Point3f> &obj, const cv::Mat &rvec, const cv::Mat &tvec, const cv::Mat &K,
+                         const cv::Mat &dist, Eigen::MatrixXd &Jint, Eigen::MatrixXd &Jpose,
+                         std::vector<cv::Point2d> *proj = nullptr) {
+  std::vector<cv::Point3d> o(obj.begin(), obj.end());
+  std::vector<cv::Point2d> p;
+  cv::Mat J;
+  cv::projectPoints(o, rvec, tvec, K, dist, p, J);
+  const int n = static_cast<int>(o.size());
+  const int nd = static_cast<int>(dist.total());
+  Jint = Eigen::MatrixXd::Zero(2 * n, 12);
+  Jpose = Eigen::MatrixXd::Zero(2 * n, 6);
+  for (int r = 0; r < 2 * n; ++r) {
+    const double *row = J.ptr<double>(r);
+    for (int c = 0; c < 6; ++c)
+      Jpose(r, c) = row[c];
+    for (int c = 0; c < 4; ++c)
+      Jint(r, c) = row[6 + c];
+    for (int c = 0; c < std::min(nd, 8); ++c)
+      Jint(r, 4 + c) = row[10 + c];
+  }
+  if (proj)
+    *proj = p;
+}
+
 } // namespace
 
 CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std::vector<std::string> &names,
@@ -236,15 +327,9 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
     throw Error("too few views: " + std::to_string(usable.size()) + " usable view(s) of the board, at least " +
                 std::to_string(min_views) + " are needed (10 to 20 views at different tilts are best)");
 
-  int flags = 0;
-  if (!options.estimate_k3)
-    flags |= cv::CALIB_FIX_K3;
-  if (options.zero_tangential)
-    flags |= cv::CALIB_ZERO_TANGENT_DIST;
-  if (options.fix_aspect_ratio)
-    flags |= cv::CALIB_FIX_ASPECT_RATIO;
-  if (options.fix_principal_point)
-    flags |= cv::CALIB_FIX_PRINCIPAL_POINT;
+  Distortion model = options.distortion;
+  if (model == Distortion::Auto && options.estimate_k3)
+    model = Distortion::K5;
 
   auto degenerateMessage = [&](double spread, std::size_t n) {
     return "degenerate views: the board's orientation varies by only " + fmt(spread / kDeg, 1) + " deg over the " +
@@ -252,7 +337,8 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
            "told from the distance: tilt the board 20 to 45 degrees in different directions";
   };
 
-  auto solve = [&](const std::vector<std::size_t> &idx) {
+  auto solve = [&](const std::vector<std::size_t> &idx, Distortion d) {
+    const int flags = modelFlags(d, options);
     std::vector<std::vector<cv::Point3f>> obj;
     std::vector<std::vector<cv::Point2f>> img;
     std::vector<CalibrationView> sel;
@@ -268,7 +354,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
       throw Error(degenerateMessage(pre, idx.size()));
     OpenCvSolution s;
     s.K = cv::Mat::eye(3, 3, CV_64F);
-    s.dist = cv::Mat::zeros(1, 5, CV_64F);
+    s.dist = cv::Mat::zeros(1, d == Distortion::K8 ? 8 : 5, CV_64F);
     cv::Mat std_ext, per_view;
     try {
       cv::calibrateCamera(obj, img, cv::Size(width, height), s.K, s.dist, s.rvecs, s.tvecs, s.std_intrinsics, std_ext,
@@ -288,10 +374,109 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
     return s;
   };
 
+  // Held-out error of a model: views left out in folds, each predicted by a calibration without
+  // it (its pose fitted to its own corners). Infinite when a fold's calibration fails.
+  auto heldOut = [&](const std::vector<std::size_t> &idx, Distortion d) {
+    const std::size_t folds = std::min<std::size_t>(idx.size(), static_cast<std::size_t>(std::max(2, options.cv_folds)));
+    double sse = 0;
+    std::size_t n = 0;
+    for (std::size_t f = 0; f < folds; ++f) {
+      std::vector<std::vector<cv::Point3f>> obj;
+      std::vector<std::vector<cv::Point2f>> img;
+      for (std::size_t k = 0; k < idx.size(); ++k)
+        if (k % folds != f) {
+          obj.push_back(object[idx[k]]);
+          img.push_back(image[idx[k]]);
+        }
+      cv::Mat K = cv::Mat::eye(3, 3, CV_64F), dist = cv::Mat::zeros(1, d == Distortion::K8 ? 8 : 5, CV_64F);
+      std::vector<cv::Mat> rv, tv;
+      try {
+        cv::calibrateCamera(obj, img, cv::Size(width, height), K, dist, rv, tv, modelFlags(d, options),
+                            cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
+        if (!cv::checkRange(K) || !cv::checkRange(dist))
+          return std::numeric_limits<double>::infinity();
+        for (std::size_t k = f; k < idx.size(); k += folds) {
+          cv::Mat r, t;
+          if (!cv::solvePnP(object[idx[k]], image[idx[k]], K, dist, r, t, false, cv::SOLVEPNP_ITERATIVE))
+            return std::numeric_limits<double>::infinity();
+          std::vector<cv::Point2f> proj;
+          cv::projectPoints(object[idx[k]], r, t, K, dist, proj);
+          for (std::size_t j = 0; j < proj.size(); ++j) {
+            const double du = proj[j].x - image[idx[k]][j].x, dv = proj[j].y - image[idx[k]][j].y;
+            sse += du * du + dv * dv;
+          }
+          n += proj.size();
+        }
+      } catch (const cv::Exception &) {
+        return std::numeric_limits<double>::infinity();
+      }
+    }
+    const double r = std::sqrt(sse / static_cast<double>(std::max<std::size_t>(n, 1)));
+    return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
+  };
+
+  // The distortion model: given, or chosen by the held-out error.
+  if (model == Distortion::Auto) {
+    if (usable.size() < 4) {
+      model = Distortion::K4;
+      result.model_reason = "k1 k2 p1 p2: too few views (" + std::to_string(usable.size()) +
+                            ") to compare models on views left out";
+      result.models.push_back({modelName(model), 4, 0.0, 0.0, true});
+    } else {
+      for (Distortion d : {Distortion::K4, Distortion::K5, Distortion::K8}) {
+        DistortionModelScore m;
+        m.name = modelName(d);
+        m.coefficients = coefficientsOf(d);
+        const OpenCvSolution s = solve(usable, d);
+        double sse = 0;
+        std::size_t n = 0;
+        for (std::size_t k = 0; k < usable.size(); ++k) {
+          std::vector<cv::Point2f> proj;
+          cv::projectPoints(object[usable[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, proj);
+          for (std::size_t j = 0; j < proj.size(); ++j) {
+            const double du = proj[j].x - image[usable[k]][j].x, dv = proj[j].y - image[usable[k]][j].y;
+            sse += du * du + dv * dv;
+          }
+          n += proj.size();
+        }
+        m.rms_px = std::sqrt(sse / static_cast<double>(n));
+        m.heldout_rms_px = heldOut(usable, d);
+        result.models.push_back(m);
+      }
+      std::size_t best = 0;
+      for (std::size_t i = 1; i < result.models.size(); ++i)
+        if (result.models[i].heldout_rms_px < result.models[best].heldout_rms_px)
+          best = i;
+      std::size_t pick = best;
+      for (std::size_t i = 0; i < best; ++i) // the simplest within the margin
+        if (result.models[i].heldout_rms_px <= (1 + options.simpler_within) * result.models[best].heldout_rms_px) {
+          pick = i;
+          break;
+        }
+      if (!std::isfinite(result.models[pick].heldout_rms_px))
+        pick = 0;
+      result.models[pick].chosen = true;
+      model = pick == 0 ? Distortion::K4 : pick == 1 ? Distortion::K5 : Distortion::K8;
+      std::ostringstream why;
+      why << result.models[pick].name << ": error on views left out " << fmt(result.models[pick].heldout_rms_px, 4)
+          << " px";
+      for (std::size_t i = 0; i < result.models.size(); ++i)
+        if (i != pick)
+          why << (i == 0 || (i == 1 && pick == 0) ? " against " : ", ") << fmt(result.models[i].heldout_rms_px, 4)
+              << " (" << result.models[i].coefficients << " coefficients)";
+      if (pick != best)
+        why << "; the simpler model is within " << fmt(100 * options.simpler_within, 0) << " % of the best";
+      result.model_reason = why.str();
+    }
+  } else {
+    result.models.push_back({modelName(model), coefficientsOf(model), 0.0, 0.0, true});
+    result.model_reason = modelName(model) + ": as asked";
+  }
+
   std::vector<std::size_t> used = usable;
   OpenCvSolution sol;
   for (int pass = 0; pass < 2; ++pass) {
-    sol = solve(used);
+    sol = solve(used, model);
     // Orientation spread of the board normals.
     std::vector<Eigen::Vector3d> normals;
     for (std::size_t k = 0; k < used.size(); ++k) {
@@ -364,15 +549,53 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
 
   const double fx = sol.K.at<double>(0, 0), fy = sol.K.at<double>(1, 1);
   const double u0 = sol.K.at<double>(0, 2), v0 = sol.K.at<double>(1, 2);
-  std::vector<double> d(5);
-  for (int i = 0; i < 5; ++i)
+  const int ncoef = model == Distortion::K8 ? 8 : 5;
+  std::vector<double> d(static_cast<std::size_t>(ncoef));
+  for (int i = 0; i < ncoef; ++i)
     d[static_cast<std::size_t>(i)] = sol.dist.at<double>(i);
   result.camera = CameraModel::brown(fx, fy, u0, v0, d, static_cast<unsigned>(width), static_cast<unsigned>(height));
-  result.std_devs.assign(9, 0.0);
-  for (int i = 0; i < 9 && i < static_cast<int>(sol.std_intrinsics.total()); ++i)
-    result.std_devs[static_cast<std::size_t>(i)] = sol.std_intrinsics.at<double>(i);
-  if (options.fix_aspect_ratio) // fx = (fx/fy) fy: OpenCV reports only fy's deviation
-    result.std_devs[0] = result.std_devs[1] * fx / fy;
+  for (auto &m : result.models)
+    if (m.chosen && m.rms_px == 0)
+      m.rms_px = result.rms_px;
+
+  // Covariance of the intrinsics: Gauss-Newton normal equations of the final fit, the poses
+  // marginalised view by view (Schur complement).
+  {
+    const Eigen::MatrixXd S = freeParameterMap(model, options, fx / fy);
+    const Eigen::Index nf = S.cols();
+    Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nf, nf);
+    double sse = 0;
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < used.size(); ++k) {
+      Eigen::MatrixXd Jint, Jpose;
+      std::vector<cv::Point2d> proj;
+      projectionJacobians(object[used[k]], sol.rvecs[k], sol.tvecs[k], sol.K, sol.dist, Jint, Jpose, &proj);
+      const Eigen::MatrixXd B = Jint * S;
+      const Eigen::Matrix<double, 6, 6> V = Jpose.transpose() * Jpose;
+      const Eigen::MatrixXd W = B.transpose() * Jpose;
+      U += B.transpose() * B - W * V.ldlt().solve(W.transpose());
+      for (std::size_t j = 0; j < proj.size(); ++j) {
+        const double du = proj[j].x - image[used[k]][j].x, dv = proj[j].y - image[used[k]][j].y;
+        sse += du * du + dv * dv;
+      }
+      n += proj.size();
+    }
+    const double dof = 2.0 * static_cast<double>(n) - static_cast<double>(nf) - 6.0 * static_cast<double>(used.size());
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(U);
+    if (dof > 0 && lu.isInvertible()) {
+      const Eigen::MatrixXd cov = (sse / dof) * lu.inverse();
+      result.intrinsics_covariance = S * cov * S.transpose();
+    } else {
+      result.notes.emplace_back("the intrinsics' covariance is singular: too few points for the parameters");
+    }
+  }
+  result.std_devs.assign(12, 0.0);
+  for (int i = 0; i < 12; ++i)
+    result.std_devs[static_cast<std::size_t>(i)] = std::sqrt(std::max(0.0, result.intrinsics_covariance(i, i)));
+  result.uncertainty_grid.clear();
+  for (int cy = 0; cy < 6; ++cy)
+    for (int cx = 0; cx < 8; ++cx)
+      result.uncertainty_grid.push_back(projectionUncertainty(result, (cx + 0.5) * width / 8.0 - 0.5, (cy + 0.5) * height / 6.0 - 0.5));
 
   // Coverage: 8 x 6 cells.
   {
@@ -515,6 +738,40 @@ void saveVispCameraXml(const std::string &path, const CameraCalibration &calibra
   writeFileAtomically(path, vispCameraXmlText(calibration, camera_name, additional_info));
 }
 
+double projectionUncertainty(const CameraCalibration &calibration, double u, double v)
+{
+  const CameraModel &cam = calibration.camera;
+  const double w = cam.width(), h = cam.height();
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.kx(), 0, cam.u0(), 0, cam.ky(), cam.v0(), 0, 0, 1);
+  cv::Mat dist(1, 8, CV_64F);
+  for (int i = 0; i < 8; ++i)
+    dist.at<double>(i) = cam.brownCoefficients()[static_cast<std::size_t>(i)];
+  // Rays of (u, v) (first) and of a 16 x 12 grid over the image (the rotation is fitted on them).
+  std::vector<cv::Point3f> rays;
+  Eigen::Vector2d m;
+  if (!cam.undistort(Eigen::Vector2d(u, v), m))
+    return std::numeric_limits<double>::infinity();
+  rays.emplace_back(static_cast<float>(m.x()), static_cast<float>(m.y()), 1.f);
+  if (w > 0 && h > 0)
+    for (int gy = 0; gy < 12; ++gy)
+      for (int gx = 0; gx < 16; ++gx)
+        if (cam.undistort(Eigen::Vector2d((gx + 0.5) * w / 16 - 0.5, (gy + 0.5) * h / 12 - 0.5), m))
+          rays.emplace_back(static_cast<float>(m.x()), static_cast<float>(m.y()), 1.f);
+  Eigen::MatrixXd Jint, Jrot; // Jrot: d(pixel)/d(rvec) at rvec = 0, i.e. a small rotation of the camera
+  projectionJacobians(rays, cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), K, dist, Jint, Jrot);
+  const Eigen::Index n = Jint.rows();
+  Eigen::MatrixXd Jq = Jint.topRows(2);
+  if (n > 8) {
+    const Eigen::MatrixXd Aw = Jrot.bottomRows(n - 2).leftCols(3), At = Jint.bottomRows(n - 2);
+    // The rotation that best absorbs an intrinsics change over the image, then what is left at (u, v).
+    const Eigen::MatrixXd G = (Aw.transpose() * Aw).ldlt().solve(Aw.transpose() * At); // 3 x 12
+    Jq -= Jrot.topRows(2).leftCols(3) * G;
+  }
+  const Eigen::Matrix2d C = Jq * calibration.intrinsics_covariance * Jq.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(C);
+  return std::sqrt(std::max(0.0, es.eigenvalues()(1)));
+}
+
 cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<CalibrationView> &views)
 {
   const int w = static_cast<int>(calibration.camera.width()), h = static_cast<int>(calibration.camera.height());
@@ -554,9 +811,19 @@ cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<Ca
       }
     }
   }
-  const std::string text = std::to_string(calibration.views_used) + " views, coverage " +
-                           fmt(100 * calibration.coverage, 0) + " % (shaded: no corner)";
   const double scale = std::max(0.4, w / 1600.0);
+  // Projection uncertainty per cell (px, 1 sigma): where the calibration knows the lens least.
+  if (calibration.uncertainty_grid.size() == 48)
+    for (int cy = 0; cy < 6; ++cy)
+      for (int cx = 0; cx < 8; ++cx) {
+        const double s = calibration.uncertainty_grid[static_cast<std::size_t>(cy) * 8 + cx];
+        const std::string t = std::isfinite(s) ? fmt(s, s < 0.1 ? 3 : 2) : std::string("inf");
+        const cv::Scalar col = !(s < 0.1) ? cv::Scalar(0, 0, 200) : s < 0.05 ? cv::Scalar(0, 140, 0) : cv::Scalar(0, 120, 220);
+        cv::putText(img, t, cv::Point(cx * w / 8 + 4, (cy + 1) * h / 6 - 6), cv::FONT_HERSHEY_SIMPLEX, 0.8 * scale, col, 1,
+                    cv::LINE_AA);
+      }
+  const std::string text = std::to_string(calibration.views_used) + " views, coverage " +
+                           fmt(100 * calibration.coverage, 0) + " % (shaded: no corner); per cell: projection 1-sigma (px)";
   cv::putText(img, text, cv::Point(8, static_cast<int>(20 * scale / 0.4)), cv::FONT_HERSHEY_SIMPLEX, scale,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return img;

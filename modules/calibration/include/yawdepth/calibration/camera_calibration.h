@@ -47,7 +47,23 @@ CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std
 struct CameraCalibrationOptions {
   bool fix_aspect_ratio = false;    //!< fx = fy (cv::CALIB_FIX_ASPECT_RATIO, vpCalibration aspect ratio 1)
   bool fix_principal_point = false; //!< principal point at the image centre (OpenCV model only)
-  bool estimate_k3 = false;         //!< k3 is fixed at 0 unless set
+  /*! \brief The Brown distortion model (OpenCV's coefficients). */
+  enum class Distortion {
+    Auto, //!< fit K4, K5 and K8; keep the one with the least error on views left out (see below)
+    K4,   //!< k1 k2 p1 p2
+    K5,   //!< k1 k2 p1 p2 k3
+    K8    //!< k1 k2 p1 p2 k3 k4 k5 k6 (OpenCV's rational model)
+  };
+  /*!
+    Auto: each model is fitted with whole views left out (at most `cv_folds` folds, view k in fold
+    k mod folds); a left-out view's pose is fitted to its own corners with the model's intrinsics
+    and its reprojection error counted. The model with the least held-out RMS is chosen, or a
+    simpler one whose held-out RMS is within `simpler_within` of it. With fewer than 4 views: K4.
+  */
+  Distortion distortion = Distortion::Auto;
+  int cv_folds = 10;                //!< Auto: at most this many folds of left-out views
+  double simpler_within = 0.01;     //!< Auto: relative margin by which a simpler model is preferred
+  bool estimate_k3 = false;         //!< with distortion Auto: the same as K5 (kept for older callers)
   bool zero_tangential = false;     //!< p1 = p2 = 0
   bool drop_outliers = false;       //!< recalibrate without the views flagged as outliers
   double outlier_ratio = 3.0;       //!< a view is an outlier when its RMS > ratio x median ...
@@ -69,11 +85,21 @@ struct CalibrationViewResult {
   Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity(); //!< board pose in the camera frame
 };
 
+/*! \brief One distortion model as fitted and cross-validated by calibrateCamera(). */
+struct DistortionModelScore {
+  std::string name;          //!< "k1 k2 p1 p2", "k1 k2 p1 p2 k3" or "k1..k6 p1 p2 (rational)"
+  int coefficients = 0;      //!< 4, 5 or 8
+  double rms_px = 0;         //!< RMS reprojection error over every view (px per point, as OpenCV's)
+  double heldout_rms_px = 0; //!< RMS error on views left out (px per point); 0 when not computed
+  bool chosen = false;       //!< the model of the result
+};
+
 /*! \brief Result of calibrateCamera(). */
 struct CameraCalibration {
   CameraModel camera;              //!< Brown model with the image size
   double rms_px = 0;               //!< RMS reprojection error over the views used (px)
-  /*! standard deviations of fx, fy, u0, v0, k1, k2, p1, p2, k3 (0 for fixed parameters) */
+  /*! standard deviations of fx, fy, u0, v0, k1, k2, p1, p2, k3, k4, k5, k6 (0 for fixed parameters),
+      the square roots of intrinsics_covariance's diagonal */
   std::vector<double> std_devs;
   std::vector<CalibrationViewResult> views; //!< every input view, in input order
   int views_used = 0;              //!< number of views in the final calibration
@@ -86,7 +112,28 @@ struct CameraCalibration {
   double visp_rms_with = 0;        //!< RMS reprojection error of the kud projection (px)
   double visp_rms_kdu = 0;         //!< RMS error of the kdu model (observed pixel undistorted, px)
   std::vector<std::string> notes;  //!< warnings for the user (few views, poor coverage, ...)
+  std::vector<DistortionModelScore> models; //!< the models compared (one when the model was given)
+  std::string model_reason;        //!< why the model was chosen, one line
+  /*!
+    Covariance of fx fy u0 v0 k1 k2 p1 p2 k3 k4 k5 k6 (12 x 12; rows and columns of fixed parameters
+    are zero): the Gauss-Newton covariance of the final fit, poses marginalised (Schur complement),
+    scaled by the residual variance SSE / (2N - parameters). Its diagonal is OpenCV's std_devs^2.
+  */
+  Eigen::Matrix<double, 12, 12> intrinsics_covariance = Eigen::Matrix<double, 12, 12>::Zero();
+  /*! Projection uncertainty (px, 1 sigma along the worst direction, projectionUncertainty()) at the
+      centres of an 8 x 6 grid of image cells, row-major. */
+  std::vector<double> uncertainty_grid;
 };
+
+/*!
+  \brief How uncertain the calibrated projection of pixel (u, v)'s ray is (px, 1 sigma along the
+  worst direction), from `intrinsics_covariance` to first order. A change of the intrinsics that a
+  small rotation of the camera undoes (the principal point against the camera's orientation) moves
+  no measurement, since every pose absorbs it: that rotation, fitted over a 16 x 12 grid of the
+  image, is removed first (mrcal's compensation of the camera frame, for points far away). What
+  remains grows where the corners did not reach, at the image's edges and corners.
+*/
+double projectionUncertainty(const CameraCalibration &calibration, double u, double v);
 
 /*!
   \brief Calibrate from detected views of `board`.
