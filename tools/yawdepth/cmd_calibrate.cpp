@@ -63,7 +63,7 @@ void addBoardOptions(CLI::App *sub, std::string &tags, double &tag_gap, int &fir
 }
 
 struct CameraArgs {
-  std::string pattern, out, coverage, camera_name = "Camera", tags = "1x1", distortion = "auto";
+  std::string pattern, out, coverage, camera_name = "Camera", tags = "1x1", distortion = "auto", debug_dir;
   std::vector<std::string> images;
   bool fix_aspect = false, fix_pp = false, drop_outliers = false, k3 = false, zero_tangent = false, quiet = false;
   double tag_gap = -1;
@@ -98,6 +98,8 @@ Runner addCalibrateCamera(CLI::App &app)
   sub->add_flag("--drop-outliers", a->drop_outliers,
                 "Recalibrate without the outlier views (RMS above 3x the median and above 0.5 px)");
   sub->add_option("--coverage", a->coverage, "Coverage picture (default PREFIX_coverage.png)");
+  sub->add_option("--debug-dir", a->debug_dir,
+                  "Write each image with its detected features and ids drawn (DIR/NNNN_NAME.png, NNNN its position)");
   sub->add_option("--camera-name", a->camera_name, "Camera name in the ViSP XML")->capture_default_str();
   sub->add_option("--distortion", a->distortion,
                   "Distortion model: k4 (k1 k2 p1 p2), k5 (+ k3), k8 (rational, k1..k6 p1 p2), or auto: the one "
@@ -122,7 +124,10 @@ Runner addCalibrateCamera(CLI::App &app)
       std::vector<NamedPath> inputs;
       for (const std::string &path : a->images)
         inputs.push_back({"image", path});
-      checkOutputs(inputs, {{"--out (.yaml)", yaml}, {"--out (.xml)", xml}, {"--coverage", coverage}});
+      std::vector<NamedPath> outputs = {{"--out (.yaml)", yaml}, {"--out (.xml)", xml}, {"--coverage", coverage}};
+      for (const std::string &f : debugFiles(a->debug_dir, a->images))
+        outputs.push_back({"--debug-dir", f});
+      checkOutputs(inputs, outputs);
     }
     const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
     std::vector<cv::Mat> images;
@@ -131,6 +136,13 @@ Runner addCalibrateCamera(CLI::App &app)
     const CalibrationDetections det = detectCalibrationViews(board, a->images, images);
     for (const std::string &f : det.failures)
       std::cerr << "calibrate-camera: " << f << " (image skipped)\n";
+    for (const std::string &w : det.warnings)
+      std::cerr << "calibrate-camera: " << w << "\n";
+    if (!a->debug_dir.empty()) {
+      const std::vector<std::string> files = debugFiles(a->debug_dir, a->images);
+      for (std::size_t i = 0; i < images.size() && i < det.detections.size(); ++i)
+        writeDebugImage(files[i], images[i], det.detections[i]);
+    }
 
     CameraCalibrationOptions opt;
     opt.fix_aspect_ratio = a->fix_aspect;
@@ -183,15 +195,22 @@ Runner addCalibrateCamera(CLI::App &app)
               << (a->fix_pp ? " (fixed)" : "") << "\n"
               << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
               << "  p1 = " << pm(k[2], sd[6], 6) << "   p2 = " << pm(k[3], sd[7], 6) << "\n"
-              << "  k3 = " << pm(k[4], sd[8], 5) << (sd[8] > 0 ? "" : " (fixed)");
-    if (sd[9] > 0)
+              << "  k3 = " << pm(k[4], sd[8], 5) << (k[4] != 0 ? "" : " (fixed)");
+    if (k[5] != 0 || k[6] != 0 || k[7] != 0)
       std::cout << "   k4 = " << pm(k[5], sd[9], 5) << "   k5 = " << pm(k[6], sd[10], 5) << "   k6 = " << pm(k[7], sd[11], 5);
     std::cout << "\n";
     std::cout << "Distortion model: " << cal.model_reason << "\n";
     if (cal.models.size() > 1)
       for (const auto &m : cal.models)
+      {
         std::cout << "  " << (m.chosen ? "* " : "  ") << m.name << ": RMS " << fixed(m.rms_px, 4)
-                  << " px, on views left out " << fixed(m.heldout_rms_px, 4) << " px\n";
+                  << " px, on views left out " << fixed(m.heldout_rms_px, 4) << " px";
+        if (m.inadmissible.empty())
+          std::cout << ", projection uncertainty " << fixed(m.image_uncertainty_px, 4) << " px, expected error "
+                    << fixed(m.score_px, 4) << " px\n";
+        else
+          std::cout << "; not usable: " << m.inadmissible << "\n";
+      }
     if (cal.uncertainty_grid.size() == 48) {
       const double centre = projectionUncertainty(cal, 0.5 * (c.width() - 1), 0.5 * (c.height() - 1));
       const double worst = *std::max_element(cal.uncertainty_grid.begin(), cal.uncertainty_grid.end());

@@ -1,5 +1,6 @@
 // `yawdepth measure`: detect a pattern in the motion log's images, build tracks, estimate points,
 // and optionally write the paper's Fig. 3 report.
+#include <map>
 #include "commands.h"
 #include "method_options.h"
 
@@ -21,6 +22,7 @@ struct MeasureArgs {
   MethodArgs method;
   InputOptions input;
   bool quiet = false;
+  std::string debug_dir;
 };
 
 } // namespace
@@ -43,6 +45,8 @@ Runner addMeasure(CLI::App &app)
   sub->add_option("--tracks-out", a->tracks_out, "Also write the detected features as a tracks CSV (frame,id,u,v)");
   sub->add_option("--outliers", a->outliers, "fused/refine: also write the observations rejected as outliers");
   sub->add_flag("--quiet", a->quiet, "No progress or per-frame detection messages on stderr");
+  sub->add_option("--debug-dir", a->debug_dir,
+                  "Write each image with its detected features and ids drawn (DIR/NNNN_NAME.png, NNNN its row in the log)");
   addInputOptions(sub, a->input);
 
   return [a, sub]() {
@@ -73,8 +77,11 @@ Runner addMeasure(CLI::App &app)
         for (const std::string &f : boardReportFiles(a->report))
           outputs.push_back({"--report", f});
       }
+      for (const std::string &f : debugFiles(a->debug_dir, motion.images))
+        outputs.push_back({"--debug-dir", f});
       checkOutputs(inputs, outputs);
     }
+    const std::vector<std::string> debug_files = debugFiles(a->debug_dir, motion.images);
 
     PatternDetector detector(pattern);
     detector.setCamera(camera);
@@ -101,6 +108,10 @@ Runner addMeasure(CLI::App &app)
         ++found;
       else
         failures.push_back("measure: frame " + std::to_string(frame) + ": " + d.reason);
+      for (const std::string &w : d.warnings)
+        failures.push_back("measure: frame " + std::to_string(frame) + ": " + w);
+      if (!debug_files.empty())
+        writeDebugImage(debug_files[i], image, d);
       detections.push_back(std::move(d));
       if (progress && ((i + 1) % every == 0 || i + 1 == n))
         std::cerr << "measure: " << i + 1 << "/" << n << " frames, pattern found in " << found << "\n";
@@ -125,6 +136,51 @@ Runner addMeasure(CLI::App &app)
     }
     if (sub->count("--outliers") > 0)
       writeTracksCsv(a->outliers, rejectedObservations(tracks, flags));
+    // No silent loss: every board feature not measured is named, with why.
+    if (!a->quiet) {
+      std::map<long, const PointEstimate *> by_id;
+      std::map<long, std::size_t> seen;
+      for (std::size_t i = 0; i < tracks.size(); ++i) {
+        by_id[tracks[i].id] = &estimates[i];
+        seen[tracks[i].id] = tracks[i].observations.size();
+      }
+      BoardLayout layout;
+      layout.pattern = pattern;
+      std::size_t expected = 0, ok = 0;
+      std::vector<std::string> lost;
+      if (pattern.kind == PatternSpec::Kind::Chessboard) {
+        for (const auto &f : layout.features()) {
+          ++expected;
+          auto it = by_id.find(f.first);
+          if (it == by_id.end())
+            lost.push_back("id " + std::to_string(f.first) + ": never detected");
+          else if (!it->second->ok())
+            lost.push_back("id " + std::to_string(f.first) + ": " + toString(it->second->status) + " (seen in " +
+                           std::to_string(seen[f.first]) + " frames)");
+          else
+            ++ok;
+        }
+      } else {
+        for (const auto &[id, e] : by_id) {
+          ++expected;
+          if (e->ok())
+            ++ok;
+          else
+            lost.push_back("id " + std::to_string(id) + ": " + toString(e->status) + " (seen in " +
+                           std::to_string(seen[id]) + " frames)");
+        }
+      }
+      if (!lost.empty()) {
+        std::cerr << "measure: " << ok << " of " << expected
+                  << (pattern.kind == PatternSpec::Kind::Chessboard ? " board features" : " detected features")
+                  << " measured; not measured:";
+        for (std::size_t k = 0; k < lost.size() && k < 20; ++k)
+          std::cerr << (k ? ", " : " ") << lost[k];
+        if (lost.size() > 20)
+          std::cerr << ", and " << lost.size() - 20 << " more";
+        std::cerr << "\n";
+      }
+    }
     if (!a->report.empty()) {
       const BoardMetrics m = boardMetrics(pattern, rig, motion.samples, pairs);
       const std::string title = "yawdepth measure: " + pattern.toString() + ", method " + a->method.method + ", " +

@@ -4,7 +4,11 @@
 // Errors are thrown as yawdepth::Error and reported by main() as one line on stderr.
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <string>
+#include <vector>
+#include <opencv2/core.hpp>
 #include <yawdepth/core/files.h>
+#include <yawdepth/features/detector.h>
 
 namespace yawdepth::cli {
 
@@ -30,6 +34,12 @@ struct InputOptions {
 };
 /*! \brief Add --max-input-mb to `sub`. */
 void addInputOptions(CLI::App *sub, InputOptions &options);
+
+/*! \brief The --debug-dir pictures of `images`: DIR/NNNN_STEM.png (NNNN the image's position);
+    empty when `dir` is empty. Throws yawdepth::Error for an existing path that is not a folder. */
+std::vector<std::string> debugFiles(const std::string &dir, const std::vector<std::string> &images);
+/*! \brief drawDetection() of `image` written as a PNG to `path` (its folder created), atomically. */
+void writeDebugImage(const std::string &path, const cv::Mat &image, const FrameDetection &detection);
 
 /*! \brief CLI11 validator: a finite number (rejects nan and inf). */
 extern const CLI::Validator Finite;

@@ -1,4 +1,6 @@
 // The `yawdepth` command line: subcommands wiring the library's modules.
+#include <opencv2/imgcodecs.hpp>
+#include <filesystem>
 #include "commands.h"
 
 #include <cmath>
@@ -39,6 +41,37 @@ void addInputOptions(CLI::App *sub, InputOptions &options)
                   "regular file or a pipe (a FIFO with no writer waits for one, as cat does), not a device")
       ->check(CLI::Range(1.0, 1048576.0))
       ->capture_default_str();
+}
+
+std::vector<std::string> debugFiles(const std::string &dir, const std::vector<std::string> &images)
+{
+  std::vector<std::string> out;
+  if (dir.empty())
+    return out;
+  std::error_code ec;
+  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
+    throw Error("--debug-dir " + dir + ": exists and is not a folder");
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    char num[32];
+    std::snprintf(num, sizeof num, "%04zu_", i);
+    std::string stem = std::filesystem::path(images[i]).stem().string();
+    if (stem.empty() || stem == "." || stem == "..")
+      stem = "image";
+    out.push_back((std::filesystem::path(dir) / (num + stem + ".png")).string());
+  }
+  return out;
+}
+
+void writeDebugImage(const std::string &path, const cv::Mat &image, const FrameDetection &detection)
+{
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
+  if (ec)
+    throw Error("--debug-dir: cannot create " + std::filesystem::path(path).parent_path().string() + ": " + ec.message());
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", drawDetection(image, detection), png))
+    throw Error(path + ": cannot encode the picture");
+  writeFileAtomically(path, std::string(png.begin(), png.end()));
 }
 
 const CLI::Validator Finite([](std::string &s) { return finiteCheck(s, false); }, "FINITE");

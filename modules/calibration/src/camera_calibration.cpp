@@ -3,6 +3,7 @@
   \brief Camera calibration: OpenCV's Brown model, ViSP's two models, diagnostics.
 */
 #include <yawdepth/calibration/camera_calibration.h>
+#include <yawdepth/camera/camera_file.h>
 #include <yawdepth/camera/quiet_visp.h>
 
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include <iostream>
 #include <limits>
 #include <map>
+#include <set>
 #include <mutex>
 #include <streambuf>
 #include <sstream>
@@ -254,6 +256,10 @@ CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std
     const cv::Mat &img = images[i];
     if (img.empty()) {
       out.failures.push_back(names[i] + ": empty image");
+      FrameDetection none;
+      none.frame = static_cast<long>(i);
+      none.reason = "empty image";
+      out.detections.push_back(none);
       continue;
     }
     if (out.width == 0) {
@@ -264,16 +270,31 @@ CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std
                   names.front() + " is " + std::to_string(out.width) + "x" + std::to_string(out.height) +
                   ": all calibration images must come from the same camera at the same resolution");
     }
-    const FrameDetection d = detector.detect(img, static_cast<long>(i));
+    out.detections.push_back(detector.detect(img, static_cast<long>(i)));
+    const FrameDetection &d = out.detections.back();
+    for (const std::string &w : d.warnings)
+      out.warnings.push_back(names[i] + ": " + w);
     if (!d.found) {
       out.failures.push_back(names[i] + ": " + d.reason);
       continue;
     }
     CalibrationView v;
     v.name = names[i];
+    std::vector<long> off_board;
     for (const auto &f : d.features)
       if (pts.count(f.id))
         v.features.push_back(f);
+      else
+        off_board.push_back(f.id);
+    if (!off_board.empty() && board.pattern.kind == PatternSpec::Kind::AprilTag) {
+      std::set<long> tags;
+      for (long id : off_board)
+        tags.insert(id / 5); // pattern.h: tag t has features 5t .. 5t + 4
+      std::string list;
+      for (long t : tags)
+        list += (list.empty() ? "" : " ") + std::to_string(t);
+      out.warnings.push_back(names[i] + ": tag(s) " + list + " not on the board (--tags grid, --first-tag-id): ignored");
+    }
     if (v.features.size() < 4) {
       out.failures.push_back(names[i] + ": only " + std::to_string(v.features.size()) +
                              " features of the board (tags outside the board's --tags grid?)");
@@ -415,13 +436,80 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
     return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
   };
 
+  // Covariance of the intrinsics: Gauss-Newton normal equations of a fit, the poses marginalised
+  // view by view (Schur complement), the residual variance over 2N - parameters. False (and zero)
+  // when the reduced normal matrix is singular after scaling each parameter to unit diagonal.
+  auto intrinsicsCovariance = [&](const std::vector<std::size_t> &idx, const OpenCvSolution &s, Distortion d,
+                                  Eigen::Matrix<double, 12, 12> &out) {
+    out.setZero();
+    const Eigen::MatrixXd S = freeParameterMap(d, options, s.K.at<double>(0, 0) / s.K.at<double>(1, 1));
+    const Eigen::Index nf = S.cols();
+    Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nf, nf);
+    double sse = 0;
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      Eigen::MatrixXd Jint, Jpose;
+      std::vector<cv::Point2d> proj;
+      projectionJacobians(object[idx[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, Jint, Jpose, &proj);
+      const Eigen::MatrixXd B = Jint * S;
+      const Eigen::Matrix<double, 6, 6> V = Jpose.transpose() * Jpose;
+      const Eigen::MatrixXd W = B.transpose() * Jpose;
+      U += B.transpose() * B - W * V.ldlt().solve(W.transpose());
+      for (std::size_t j = 0; j < proj.size(); ++j) {
+        const double du = proj[j].x - image[idx[k]][j].x, dv = proj[j].y - image[idx[k]][j].y;
+        sse += du * du + dv * dv;
+      }
+      n += proj.size();
+    }
+    const double dof = 2.0 * static_cast<double>(n) - static_cast<double>(nf) - 6.0 * static_cast<double>(idx.size());
+    if (!(dof > 0))
+      return false;
+    const Eigen::VectorXd dg = U.diagonal();
+    if (!(dg.minCoeff() > 0))
+      return false;
+    const Eigen::VectorXd sc = dg.cwiseSqrt().cwiseInverse();
+    const Eigen::MatrixXd Us = sc.asDiagonal() * U * sc.asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Us);
+    if (!(es.eigenvalues().minCoeff() > 1e-12 * es.eigenvalues().maxCoeff()))
+      return false;
+    const Eigen::MatrixXd cov = (sse / dof) * (sc.asDiagonal() * es.eigenvectors() *
+                                               es.eigenvalues().cwiseInverse().asDiagonal() *
+                                               es.eigenvectors().transpose() * sc.asDiagonal());
+    out = S * cov * S.transpose();
+    return out.allFinite();
+  };
+
+  // A fit is admissible when its camera is usable over the whole image (what loadCameraFile()
+  // would accept): a high-order model can bend back beyond the corners' reach.
+  auto admissibility = [&](const OpenCvSolution &s, Distortion d, const std::vector<std::size_t> &idx) -> std::string {
+    Eigen::Matrix<double, 12, 12> cov;
+    if (!intrinsicsCovariance(idx, s, d, cov))
+      return modelName(d) + ": the views do not determine its parameters (singular covariance)";
+    std::vector<double> c(static_cast<std::size_t>(d == Distortion::K8 ? 8 : 5));
+    for (std::size_t i = 0; i < c.size(); ++i)
+      c[i] = s.dist.at<double>(static_cast<int>(i));
+    try {
+      checkCameraPlausible(CameraModel::brown(s.K.at<double>(0, 0), s.K.at<double>(1, 1), s.K.at<double>(0, 2),
+                                              s.K.at<double>(1, 2), c, static_cast<unsigned>(width),
+                                              static_cast<unsigned>(height)),
+                           modelName(d));
+    } catch (const Error &e) {
+      return e.what();
+    }
+    return {};
+  };
+
   // The distortion model: given, or chosen by the held-out error.
   if (model == Distortion::Auto) {
     if (usable.size() < 4) {
       model = Distortion::K4;
       result.model_reason = "k1 k2 p1 p2: too few views (" + std::to_string(usable.size()) +
                             ") to compare models on views left out";
-      result.models.push_back({modelName(model), 4, 0.0, 0.0, true});
+      DistortionModelScore m;
+      m.name = modelName(model);
+      m.coefficients = 4;
+      m.chosen = true;
+      result.models.push_back(m);
     } else {
       for (Distortion d : {Distortion::K4, Distortion::K5, Distortion::K8}) {
         DistortionModelScore m;
@@ -441,35 +529,71 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
         }
         m.rms_px = std::sqrt(sse / static_cast<double>(n));
         m.heldout_rms_px = heldOut(usable, d);
+        m.inadmissible = admissibility(s, d, usable);
+        if (m.inadmissible.empty()) {
+          CameraCalibration tmp;
+          std::vector<double> c(static_cast<std::size_t>(d == Distortion::K8 ? 8 : 5));
+          for (std::size_t i = 0; i < c.size(); ++i)
+            c[i] = s.dist.at<double>(static_cast<int>(i));
+          tmp.camera = CameraModel::brown(s.K.at<double>(0, 0), s.K.at<double>(1, 1), s.K.at<double>(0, 2),
+                                          s.K.at<double>(1, 2), c, static_cast<unsigned>(width), static_cast<unsigned>(height));
+          intrinsicsCovariance(usable, s, d, tmp.intrinsics_covariance);
+          double u2 = 0;
+          for (int cy = 0; cy < 6; ++cy)
+            for (int cx = 0; cx < 8; ++cx) {
+              const double u = projectionUncertainty(tmp, (cx + 0.5) * width / 8.0 - 0.5, (cy + 0.5) * height / 6.0 - 0.5);
+              u2 += u * u / 48.0;
+            }
+          m.image_uncertainty_px = std::sqrt(u2);
+          m.score_px = std::hypot(m.heldout_rms_px, m.image_uncertainty_px);
+          if (!std::isfinite(m.score_px))
+            m.inadmissible = m.name + ": its projection cannot be computed over the whole image";
+        }
         result.models.push_back(m);
       }
-      std::size_t best = 0;
-      for (std::size_t i = 1; i < result.models.size(); ++i)
-        if (result.models[i].heldout_rms_px < result.models[best].heldout_rms_px)
+      std::size_t best = result.models.size();
+      for (std::size_t i = 0; i < result.models.size(); ++i)
+        if (result.models[i].inadmissible.empty() && std::isfinite(result.models[i].score_px) &&
+            (best == result.models.size() || result.models[i].score_px < result.models[best].score_px))
           best = i;
+      if (best == result.models.size()) {
+        std::string why;
+        for (const auto &m : result.models)
+          why += (why.empty() ? "" : "; ") + m.name + ": " +
+                 (m.inadmissible.empty() ? std::string("its calibration failed on views left out") : m.inadmissible);
+        throw Error("no distortion model gives a usable camera (" + why +
+                    "): take views whose corners reach the image's corners and edges");
+      }
       std::size_t pick = best;
       for (std::size_t i = 0; i < best; ++i) // the simplest within the margin
-        if (result.models[i].heldout_rms_px <= (1 + options.simpler_within) * result.models[best].heldout_rms_px) {
+        if (result.models[i].inadmissible.empty() &&
+            result.models[i].score_px <= (1 + options.simpler_within) * result.models[best].score_px) {
           pick = i;
           break;
         }
-      if (!std::isfinite(result.models[pick].heldout_rms_px))
-        pick = 0;
       result.models[pick].chosen = true;
       model = pick == 0 ? Distortion::K4 : pick == 1 ? Distortion::K5 : Distortion::K8;
       std::ostringstream why;
-      why << result.models[pick].name << ": error on views left out " << fmt(result.models[pick].heldout_rms_px, 4)
+      why << result.models[pick].name << ": expected error over the image " << fmt(result.models[pick].score_px, 4)
           << " px";
+      bool first = true;
       for (std::size_t i = 0; i < result.models.size(); ++i)
-        if (i != pick)
-          why << (i == 0 || (i == 1 && pick == 0) ? " against " : ", ") << fmt(result.models[i].heldout_rms_px, 4)
+        if (i != pick) {
+          why << (first ? " against " : ", ")
+              << (result.models[i].inadmissible.empty() ? fmt(result.models[i].score_px, 4) : std::string("not usable"))
               << " (" << result.models[i].coefficients << " coefficients)";
+          first = false;
+        }
       if (pick != best)
         why << "; the simpler model is within " << fmt(100 * options.simpler_within, 0) << " % of the best";
       result.model_reason = why.str();
     }
   } else {
-    result.models.push_back({modelName(model), coefficientsOf(model), 0.0, 0.0, true});
+    DistortionModelScore m;
+    m.name = modelName(model);
+    m.coefficients = coefficientsOf(model);
+    m.chosen = true;
+    result.models.push_back(m);
     result.model_reason = modelName(model) + ": as asked";
   }
 
@@ -554,41 +678,19 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
   for (int i = 0; i < ncoef; ++i)
     d[static_cast<std::size_t>(i)] = sol.dist.at<double>(i);
   result.camera = CameraModel::brown(fx, fy, u0, v0, d, static_cast<unsigned>(width), static_cast<unsigned>(height));
+  {
+    const std::string bad = admissibility(sol, model, used);
+    if (!bad.empty())
+      throw Error("the calibrated camera is not usable: " + bad +
+                  "; take views whose corners reach the image's corners and edges" +
+                  (model != Distortion::K4 ? std::string(", or a model with fewer coefficients") : std::string()));
+  }
   for (auto &m : result.models)
     if (m.chosen && m.rms_px == 0)
       m.rms_px = result.rms_px;
 
-  // Covariance of the intrinsics: Gauss-Newton normal equations of the final fit, the poses
-  // marginalised view by view (Schur complement).
-  {
-    const Eigen::MatrixXd S = freeParameterMap(model, options, fx / fy);
-    const Eigen::Index nf = S.cols();
-    Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nf, nf);
-    double sse = 0;
-    std::size_t n = 0;
-    for (std::size_t k = 0; k < used.size(); ++k) {
-      Eigen::MatrixXd Jint, Jpose;
-      std::vector<cv::Point2d> proj;
-      projectionJacobians(object[used[k]], sol.rvecs[k], sol.tvecs[k], sol.K, sol.dist, Jint, Jpose, &proj);
-      const Eigen::MatrixXd B = Jint * S;
-      const Eigen::Matrix<double, 6, 6> V = Jpose.transpose() * Jpose;
-      const Eigen::MatrixXd W = B.transpose() * Jpose;
-      U += B.transpose() * B - W * V.ldlt().solve(W.transpose());
-      for (std::size_t j = 0; j < proj.size(); ++j) {
-        const double du = proj[j].x - image[used[k]][j].x, dv = proj[j].y - image[used[k]][j].y;
-        sse += du * du + dv * dv;
-      }
-      n += proj.size();
-    }
-    const double dof = 2.0 * static_cast<double>(n) - static_cast<double>(nf) - 6.0 * static_cast<double>(used.size());
-    Eigen::FullPivLU<Eigen::MatrixXd> lu(U);
-    if (dof > 0 && lu.isInvertible()) {
-      const Eigen::MatrixXd cov = (sse / dof) * lu.inverse();
-      result.intrinsics_covariance = S * cov * S.transpose();
-    } else {
-      result.notes.emplace_back("the intrinsics' covariance is singular: too few points for the parameters");
-    }
-  }
+  if (!intrinsicsCovariance(used, sol, model, result.intrinsics_covariance))
+    result.notes.emplace_back("the intrinsics' covariance is singular: the views do not determine every parameter");
   result.std_devs.assign(12, 0.0);
   for (int i = 0; i < 12; ++i)
     result.std_devs[static_cast<std::size_t>(i)] = std::sqrt(std::max(0.0, result.intrinsics_covariance(i, i)));

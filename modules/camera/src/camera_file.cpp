@@ -435,7 +435,13 @@ Format detectFormat(const std::string &text) {
   or that maps the image to a field more than 10x wider or narrower than the pinhole would.
 */
 void checkPlausible(const std::string &path, const CameraModel &c) {
-  auto fail = [&](const std::string &why) { throw Error(path + ": implausible camera: " + why); };
+  checkCameraPlausible(c, path);
+}
+
+} // namespace
+
+void checkCameraPlausible(const CameraModel &c, const std::string &what) {
+  auto fail = [&](const std::string &why) { throw Error(what + ": implausible camera: " + why); };
   auto num = [](double v) {
     std::ostringstream ss;
     ss.precision(6);
@@ -489,8 +495,6 @@ void checkPlausible(const std::string &path, const CameraModel &c) {
     }
   }
 }
-
-} // namespace
 
 CameraModel loadCameraFile(const std::string &path, const std::string &camera_name) {
   try {

@@ -242,7 +242,9 @@ bool refineSaddle(const RefineContext &c, cv::Point2d &q, double sigma) {
 } // namespace
 
 void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corners, double spacing_px,
-                             CornerRefinement method, int window) {
+                             CornerRefinement method, int window, std::vector<bool> *refined) {
+  if (refined)
+    refined->assign(corners.size(), true);
   if (method == CornerRefinement::None || corners.empty())
     return;
   if (gray.empty() || gray.type() != CV_8UC1)
@@ -260,9 +262,14 @@ void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corn
       pts.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
     cv::cornerSubPix(gray, pts, cv::Size(half, half), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
-    for (std::size_t i = 0; i < pts.size(); ++i)
-      if (std::hypot(pts[i].x - corners[i].x, pts[i].y - corners[i].y) <= max_move)
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const bool ok = std::isfinite(pts[i].x) && std::isfinite(pts[i].y) &&
+                      std::hypot(pts[i].x - corners[i].x, pts[i].y - corners[i].y) <= max_move;
+      if (ok)
         corners[i] = cv::Point2d(pts[i].x, pts[i].y);
+      else if (refined)
+        (*refined)[i] = false;
+    }
     return;
   }
   RefineContext c;
@@ -273,12 +280,15 @@ void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corn
     cv::Sobel(c.f, c.gx, CV_32F, 1, 0, 3, 1.0 / 8);
     cv::Sobel(c.f, c.gy, CV_32F, 0, 1, 3, 1.0 / 8);
   }
-  for (auto &p : corners) {
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    cv::Point2d &p = corners[i];
     cv::Point2d q = p;
     const auto one = method == CornerRefinement::Gradient ? refineGradient : refineSaddle;
     const bool ok = window > 0 ? one(c, q, sigma) : refineAdaptive(c, q, sigma, one);
     if (ok && std::hypot(q.x - p.x, q.y - p.y) <= max_move)
       p = q;
+    else if (refined)
+      (*refined)[i] = false;
   }
 }
 
@@ -466,13 +476,16 @@ FrameDetection PatternDetector::Impl::detectChessboard(const cv::Mat &gray, long
   }
 
   // 2. Sub-pixel refinement, each corner on its own.
+  std::vector<bool> refined; // by detected grid index; empty: all refined (or no refinement asked)
   if (options.subpixel) {
     const CornerRefinement method = options.refinement;
     // The iterative methods need a start within about a pixel: cornerSubPix first.
     if (classic || method == CornerRefinement::Gradient || method == CornerRefinement::Saddle)
       refineChessboardCorners(gray, det, spacing, CornerRefinement::OpenCV, options.subpixel_window);
+    std::vector<bool> ok_final;
     if (method != CornerRefinement::OpenCV)
-      refineChessboardCorners(gray, det, spacing, method, options.subpixel_window);
+      refineChessboardCorners(gray, det, spacing, method, options.subpixel_window, &ok_final);
+    refined = ok_final;
   }
 
   // 3. Ids in the board's own grid. Candidates: the grid symmetries (4, or 8 for a square board)
@@ -587,6 +600,11 @@ FrameDetection PatternDetector::Impl::detectChessboard(const cv::Mat &gray, long
       const long id = static_cast<long>(R) * cols + C;
       out.features.push_back(DetectedFeature{id, p.x, p.y});
       current[id] = p;
+      int r = 0, c = 0;
+      detOf(m, R, C, r, c);
+      if (!refined.empty() && !refined[static_cast<std::size_t>(r) * cols + c])
+        out.warnings.push_back("corner " + std::to_string(id) +
+                               ": sub-pixel refinement failed, the detector's estimate kept");
     }
   previous = std::move(current);
   out.found = true;
@@ -611,6 +629,12 @@ FrameDetection PatternDetector::Impl::detectAprilTag(const cv::Mat &gray, long f
       ++count[ids[i]];
   }
   for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (ids[i] >= 0 && count[ids[i]] > 1) {
+      const std::string w = "tag " + std::to_string(ids[i]) + " seen " + std::to_string(count[ids[i]]) +
+                             " times in the image: dropped (ambiguous)";
+      if (std::find(out.warnings.begin(), out.warnings.end(), w) == out.warnings.end())
+        out.warnings.push_back(w);
+    }
     if (ids[i] < 0 || count[ids[i]] != 1 || ids[i] > std::numeric_limits<int>::max() / 5 - 1)
       continue; // unreadable or ambiguous (the same tag twice)
     const std::vector<vpImagePoint> &poly = apriltag->getPolygon(i);
@@ -752,6 +776,49 @@ bool headerSize(const std::vector<unsigned char> &b, std::uint64_t &w, std::uint
 }
 
 } // namespace
+
+cv::Mat drawDetection(const cv::Mat &image, const FrameDetection &d) {
+  cv::Mat out;
+  if (image.empty())
+    out = cv::Mat(480, 640, CV_8UC3, cv::Scalar(60, 60, 60));
+  else if (image.depth() != CV_8U)
+    out = cv::Mat(image.rows, image.cols, CV_8UC3, cv::Scalar(60, 60, 60));
+  else if (image.channels() == 1)
+    cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
+  else if (image.channels() == 4)
+    cv::cvtColor(image, out, cv::COLOR_BGRA2BGR);
+  else if (image.channels() == 3)
+    out = image.clone();
+  else
+    out = cv::Mat(image.rows, image.cols, CV_8UC3, cv::Scalar(60, 60, 60));
+  const double scale = std::max(0.35, out.cols / 1800.0);
+  const int r = std::max(3, out.cols / 200);
+  std::map<long, cv::Point2d> at;
+  for (const auto &f : d.features)
+    at[f.id] = cv::Point2d(f.u, f.v);
+  // chessboard: the first row's direction from corner 0 to corner 1
+  if (at.count(0) && at.count(1))
+    cv::arrowedLine(out, at[0], at[1], cv::Scalar(0, 200, 0), 1, cv::LINE_AA, 0, 0.2);
+  for (const auto &f : d.features) {
+    const cv::Point p(static_cast<int>(std::lround(f.u)), static_cast<int>(std::lround(f.v)));
+    const cv::Scalar col = f.id == 0 ? cv::Scalar(0, 0, 255) : cv::Scalar(255, 80, 0);
+    cv::drawMarker(out, p, col, cv::MARKER_CROSS, 2 * r, 1, cv::LINE_AA);
+    cv::putText(out, std::to_string(f.id), p + cv::Point(3, -3), cv::FONT_HERSHEY_SIMPLEX, scale, col, 1, cv::LINE_AA);
+  }
+  for (const std::string &w : d.warnings) {
+    long id = -1;
+    if (std::sscanf(w.c_str(), "corner %ld", &id) == 1 && at.count(id))
+      cv::circle(out, at[id], 3 * r, cv::Scalar(0, 140, 255), 2, cv::LINE_AA);
+  }
+  const std::string title = "frame " + std::to_string(d.frame) + ": " +
+                            (d.found ? std::to_string(d.features.size()) + " features" : "NOT FOUND: " + d.reason) +
+                            (d.warnings.empty() ? std::string() : ", " + std::to_string(d.warnings.size()) + " warning(s)");
+  cv::putText(out, title, cv::Point(6, static_cast<int>(18 * scale / 0.35)), cv::FONT_HERSHEY_SIMPLEX, scale * 1.2,
+              cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+  cv::putText(out, title, cv::Point(6, static_cast<int>(18 * scale / 0.35)), cv::FONT_HERSHEY_SIMPLEX, scale * 1.2,
+              d.found ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 0, 255), 1, cv::LINE_AA);
+  return out;
+}
 
 cv::Mat readGrayImage(const std::string &path) {
   // Read the bytes ourselves (clear messages for missing, empty, endless or huge files; only a

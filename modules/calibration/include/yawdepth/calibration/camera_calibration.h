@@ -30,6 +30,8 @@ struct CalibrationDetections {
   int width = 0, height = 0;              //!< image height (px)
   std::vector<CalibrationView> views;     //!< the images where the pattern was found
   std::vector<std::string> failures;      //!< "NAME: reason" for every image where it was not
+  std::vector<std::string> warnings;      //!< "NAME: warning" (FrameDetection::warnings, features not on the board)
+  std::vector<FrameDetection> detections; //!< every image's detection, in input order (frame = index)
 };
 
 /*!
@@ -57,8 +59,13 @@ struct CameraCalibrationOptions {
   /*!
     Auto: each model is fitted with whole views left out (at most `cv_folds` folds, view k in fold
     k mod folds); a left-out view's pose is fitted to its own corners with the model's intrinsics
-    and its reprojection error counted. The model with the least held-out RMS is chosen, or a
-    simpler one whose held-out RMS is within `simpler_within` of it. With fewer than 4 views: K4.
+    and its reprojection error counted. Views left out only test where views were; where none
+    reached, a flexible model can be far off: its projection uncertainty (projectionUncertainty(),
+    RMS over the image) says how far. The score is sqrt(held-out RMS^2 + uncertainty^2); the model
+    with the least score is chosen, or a simpler one within `simpler_within` of it, among the models whose fit is
+    a usable camera over the whole image (checkCameraPlausible(): invertible, monotonic out to the
+    image's corners). With fewer than 4 views: K4. A given model whose fit is not usable is an
+    error, as is Auto when none is.
   */
   Distortion distortion = Distortion::Auto;
   int cv_folds = 10;                //!< Auto: at most this many folds of left-out views
@@ -91,7 +98,16 @@ struct DistortionModelScore {
   int coefficients = 0;      //!< 4, 5 or 8
   double rms_px = 0;         //!< RMS reprojection error over every view (px per point, as OpenCV's)
   double heldout_rms_px = 0; //!< RMS error on views left out (px per point); 0 when not computed
+  /*! RMS over an 8 x 6 grid of the whole image of projectionUncertainty() (px): what the views
+      leave unknown where they did not reach; 0 when not computed */
+  double image_uncertainty_px = 0;
+  /*! The criterion: sqrt(heldout_rms_px^2 + image_uncertainty_px^2), the expected error of a
+      prediction anywhere in the image; 0 when not computed */
+  double score_px = 0;
   bool chosen = false;       //!< the model of the result
+  /*! Empty, or why the model cannot be used: its fit does not invert over the whole image
+      (checkCameraPlausible()), typically a high-order model beyond the corners' reach. */
+  std::string inadmissible;
 };
 
 /*! \brief Result of calibrateCamera(). */

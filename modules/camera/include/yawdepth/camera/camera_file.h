@@ -22,6 +22,17 @@ namespace yawdepth {
 */
 CameraModel loadCameraFile(const std::string &path, const std::string &camera_name = "");
 
+/*!
+  \brief Throws yawdepth::Error ("WHAT: implausible camera: why") for a camera that cannot be a real
+  one: focal lengths outside 1e-3..1e6 px or with an aspect ratio beyond 10, an image side over
+  65535 px, a principal point more than half an image outside the image, or (image size known) a
+  distortion that is not invertible over the whole image (not monotonic along a ray from the
+  centre, Newton's inverse failing) or that maps it to a field more than 10x wider or narrower than
+  the pinhole would. loadCameraFile() applies it to every file it reads.
+  \param camera The camera. \param what What to name in the message (a file, a model).
+*/
+void checkCameraPlausible(const CameraModel &camera, const std::string &what);
+
 /*! \brief An OpenCV YAML camera file's text (the format loadCameraFile() reads). \param camera The camera. */
 std::string cameraYamlText(const CameraModel &camera);
 /*!

@@ -27,7 +27,18 @@ struct FrameDetection {
   bool found = false;         //!< false: no usable pattern; `reason` says why
   std::string reason;         //!< e.g. "chessboard 5x4 not found", "image unreadable"
   std::vector<DetectedFeature> features; //!< the detected features (empty when not found)
+  /*! Features kept but less sure, one line each: e.g. "corner 17: sub-pixel refinement failed,
+      the detector's estimate kept", or AprilTag ids of the board seen twice and dropped. */
+  std::vector<std::string> warnings;
 };
+
+/*!
+  \brief A picture to check a detection by eye: the image in colour, each feature as a cross with
+  its id (chessboard: corner 0 in red, the board's X direction along the first row in green), the
+  warnings' features circled in orange, and the reason on top when the pattern was not found.
+  \param image The image that was given to detect() (grayscale or colour). \param detection Its result.
+*/
+cv::Mat drawDetection(const cv::Mat &image, const FrameDetection &detection);
 
 /*!
   \brief Sub-pixel refinement of chessboard corners (each corner on its own: no homography or
@@ -126,9 +137,11 @@ private:
   \param spacing_px Smallest distance between neighbouring corners (px): sets the window.
   \param method The refinement method.
   \param window Half-size of the window (px); 0 = from `spacing_px`.
+  \param refined If not null, receives for each corner whether its refinement succeeded (false:
+  the input was kept).
 */
 void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corners, double spacing_px,
-                             CornerRefinement method, int window = 0);
+                             CornerRefinement method, int window = 0, std::vector<bool> *refined = nullptr);
 
 /*! \brief Read an image file as 8-bit grayscale; throws yawdepth::Error (unreadable, truncated, empty). */
 cv::Mat readGrayImage(const std::string &path);
