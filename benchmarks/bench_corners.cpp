@@ -32,6 +32,11 @@
 #include <yawdepth/features/detector.h>
 #include <yawdepth/features/pattern.h>
 #include <yawdepth/render/renderer.h>
+#include <array>
+#include <Eigen/Dense>
+#include <visp3/core/vpImage.h>
+#include <visp3/core/vpImageConvert.h>
+#include <visp3/detection/vpDetectorAprilTag.h>
 #include <random>
 #include <cstdlib>
 
@@ -152,6 +157,8 @@ bool loadSet(ImageSet &s, const std::vector<std::string> &paths) {
 }
 
 void runChessboardSet(const ImageSet &s, const std::vector<Method> &methods) {
+  if (s.images.empty())
+    return;
   const std::size_t nm = methods.size();
   std::vector<std::vector<Corners>> corners(nm, std::vector<Corners>(s.images.size()));
   for (std::size_t i = 0; i < s.images.size(); ++i) {
@@ -352,16 +359,201 @@ ImageSet photoRenders(int count, std::uint64_t seed, bool photo) {
   return s;
 }
 
+/*!
+  The corners of coplanar tags against one plane: unknowns the image-from-plane homography and
+  each tag's position and turn on the plane (tag 0 fixes the plane's frame), the tag side known;
+  Gauss-Newton on the 4 corners of every tag. Returns the RMS per coordinate
+  sqrt(SSE / (2 * 4 * tags - 8 - 3 * (tags - 1))); NaN when it fails.
+  `corners[t]` are tag t's 4 corners in the order of pattern.h (counter-clockwise from bottom-left
+  in the tag's own frame: (-s/2, s/2), (s/2, s/2), (s/2, -s/2), (-s/2, -s/2) as libapriltag).
+*/
+double coplanarTagsRms(const std::vector<std::array<cv::Point2d, 4>> &corners) {
+  const int T = static_cast<int>(corners.size());
+  if (T < 2)
+    return NAN;
+  const double h = 0.5; // unit tag side: positions in tag sides
+  const cv::Point2d local[4] = {{-h, h}, {h, h}, {h, -h}, {-h, -h}};
+  // Initial H from tag 0's corners; other tags placed through H^-1 (Procrustes).
+  std::vector<cv::Point2d> l0(local, local + 4), i0(corners[0].begin(), corners[0].end());
+  cv::Mat H = cv::findHomography(l0, i0, 0);
+  if (H.empty())
+    return NAN;
+  H /= H.at<double>(2, 2);
+  const int np = 8 + 3 * (T - 1);
+  Eigen::VectorXd x(np);
+  for (int k = 0; k < 8; ++k)
+    x[k] = H.at<double>(k / 3, k % 3);
+  const cv::Mat Hi = H.inv();
+  for (int t = 1; t < T; ++t) {
+    std::vector<cv::Point2d> img(corners[t].begin(), corners[t].end()), pl;
+    cv::perspectiveTransform(img, pl, Hi);
+    cv::Point2d c(0, 0);
+    for (const auto &p : pl)
+      c += 0.25 * p;
+    double sc = 0, ss = 0;
+    for (int k = 0; k < 4; ++k) {
+      const cv::Point2d q = pl[k] - c;
+      sc += local[k].x * q.x + local[k].y * q.y;
+      ss += local[k].x * q.y - local[k].y * q.x;
+    }
+    x[8 + 3 * (t - 1)] = c.x;
+    x[8 + 3 * (t - 1) + 1] = c.y;
+    x[8 + 3 * (t - 1) + 2] = std::atan2(ss, sc);
+  }
+  auto residuals = [&](const Eigen::VectorXd &p) {
+    Eigen::VectorXd r(8 * T);
+    for (int t = 0; t < T; ++t) {
+      double cx = 0, cy = 0, a = 0;
+      if (t > 0) {
+        cx = p[8 + 3 * (t - 1)];
+        cy = p[8 + 3 * (t - 1) + 1];
+        a = p[8 + 3 * (t - 1) + 2];
+      }
+      for (int k = 0; k < 4; ++k) {
+        const double X = cx + std::cos(a) * local[k].x - std::sin(a) * local[k].y;
+        const double Y = cy + std::sin(a) * local[k].x + std::cos(a) * local[k].y;
+        const double w = p[6] * X + p[7] * Y + 1;
+        r[8 * t + 2 * k] = (p[0] * X + p[1] * Y + p[2]) / w - corners[t][k].x;
+        r[8 * t + 2 * k + 1] = (p[3] * X + p[4] * Y + p[5]) / w - corners[t][k].y;
+      }
+    }
+    return r;
+  };
+  for (int it = 0; it < 30; ++it) {
+    const Eigen::VectorXd r = residuals(x);
+    Eigen::MatrixXd J(r.size(), np);
+    for (int k = 0; k < np; ++k) {
+      const double d = 1e-7 * std::max(1.0, std::abs(x[k]));
+      Eigen::VectorXd xp = x;
+      xp[k] += d;
+      J.col(k) = (residuals(xp) - r) / d;
+    }
+    const Eigen::VectorXd step = J.colPivHouseholderQr().solve(-r);
+    x += step;
+    if (step.norm() < 1e-12 * (1 + x.norm()))
+      break;
+  }
+  const Eigen::VectorXd r = residuals(x);
+  return std::sqrt(r.squaredNorm() / (8.0 * T - np));
+}
+
+/*! Tag poses' consistency: distance RMS of the tag centres to their best plane (mm) and the
+    largest angle between a tag's normal and that plane's normal (deg). */
+void posePlanarity(const std::vector<vpHomogeneousMatrix> &cMt, double &plane_rms_mm, double &normal_deg) {
+  Eigen::MatrixXd P(static_cast<Eigen::Index>(cMt.size()), 3);
+  for (std::size_t i = 0; i < cMt.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      P(static_cast<Eigen::Index>(i), k) = cMt[i][k][3];
+  const Eigen::RowVector3d mean = P.colwise().mean();
+  const Eigen::MatrixXd Q = P.rowwise() - mean;
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Q, Eigen::ComputeThinV);
+  Eigen::Vector3d n = svd.matrixV().col(2);
+  plane_rms_mm = 1000 * std::sqrt((Q * n).squaredNorm() / std::max<Eigen::Index>(1, P.rows() - 3));
+  normal_deg = 0;
+  for (const auto &M : cMt) {
+    const Eigen::Vector3d z(M[0][2], M[1][2], M[2][2]);
+    normal_deg = std::max(normal_deg, std::acos(std::min(1.0, std::abs(z.dot(n)))) * 180 / M_PI);
+  }
+}
+
+/*! AprilTag.pgm (visp-images-data): 12 coplanar 36h11 tags, 53 mm, camera without distortion as
+    ViSP's own test takes it; ViSP's vpDetectorAprilTag beside yawdepth's detector. */
+void runAprilTagSet(const std::string &path) {
+  const cv::Mat gray = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (gray.empty()) {
+    std::printf("\n## AprilTag.pgm: %s not readable (apt-get install visp-images-data), skipped\n", path.c_str());
+    return;
+  }
+  const double tag = 0.053;
+  vpCameraParameters cam;
+  cam.initPersProjWithoutDistortion(615.1674805, 615.1675415, 312.1889954, 243.4373779);
+  const CameraModel camera(cam, static_cast<unsigned>(gray.cols), static_cast<unsigned>(gray.rows));
+  std::printf("\n## AprilTag.pgm (real, visp-images-data): %dx%d, 36h11 tags of 53 mm, camera 615.17/615.17/312.19/243.44\n",
+              gray.cols, gray.rows);
+  std::printf("%-34s %5s %14s %16s %16s\n", "detector", "tags", "H-rms (px)", "pose plane (mm)", "normals (deg)");
+  // ViSP, as a ViSP user runs it (default options: quad decimation 1, pose from its homography).
+  vpImage<unsigned char> I;
+  vpImageConvert::convert(gray, I);
+  std::map<long, std::array<cv::Point2d, 4>> visp_c;
+  std::vector<vpHomogeneousMatrix> visp_pose;
+  {
+    vpDetectorAprilTag d(vpDetectorAprilTag::TAG_36h11);
+    d.detect(I);
+    for (std::size_t i = 0; i < d.getNbObjects(); ++i) {
+      const std::vector<vpImagePoint> &poly = d.getPolygon(i);
+      long id = -1;
+      std::sscanf(d.getMessage(i).c_str(), "36h11 id: %ld", &id);
+      if (poly.size() != 4 || id < 0)
+        continue;
+      for (int k = 0; k < 4; ++k)
+        visp_c[id][static_cast<std::size_t>(k)] = cv::Point2d(poly[static_cast<std::size_t>(k)].get_u(), poly[static_cast<std::size_t>(k)].get_v());
+      vpHomogeneousMatrix M;
+      if (d.getPose(i, tag, cam, M))
+        visp_pose.push_back(M);
+    }
+  }
+  // yawdepth's detector (features by id, pattern.h), poses by PnP of the 4 corners (IPPE square).
+  std::map<long, std::array<cv::Point2d, 4>> ours;
+  std::vector<vpHomogeneousMatrix> our_pose;
+  {
+    PatternDetector det(PatternSpec::parse("apriltag:36h11:0.053"));
+    det.setCamera(camera);
+    const FrameDetection d = det.detect(gray, 0);
+    std::map<long, std::map<int, cv::Point2d>> byTag;
+    for (const auto &f : d.features) {
+      const long t = f.id / 5, k = f.id % 5 - 1;
+      if (k >= 0)
+        byTag[t][static_cast<int>(k)] = cv::Point2d(f.u, f.v);
+    }
+    for (const auto &[t, m] : byTag)
+      if (m.size() == 4) {
+        std::array<cv::Point2d, 4> c;
+        for (int k = 0; k < 4; ++k)
+          c[static_cast<std::size_t>(k)] = m.at(k);
+        ours[t] = c;
+        const std::vector<cv::Point3d> obj = {{-tag / 2, tag / 2, 0}, {tag / 2, tag / 2, 0}, {tag / 2, -tag / 2, 0}, {-tag / 2, -tag / 2, 0}};
+        const std::vector<cv::Point2d> img(c.begin(), c.end());
+        cv::Mat rv, tv;
+        const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.get_px(), 0, cam.get_u0(), 0, cam.get_py(), cam.get_v0(), 0, 0, 1);
+        if (cv::solvePnP(obj, img, K, cv::noArray(), rv, tv, false, cv::SOLVEPNP_IPPE_SQUARE)) {
+          cv::Mat R;
+          cv::Rodrigues(rv, R);
+          vpHomogeneousMatrix M;
+          for (int a = 0; a < 3; ++a) {
+            for (int b = 0; b < 3; ++b)
+              M[a][b] = R.at<double>(a, b);
+            M[a][3] = tv.at<double>(a);
+          }
+          our_pose.push_back(M);
+        }
+      }
+  }
+  auto row = [&](const char *name, const std::map<long, std::array<cv::Point2d, 4>> &c, const std::vector<vpHomogeneousMatrix> &poses) {
+    std::vector<std::array<cv::Point2d, 4>> v;
+    for (const auto &kv : c)
+      v.push_back(kv.second);
+    double pr = NAN, nd = NAN;
+    if (poses.size() >= 4)
+      posePlanarity(poses, pr, nd);
+    std::printf("%-34s %5zu %14.4f %16.3f %16.3f\n", name, v.size(), coplanarTagsRms(v), pr, nd);
+  };
+  row("ViSP vpDetectorAprilTag", visp_c, visp_pose);
+  row("yawdepth (ViSP corners, IPPE pose)", ours, our_pose);
+}
+
 } // namespace
 
 int main(int argc, char **argv) {
   std::string franka = "../shared/data/franka-eye-in-hand";
   int renders = 12;
+  std::string visp_images = "/usr/share/visp-images-data/ViSP-images";
   std::vector<std::string> extra;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--franka" && i + 1 < argc)
       franka = argv[++i];
+    else if (a == "--visp-images" && i + 1 < argc)
+      visp_images = argv[++i];
     else if (a == "--set" && i + 1 < argc)
       extra.push_back(argv[++i]);
     else if (a == "--renders" && i + 1 < argc)
@@ -423,6 +615,7 @@ int main(int argc, char **argv) {
   if (!loadSet(f, paths))
     return 1;
   runChessboardSet(f, methods);
+  runAprilTagSet(visp_images + "/AprilTag/AprilTag.pgm");
   runChessboardSet(photoRenders(renders, 11, true), methods);
   runChessboardSet(photoRenders(renders, 12, false), methods);
   return 0;
