@@ -456,6 +456,90 @@ void posePlanarity(const std::vector<vpHomogeneousMatrix> &cMt, double &plane_rm
   }
 }
 
+/*! Dot grids: ViSP's grid36-0*.pgm (real photos, 6x6 dots) and perspective renders with truth;
+    cv::findCirclesGrid (symmetric grid) beside yawdepth's refineDotGridCentres on its output.
+    No undistortion (the grid photos' camera is not given): the homography RMS includes the lens. */
+void runDotGrids(const std::string &visp_images) {
+  std::printf("\n## dot grids: homography RMS of the centres (px; no undistortion), renders also against the truth\n");
+  std::printf("%-44s %5s %12s %12s %12s %12s\n", "set", "found", "OpenCV H", "yawdepth H", "OpenCV err", "yawdepth err");
+  auto one = [](const cv::Mat &g, int cols, int rows, const std::vector<cv::Point2f> *truth, double &ho, double &hy,
+                double &eo, double &ey) {
+    Corners c;
+    if (!cv::findCirclesGrid(g, cv::Size(cols, rows), c, cv::CALIB_CB_SYMMETRIC_GRID))
+      return false;
+    std::vector<cv::Point2d> d(c.begin(), c.end());
+    refineDotGridCentres(g, d, cols, rows);
+    Corners y;
+    for (const auto &p : d)
+      y.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+    const cv::Mat K = cv::Mat::eye(3, 3, CV_64F), D;
+    ho = planarFit(c, cols, rows, K, D).h_rms;
+    hy = planarFit(y, cols, rows, K, D).h_rms;
+    eo = ey = NAN;
+    if (truth) {
+      Corners tc = *truth;
+      Corners c2 = c, y2 = y;
+      if (!matchOrder(tc, c2) || !matchOrder(tc, y2))
+        return false;
+      double so = 0, sy = 0;
+      for (std::size_t i = 0; i < tc.size(); ++i) {
+        const cv::Point2f a = c2[i] - tc[i], b = y2[i] - tc[i];
+        so += a.dot(a);
+        sy += b.dot(b);
+      }
+      eo = std::sqrt(so / (2.0 * tc.size()));
+      ey = std::sqrt(sy / (2.0 * tc.size()));
+    }
+    return true;
+  };
+  {
+    std::vector<double> ho, hy;
+    int n = 0, found = 0;
+    for (int k = 1; k <= 4; ++k) {
+      const cv::Mat g = cv::imread(visp_images + "/calibration/grid36-0" + std::to_string(k) + ".pgm", cv::IMREAD_GRAYSCALE);
+      if (g.empty())
+        continue;
+      ++n;
+      double a, b, c, d;
+      if (one(g, 6, 6, nullptr, a, b, c, d)) {
+        ++found;
+        ho.push_back(a);
+        hy.push_back(b);
+      }
+    }
+    if (n)
+      std::printf("%-44s %2d/%-2d %12.4f %12.4f %12s %12s\n", "ViSP grid36-0*.pgm (real, 6x6)", found, n, median(ho),
+                  median(hy), "-", "-");
+    else
+      std::printf("ViSP grid36-0*.pgm: not found (apt-get install visp-images-data)\n");
+  }
+  {
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> U(-1, 1);
+    std::vector<double> ho, hy, eo, ey;
+    int found = 0;
+    const int n = 10;
+    for (int k = 0; k < n; ++k) {
+      // a 6x6 grid, spacing ~60 px, dots 0.6 spacing, perspective from a random homography
+      const double s = 55 + 10 * U(rng);
+      cv::Matx33d H(s, 0.15 * s * U(rng), 170 + 20 * U(rng), 0.15 * s * U(rng), s, 90 + 20 * U(rng),
+                    2e-3 * U(rng) * 60 / s, 2e-3 * U(rng) * 60 / s, 1);
+      std::vector<cv::Point2f> truth;
+      const cv::Mat g = dotGridImage(H, 6, 6, 0.6, cv::Size(640, 480), 0.8, 2.0, 100 + k, truth);
+      double a, b, c, d;
+      if (one(g, 6, 6, &truth, a, b, c, d)) {
+        ++found;
+        ho.push_back(a);
+        hy.push_back(b);
+        eo.push_back(c);
+        ey.push_back(d);
+      }
+    }
+    std::printf("%-44s %2d/%-2d %12.4f %12.4f %12.4f %12.4f\n", "rendered 6x6 dot grids (perspective, blur 0.8)", found, n,
+                median(ho), median(hy), median(eo), median(ey));
+  }
+}
+
 /*! AprilTag.pgm (visp-images-data): 12 coplanar 36h11 tags, 53 mm, camera without distortion as
     ViSP's own test takes it; ViSP's vpDetectorAprilTag beside yawdepth's detector. */
 void runAprilTagSet(const std::string &path) {
@@ -616,6 +700,7 @@ int main(int argc, char **argv) {
     return 1;
   runChessboardSet(f, methods);
   runAprilTagSet(visp_images + "/AprilTag/AprilTag.pgm");
+  runDotGrids(visp_images);
   runChessboardSet(photoRenders(renders, 11, true), methods);
   runChessboardSet(photoRenders(renders, 12, false), methods);
   return 0;

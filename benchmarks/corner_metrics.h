@@ -152,5 +152,50 @@ inline Fit planarFit(const Corners &distorted, int cols, int rows, const cv::Mat
 }
 
 
+/*!
+  \brief A synthetic photo of a cols x rows grid of dark dots (diameter `dot` in grid units of 1)
+  seen through the board-to-image homography H (board (c, r) -> pixel): each dot's exact projected
+  outline filled at 8x resolution and area-averaged, Gaussian blur `blur` px, noise `noise` gray
+  levels (seeded). `truth` receives the exact image of each dot's centre (row-major).
+*/
+inline cv::Mat dotGridImage(const cv::Matx33d &H, int cols, int rows, double dot, cv::Size size, double blur,
+                            double noise, unsigned seed, std::vector<cv::Point2f> &truth) {
+  const int k = 8;
+  cv::Mat big(size.height * k, size.width * k, CV_8UC1, cv::Scalar(215));
+  truth.clear();
+  auto map = [&](double x, double y) {
+    const cv::Vec3d p = H * cv::Vec3d(x, y, 1);
+    return cv::Point2d(p[0] / p[2], p[1] / p[2]);
+  };
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      std::vector<cv::Point> poly;
+      for (int a = 0; a < 720; ++a) {
+        const double t = 2 * M_PI * a / 720;
+        const cv::Point2d q = map(c + 0.5 * dot * std::cos(t), r + 0.5 * dot * std::sin(t));
+        // pixel centres at integers: the big image's pixel (i) covers [i/k - 1/2, (i+1)/k - 1/2)
+        poly.emplace_back(static_cast<int>(std::lround((q.x + 0.5) * k * 16 - 8)),
+                          static_cast<int>(std::lround((q.y + 0.5) * k * 16 - 8)));
+      }
+      cv::fillPoly(big, std::vector<std::vector<cv::Point>>{poly}, cv::Scalar(35), cv::LINE_AA, 4);
+      const cv::Point2d t = map(c, r);
+      truth.emplace_back(static_cast<float>(t.x), static_cast<float>(t.y));
+    }
+  cv::Mat img;
+  cv::resize(big, img, size, 0, 0, cv::INTER_AREA);
+  img.convertTo(img, CV_32F);
+  if (blur > 0)
+    cv::GaussianBlur(img, img, cv::Size(0, 0), blur);
+  if (noise > 0) {
+    cv::Mat n(img.size(), CV_32F);
+    cv::RNG rng(seed);
+    rng.fill(n, cv::RNG::NORMAL, 0, noise);
+    img += n;
+  }
+  cv::Mat out;
+  img.convertTo(out, CV_8U);
+  return out;
+}
+
 } // namespace bench
 } // namespace yawdepth

@@ -143,6 +143,30 @@ private:
 void refineChessboardCorners(const cv::Mat &gray, std::vector<cv::Point2d> &corners, double spacing_px,
                              CornerRefinement method, int window = 0, std::vector<bool> *refined = nullptr);
 
+/*!
+  \brief Refine the centres of a planar grid of dark round dots on a light ground (ViSP's
+  calibration grid, OpenCV's symmetric circle grid), given roughly (e.g. by cv::findCirclesGrid).
+  Each dot's outline is found on 64 rays from its rough centre (the gradient's peak along the ray,
+  to a quarter pixel and a parabola; rays whose edge strays from the median radius, e.g. on marks
+  printed inside the dot, are dropped) and fitted by an ellipse C. The dot's centre of darkness is
+  then the centroid of w = (ground - I) / (ground - dot), clipped to 0..1, over the ellipse and a
+  ring around it, with w = 1 inside 0.8 of the outline (marks in the dot do not count): blur moves
+  no first moment, so this is the imaged ellipse's centre to a few thousandths of a pixel. Under
+  perspective the image of a circle's centre is not that: it is the pole of the image of the
+  plane's line at infinity with respect to the ellipse, \f$ c \propto C^{-1} H^{-T} (0, 0, 1)^T \f$
+  (H the grid's board-to-image homography), so the pole's offset from the ellipse's centre is
+  added. Distortion is not modelled (dots are small against it). A dot whose outline or centroid
+  cannot be measured keeps its input.
+  Measured (bench_corners): on rendered 6x6 grids under perspective (blur 0.8 px, noise 2) the
+  error against the truth is 0.005 px against cv::findCirclesGrid's 0.009 px; on ViSP's real
+  grid36 photos the homography RMS is 0.203 px against 0.220 px.
+  \param gray 8-bit grayscale image.
+  \param centres Row-major over the grid (`cols` per row), refined in place.
+  \param cols, rows The grid's size.
+  \return The number of dots refined.
+*/
+int refineDotGridCentres(const cv::Mat &gray, std::vector<cv::Point2d> &centres, int cols, int rows);
+
 /*! \brief Read an image file as 8-bit grayscale; throws yawdepth::Error (unreadable, truncated, empty). */
 cv::Mat readGrayImage(const std::string &path);
 
