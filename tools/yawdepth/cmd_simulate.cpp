@@ -157,7 +157,7 @@ Runner addSimulate(CLI::App &app)
       if (a->photo) {
         const RenderOptions p = photoLikeRenderOptions(a->board_distance);
         RenderOptions &r = a->render;
-        const auto unset = [&](const char *name) { return a->photo_options.size() && !findGiven(*a, name); };
+        const auto unset = [&](const char *name) { return !findGiven(*a, name); };
         if (unset("--light-gradient"))
           r.light_gradient = p.light_gradient;
         if (unset("--vignetting"))

@@ -224,8 +224,8 @@ void projectionJacobians(const std::vector<cv::Point3f> &obj, const cv::Mat &rve
   cv::projectPoints(o, rvec, tvec, K, dist, p, J);
   const int n = static_cast<int>(o.size());
   const int nd = static_cast<int>(dist.total());
-  Jint = Eigen::MatrixXd::Zero(2 * n, 12);
-  Jpose = Eigen::MatrixXd::Zero(2 * n, 6);
+  Jint = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(n), 12);
+  Jpose = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(n), 6);
   for (int r = 0; r < 2 * n; ++r) {
     const double *row = J.ptr<double>(r);
     for (int c = 0; c < 6; ++c)
@@ -397,7 +397,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
 
   // Held-out error of a model: views left out in folds, each predicted by a calibration without
   // it (its pose fitted to its own corners). Infinite when a fold's calibration fails.
-  auto heldOut = [&](const std::vector<std::size_t> &idx, Distortion d) {
+  auto heldOut = [&](const std::vector<std::size_t> &idx, Distortion d, const OpenCvSolution &all) {
     const std::size_t folds = std::min<std::size_t>(idx.size(), static_cast<std::size_t>(std::max(2, options.cv_folds)));
     double sse = 0;
     std::size_t n = 0;
@@ -409,10 +409,12 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
           obj.push_back(object[idx[k]]);
           img.push_back(image[idx[k]]);
         }
-      cv::Mat K = cv::Mat::eye(3, 3, CV_64F), dist = cv::Mat::zeros(1, d == Distortion::K8 ? 8 : 5, CV_64F);
+      // Started from the fit on every view: a fold's solution is near it.
+      cv::Mat K = all.K.clone(), dist = all.dist.clone();
       std::vector<cv::Mat> rv, tv;
       try {
-        cv::calibrateCamera(obj, img, cv::Size(width, height), K, dist, rv, tv, modelFlags(d, options),
+        cv::calibrateCamera(obj, img, cv::Size(width, height), K, dist, rv, tv,
+                            modelFlags(d, options) | cv::CALIB_USE_INTRINSIC_GUESS,
                             cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
         if (!cv::checkRange(K) || !cv::checkRange(dist))
           return std::numeric_limits<double>::infinity();
@@ -528,7 +530,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
           n += proj.size();
         }
         m.rms_px = std::sqrt(sse / static_cast<double>(n));
-        m.heldout_rms_px = heldOut(usable, d);
+        m.heldout_rms_px = heldOut(usable, d, s);
         m.inadmissible = admissibility(s, d, usable);
         if (m.inadmissible.empty()) {
           CameraCalibration tmp;

@@ -896,8 +896,8 @@ int refineDotGridCentres(const cv::Mat &gray, std::vector<cv::Point2d> &centres,
       }
       if (best < 2 || best > n - 3)
         continue;
-      const double gm = g[static_cast<std::size_t>(best - 1)], g0 = g[static_cast<std::size_t>(best)],
-                   gp = g[static_cast<std::size_t>(best + 1)];
+      const std::size_t b = static_cast<std::size_t>(best);
+      const double gm = g[b - 1], g0 = g[b], gp = g[b + 1];
       const double den = gm - 2 * g0 + gp;
       const double off = den < 0 ? 0.5 * (gm - gp) / den : 0.0;
       const double r = r0 + (best - 1 + off) * step;
@@ -979,19 +979,16 @@ int refineDotGridCentres(const cv::Mat &gray, std::vector<cv::Point2d> &centres,
 }
 
 cv::Mat drawDetection(const cv::Mat &image, const FrameDetection &d) {
-  cv::Mat out;
-  if (image.empty())
-    out = cv::Mat(480, 640, CV_8UC3, cv::Scalar(60, 60, 60));
-  else if (image.depth() != CV_8U)
-    out = cv::Mat(image.rows, image.cols, CV_8UC3, cv::Scalar(60, 60, 60));
-  else if (image.channels() == 1)
-    cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
-  else if (image.channels() == 4)
-    cv::cvtColor(image, out, cv::COLOR_BGRA2BGR);
-  else if (image.channels() == 3)
-    out = image.clone();
-  else
-    out = cv::Mat(image.rows, image.cols, CV_8UC3, cv::Scalar(60, 60, 60));
+  // A gray canvas for what cannot be shown (empty, not 8-bit, odd channel count).
+  cv::Mat out(image.empty() ? 480 : image.rows, image.empty() ? 640 : image.cols, CV_8UC3, cv::Scalar(60, 60, 60));
+  if (!image.empty() && image.depth() == CV_8U) {
+    if (image.channels() == 1)
+      cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
+    else if (image.channels() == 4)
+      cv::cvtColor(image, out, cv::COLOR_BGRA2BGR);
+    else if (image.channels() == 3)
+      image.copyTo(out);
+  }
   const double scale = std::max(0.35, out.cols / 1800.0);
   const int r = std::max(3, out.cols / 200);
   std::map<long, cv::Point2d> at;

@@ -68,7 +68,7 @@ struct CameraCalibrationOptions {
     error, as is Auto when none is.
   */
   Distortion distortion = Distortion::Auto;
-  int cv_folds = 10;                //!< Auto: at most this many folds of left-out views
+  int cv_folds = 5;                 //!< Auto: at most this many folds of left-out views
   double simpler_within = 0.01;     //!< Auto: relative margin by which a simpler model is preferred
   bool estimate_k3 = false;         //!< with distortion Auto: the same as K5 (kept for older callers)
   bool zero_tangential = false;     //!< p1 = p2 = 0
