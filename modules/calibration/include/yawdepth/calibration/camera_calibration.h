@@ -133,7 +133,8 @@ struct CameraCalibration {
   /*!
     Covariance of fx fy u0 v0 k1 k2 p1 p2 k3 k4 k5 k6 (12 x 12; rows and columns of fixed parameters
     are zero): the Gauss-Newton covariance of the final fit, poses marginalised (Schur complement),
-    scaled by the residual variance SSE / (2N - parameters). Its diagonal is OpenCV's std_devs^2.
+    scaled by the residual variance SSE / (2N - parameters). Its diagonal is std_devs^2. (OpenCV's
+    own deviations are larger by sqrt((2N - p) / (N - p)): it divides by N points, not 2N residuals.)
   */
   Eigen::Matrix<double, 12, 12> intrinsics_covariance = Eigen::Matrix<double, 12, 12>::Zero();
   /*! Projection uncertainty (px, 1 sigma along the worst direction, projectionUncertainty()) at the
