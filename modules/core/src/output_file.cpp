@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <utility>
 #include <string>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -135,6 +136,14 @@ std::string outputKey(const std::string &path)
 
 void checkOutputs(const std::vector<NamedPath> &inputs, const std::vector<NamedPath> &outputs)
 {
+  // Each input stat'ed once, by (device, inode): a sequence's thousands of images against as many
+  // --debug-dir pictures stay linear, not a stat per pair.
+  std::map<std::pair<dev_t, ino_t>, const NamedPath *> input_ids;
+  for (const NamedPath &i : inputs) {
+    struct stat si;
+    if (!i.path.empty() && ::stat(i.path.c_str(), &si) == 0)
+      input_ids.emplace(std::make_pair(si.st_dev, si.st_ino), &i);
+  }
   std::map<std::string, const NamedPath *> seen;
   for (const NamedPath &o : outputs) {
     if (o.path == "-")
@@ -142,12 +151,15 @@ void checkOutputs(const std::vector<NamedPath> &inputs, const std::vector<NamedP
     if (o.path.empty())
       fail(o.option + ": empty file name");
     struct stat st;
-    if (::stat(o.path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    const bool exists = ::stat(o.path.c_str(), &st) == 0;
+    if (exists && S_ISDIR(st.st_mode))
       fail(o.option + " " + o.path + ": is a folder, not a file");
-    for (const NamedPath &i : inputs)
-      if (sameFile(i.path, o.path))
-        fail(o.option + " " + o.path + ": is the input " + i.option + " " + i.path +
+    if (exists) {
+      const auto in = input_ids.find(std::make_pair(st.st_dev, st.st_ino));
+      if (in != input_ids.end())
+        fail(o.option + " " + o.path + ": is the input " + in->second->option + " " + in->second->path +
              " (refusing to overwrite an input; choose another output)");
+    }
     const std::string key = outputKey(o.path);
     if (key.empty())
       continue;
