@@ -1,6 +1,8 @@
 // `yawdepth simulate`: a synthetic sequence with known truth. Random 3D points (tracks only), or a
 // rendered chessboard / AprilTag board (images named in motion.csv, plus tracks of the true
 // feature positions).
+#include <functional>
+#include <utility>
 #include "commands.h"
 
 #include <cmath>
@@ -20,9 +22,6 @@ namespace yawdepth::cli {
 
 namespace {
 
-struct SimulateArgs;
-bool findGiven(const SimulateArgs &a, const char *name);
-
 struct SimulateArgs {
   std::string camera, camera_name, rig, out_dir;
   SceneOptions scene;
@@ -34,16 +33,9 @@ struct SimulateArgs {
   double outer_square = 0;
   bool photo = false;
   RenderOptions render;
-  std::vector<CLI::Option *> photo_options; //!< the options --photo sets when they are not given
+  /*! the options --photo sets when they are not given, each with how to take the preset's value */
+  std::vector<std::pair<CLI::Option *, std::function<void(RenderOptions &, const RenderOptions &)>>> photo_options;
 };
-
-/* True when the option `name` of --photo's group was given on the command line. */
-bool findGiven(const SimulateArgs &a, const char *name) {
-  for (const CLI::Option *o : a.photo_options)
-    if (o->check_name(name))
-      return o->count() > 0;
-  return false;
-}
 
 /* Pose of the board in the world: facing the first camera, its pattern centred on the optical
    axis at `distance`, turned by `tilt` about the board's vertical axis. */
@@ -123,22 +115,30 @@ Runner addSimulate(CLI::App &app)
                 "Make the images look like a consumer camera's photographs (the options below, unless given): "
                 "light gradient 0.3, vignetting 0.35, defocus 1.5 px, Bayer, shot noise 0.15, image noise 1.5, "
                 "gamma 2.2, JPEG 85, blur 0.6");
-  a->photo_options = {
-      sub->add_option("--light-gradient", a->render.light_gradient, "Relative change of the light across the image (0..1)")
-          ->check(CLI::Range(0.0, 1.0)),
-      sub->add_option("--vignetting", a->render.vignetting, "Relative fall-off of the light at the image corners (0..1)")
-          ->check(CLI::Range(0.0, 1.0)),
-      sub->add_option("--defocus", a->render.defocus_px,
-                      "Defocus blur sigma (px) = DEFOCUS x |focus distance / depth - 1|")
-          ->check(CLI::Range(0.0, 1000.0)),
-      sub->add_option("--shot-noise", a->render.shot_noise, "Shot noise variance per gray level of signal")
-          ->check(FiniteNonNegative),
-      sub->add_option("--gamma", a->render.gamma, "Response curve: out = 255 (in / 255)^(1 / GAMMA)")->check(CLI::Range(0.1, 10.0)),
-      sub->add_option("--jpeg-quality", a->render.jpeg_quality, "JPEG round trip at this quality (1..100; 0 = none)")
-          ->check(CLI::Range(0, 100)),
-      sub->add_flag("--bayer", a->render.bayer, "Bayer mosaic (RGGB) and demosaicing"),
-      sub->get_option("--image-noise"),
-      sub->get_option("--blur")};
+  // Each option --photo sets when it is not given, with how to take the preset's value.
+  using Copy = std::function<void(RenderOptions &, const RenderOptions &)>;
+  const auto photo = [&](CLI::Option *o, Copy copy) { a->photo_options.emplace_back(o, std::move(copy)); };
+  photo(sub->add_option("--light-gradient", a->render.light_gradient, "Relative change of the light across the image (0..1)")
+            ->check(CLI::Range(0.0, 1.0)),
+        [](RenderOptions &r, const RenderOptions &p) { r.light_gradient = p.light_gradient; });
+  photo(sub->add_option("--vignetting", a->render.vignetting, "Relative fall-off of the light at the image corners (0..1)")
+            ->check(CLI::Range(0.0, 1.0)),
+        [](RenderOptions &r, const RenderOptions &p) { r.vignetting = p.vignetting; });
+  photo(sub->add_option("--defocus", a->render.defocus_px, "Defocus blur sigma (px) = DEFOCUS x |focus distance / depth - 1|")
+            ->check(CLI::Range(0.0, 1000.0)),
+        [](RenderOptions &r, const RenderOptions &p) { r.defocus_px = p.defocus_px; });
+  photo(sub->add_option("--shot-noise", a->render.shot_noise, "Shot noise variance per gray level of signal")
+            ->check(FiniteNonNegative),
+        [](RenderOptions &r, const RenderOptions &p) { r.shot_noise = p.shot_noise; });
+  photo(sub->add_option("--gamma", a->render.gamma, "Response curve: out = 255 (in / 255)^(1 / GAMMA)")->check(CLI::Range(0.1, 10.0)),
+        [](RenderOptions &r, const RenderOptions &p) { r.gamma = p.gamma; });
+  photo(sub->add_option("--jpeg-quality", a->render.jpeg_quality, "JPEG round trip at this quality (1..100; 0 = none)")
+            ->check(CLI::Range(0, 100)),
+        [](RenderOptions &r, const RenderOptions &p) { r.jpeg_quality = p.jpeg_quality; });
+  photo(sub->add_flag("--bayer", a->render.bayer, "Bayer mosaic (RGGB) and demosaicing"),
+        [](RenderOptions &r, const RenderOptions &p) { r.bayer = p.bayer; });
+  photo(sub->get_option("--image-noise"), [](RenderOptions &r, const RenderOptions &p) { r.noise_sigma = p.noise_sigma; });
+  photo(sub->get_option("--blur"), [](RenderOptions &r, const RenderOptions &p) { r.blur_sigma_px = p.blur_sigma_px; });
   sub->add_option("--focus-distance", a->render.focus_distance, "Depth in focus for --defocus (m; default the board distance)")
       ->check(FiniteNonNegative);
   sub->add_option("--supersampling", a->render.supersampling, "Anti-aliasing samples per pixel side")
@@ -155,27 +155,10 @@ Runner addSimulate(CLI::App &app)
       so.points = 0;
     if (board_mode) {
       if (a->photo) {
-        const RenderOptions p = photoLikeRenderOptions(a->board_distance);
-        RenderOptions &r = a->render;
-        const auto unset = [&](const char *name) { return !findGiven(*a, name); };
-        if (unset("--light-gradient"))
-          r.light_gradient = p.light_gradient;
-        if (unset("--vignetting"))
-          r.vignetting = p.vignetting;
-        if (unset("--defocus"))
-          r.defocus_px = p.defocus_px;
-        if (unset("--shot-noise"))
-          r.shot_noise = p.shot_noise;
-        if (unset("--gamma"))
-          r.gamma = p.gamma;
-        if (unset("--jpeg-quality"))
-          r.jpeg_quality = p.jpeg_quality;
-        if (unset("--bayer"))
-          r.bayer = p.bayer;
-        if (unset("--image-noise"))
-          r.noise_sigma = p.noise_sigma;
-        if (unset("--blur"))
-          r.blur_sigma_px = p.blur_sigma_px;
+        const RenderOptions preset = photoLikeRenderOptions(a->board_distance);
+        for (const auto &[option, copy] : a->photo_options)
+          if (option->count() == 0)
+            copy(a->render, preset);
       }
       if (a->render.defocus_px > 0 && !(a->render.focus_distance > 0))
         a->render.focus_distance = a->board_distance;
