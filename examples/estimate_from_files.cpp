@@ -28,7 +28,7 @@ int main(int argc, char **argv)
     const yawdepth::CameraModel camera = yawdepth::loadCameraFile(argv[1]);
     // Rig: the optical centre's offset from the yaw axis, and optionally a fixed yaw.
     const yawdepth::RigFile rig_file = yawdepth::readRigFile(argv[2]);
-    const yawdepth::YawRig rig(rig_file.camera_offset);
+    const yawdepth::YawRig rig = yawdepth::rigOf(rig_file);
     // Motion log (one row per frame); the rig's fixed yaw is used if the log has no yaw column.
     const yawdepth::MotionLog motion = yawdepth::readMotionCsv(argv[3], rig_file.yaw);
     // Tracks: every observation of every feature, grouped by feature id.

@@ -49,7 +49,7 @@ int main(int argc, char **argv)
     std::optional<double> fixed_yaw;
     if (!rig_path.empty()) {
       const yawdepth::RigFile rf = yawdepth::readRigFile(rig_path);
-      rig = yawdepth::YawRig(rf.camera_offset);
+      rig = yawdepth::rigOf(rf);
       fixed_yaw = rf.yaw;
     }
     yawdepth::MotionLog log = yawdepth::readMotionCsv(motion_path, fixed_yaw);

@@ -34,16 +34,16 @@ MotionSample sample(long frame, double x, double z, double heading, double yaw)
 /* The exact map of the filter's prediction, for finite differences: a point in (x, y, log 1/Z)
    through a perturbed increment. */
 Eigen::Vector3d exactPrediction(const MotionSample &a, const MotionSample &b, const Eigen::Vector3d &xyr,
-                                const Eigen::Matrix<double, 6, 1> &n)
+                                const Eigen::Matrix<double, 8, 1> &n)
 {
   IncrementPerturbation<double> p;
   p.d_translation = n.head<3>();
-  p.d_heading = n(3);
-  p.d_yaw_prev = n(4);
-  p.d_yaw_cur = n(5);
+  p.d_rotation = n.segment<3>(3);
+  p.d_yaw_prev = n(6);
+  p.d_yaw_cur = n(7);
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
-  relativeMotion(kRig.cameraOffset(), a, b, p, R, t);
+  relativeMotion(kRig, a, b, p, R, t);
   const Eigen::Vector3d P = R * Eigen::Vector3d(xyr(0), xyr(1), 1.0) * std::exp(-xyr(2)) + t;
   return Eigen::Vector3d(P.x() / P.z(), P.y() / P.z(), -std::log(P.z()));
 }
@@ -60,18 +60,18 @@ TEST_CASE("IncrementModel: R, t and their derivatives", "[fused]")
   CHECK((inc.R - R).norm() < 1e-14);
   CHECK((inc.t - t).norm() < 1e-14);
   const double h = 1e-6;
-  for (int j = 0; j < 6; ++j) {
+  for (int j = 0; j < 8; ++j) {
     IncrementPerturbation<double> p, m;
-    double *pp[6] = {&p.d_translation(0), &p.d_translation(1), &p.d_translation(2), &p.d_heading, &p.d_yaw_prev,
-                     &p.d_yaw_cur};
-    double *mm[6] = {&m.d_translation(0), &m.d_translation(1), &m.d_translation(2), &m.d_heading, &m.d_yaw_prev,
-                     &m.d_yaw_cur};
+    double *pp[8] = {&p.d_translation(0), &p.d_translation(1), &p.d_translation(2), &p.d_rotation(0),
+                     &p.d_rotation(1),    &p.d_rotation(2),    &p.d_yaw_prev,       &p.d_yaw_cur};
+    double *mm[8] = {&m.d_translation(0), &m.d_translation(1), &m.d_translation(2), &m.d_rotation(0),
+                     &m.d_rotation(1),    &m.d_rotation(2),    &m.d_yaw_prev,       &m.d_yaw_cur};
     *pp[j] = h;
     *mm[j] = -h;
     Eigen::Matrix3d Rp, Rm;
     Eigen::Vector3d tp, tm;
-    relativeMotion(kRig.cameraOffset(), a, b, p, Rp, tp);
-    relativeMotion(kRig.cameraOffset(), a, b, m, Rm, tm);
+    relativeMotion(kRig, a, b, p, Rp, tp);
+    relativeMotion(kRig, a, b, m, Rm, tm);
     CHECK(((Rp - Rm) / (2 * h) - inc.dR[j]).norm() < kFdTol);
     CHECK(((tp - tm) / (2 * h) - inc.dt[j]).norm() < kFdTol);
   }
@@ -79,43 +79,53 @@ TEST_CASE("IncrementModel: R, t and their derivatives", "[fused]")
 
 TEST_CASE("prediction: exact mean, covariance J P J^T + G Q G^T checked by finite differences", "[fused]")
 {
-  const MotionSample a = sample(0, 0.0, 0.0, 0.1, 0.8), b = sample(1, 0.004, 0.02, 0.117, 0.83);
-  const IncrementModel inc = IncrementModel::between(kRig, a, b);
-  DepthFilter::Options o;
-  DepthFilter f(o, 1734.1, 1734.5);
-  Eigen::Matrix2d mcov;
-  mcov << 3e-8, 1e-9, 1e-9, 2e-8;
-  f.initialize(0, a.yaw, Eigen::Vector2d(0.05, -0.02), mcov);
-  const Eigen::Vector4d s0 = f.state();
-  const Eigen::Matrix4d P0 = f.covariance();
-  REQUIRE(f.step(inc) == DepthFilter::Update::PredictOnly);
-  const Eigen::Vector3d expect = exactPrediction(a, b, s0.head<3>(), Eigen::Matrix<double, 6, 1>::Zero());
-  CHECK((f.state().head<3>() - expect).norm() < 1e-14);
-  // Finite-difference Jacobian with respect to (x, y, rho, e_prev) and the new noise.
-  Eigen::Matrix<double, 4, 9> J = Eigen::Matrix<double, 4, 9>::Zero();
-  const double h = 1e-7;
-  for (int i = 0; i < 9; ++i) {
-    Eigen::Vector3d xyr_p = s0.head<3>(), xyr_m = s0.head<3>();
-    Eigen::Matrix<double, 6, 1> np = Eigen::Matrix<double, 6, 1>::Zero(), nm = np;
-    if (i < 3) {
-      xyr_p(i) += h;
-      xyr_m(i) -= h;
-    } else {
-      const int map[6] = {4, 0, 1, 2, 3, 5}; // w index 3..8 -> noise index
-      np(map[i - 3]) = h;
-      nm(map[i - 3]) = -h;
+  for (bool six_dof : {false, true}) {
+    MotionSample a = sample(0, 0.0, 0.0, 0.1, 0.8), b = sample(1, 0.004, 0.02, 0.117, 0.83);
+    if (six_dof) { // the same rows as 6-DoF poses, tilted
+      a = MotionSample::fromPose(0, vpHomogeneousMatrix(0.0, 0.0, 0.0, 0.05, 0.1, -0.03), 0.8);
+      b = MotionSample::fromPose(1, vpHomogeneousMatrix(0.004, 0.02, 0.012, 0.06, 0.117, -0.02), 0.83);
     }
-    J.col(i).head<3>() = (exactPrediction(a, b, xyr_p, np) - exactPrediction(a, b, xyr_m, nm)) / (2 * h);
+    const IncrementModel inc = IncrementModel::between(kRig, a, b);
+    REQUIRE(inc.six_dof == six_dof);
+    DepthFilter::Options o;
+    DepthFilter f(o, 1734.1, 1734.5);
+    Eigen::Matrix2d mcov;
+    mcov << 3e-8, 1e-9, 1e-9, 2e-8;
+    f.initialize(0, a.yaw, Eigen::Vector2d(0.05, -0.02), mcov);
+    const Eigen::Vector4d s0 = f.state();
+    const Eigen::Matrix4d P0 = f.covariance();
+    REQUIRE(f.step(inc) == DepthFilter::Update::PredictOnly);
+    const Eigen::Vector3d expect = exactPrediction(a, b, s0.head<3>(), Eigen::Matrix<double, 8, 1>::Zero());
+    CHECK((f.state().head<3>() - expect).norm() < 1e-14);
+    // Finite-difference Jacobian with respect to w = (x, y, rho, e_prev, d(3), rot(3), e_cur).
+    Eigen::Matrix<double, 4, 11> J = Eigen::Matrix<double, 4, 11>::Zero();
+    const double h = 1e-7;
+    for (int i = 0; i < 11; ++i) {
+      Eigen::Vector3d xyr_p = s0.head<3>(), xyr_m = s0.head<3>();
+      Eigen::Matrix<double, 8, 1> np = Eigen::Matrix<double, 8, 1>::Zero(), nm = np;
+      if (i < 3) {
+        xyr_p(i) += h;
+        xyr_m(i) -= h;
+      } else {
+        const int map[8] = {6, 0, 1, 2, 3, 4, 5, 7}; // w index 3..10 -> perturbation index
+        np(map[i - 3]) = h;
+        nm(map[i - 3]) = -h;
+      }
+      J.col(i).head<3>() = (exactPrediction(a, b, xyr_p, np) - exactPrediction(a, b, xyr_m, nm)) / (2 * h);
+    }
+    J(3, 10) = 1.0;
+    Eigen::Matrix<double, 11, 11> Pw = Eigen::Matrix<double, 11, 11>::Zero();
+    Pw.topLeftCorner<4, 4>() = P0;
+    const double so2 = o.noise.sigma_odom * o.noise.sigma_odom;
+    Pw(4, 4) = Pw(5, 5) = Pw(6, 6) = so2;
+    const double sr2 = o.noise.sigma_rot * o.noise.sigma_rot;
+    Pw(7, 7) = six_dof ? sr2 : 0.0;
+    Pw(8, 8) = six_dof ? sr2 : o.noise.sigma_heading * o.noise.sigma_heading;
+    Pw(9, 9) = six_dof ? sr2 : 0.0;
+    Pw(10, 10) = o.noise.sigma_yaw * o.noise.sigma_yaw;
+    const Eigen::Matrix4d P_fd = J * Pw * J.transpose();
+    CHECK((P_fd - f.covariance()).norm() < 1e-5 * P_fd.norm());
   }
-  J(3, 8) = 1.0;
-  Eigen::Matrix<double, 9, 9> Pw = Eigen::Matrix<double, 9, 9>::Zero();
-  Pw.topLeftCorner<4, 4>() = P0;
-  const double so2 = o.noise.sigma_odom * o.noise.sigma_odom;
-  Pw(4, 4) = Pw(5, 5) = Pw(6, 6) = so2;
-  Pw(7, 7) = o.noise.sigma_heading * o.noise.sigma_heading;
-  Pw(8, 8) = o.noise.sigma_yaw * o.noise.sigma_yaw;
-  const Eigen::Matrix4d P_fd = J * Pw * J.transpose();
-  CHECK((P_fd - f.covariance()).norm() < 1e-5 * P_fd.norm());
 }
 
 TEST_CASE("fused converges to the truth on noise-free sequences, with rotation", "[fused]")

@@ -3,6 +3,8 @@
 
 #include <Eigen/LU>
 #include <random>
+#include <visp3/core/vpPoseVector.h>
+#include <visp3/core/vpThetaUVector.h>
 #include <yawdepth/geometry/rig.h>
 
 using namespace yawdepth;
@@ -130,21 +132,129 @@ TEST_CASE("increment perturbations act on the odometry increment and the yaw rea
     const MotionSample a = randomSample(rng, 1), b = randomSample(rng, 2);
     IncrementPerturbation<double> p;
     p.d_translation = Eigen::Vector3d(u(rng), u(rng), u(rng));
-    p.d_heading = u(rng);
+    p.d_rotation.y() = u(rng);
     p.d_yaw_prev = u(rng);
     p.d_yaw_cur = u(rng);
     Eigen::Matrix3d R;
     Eigen::Vector3d t;
-    relativeMotion(rig.cameraOffset(), a, b, p, R, t);
+    relativeMotion(rig, a, b, p, R, t);
     // The same motion from explicitly perturbed motion-log rows.
     MotionSample a2 = a, b2 = b;
     const Eigen::Vector3d w_dd = rotY(a.heading) * p.d_translation;
     b2.x += w_dd.x();
     b2.y += w_dd.y();
     b2.z += w_dd.z();
-    b2.heading += p.d_heading;
+    b2.heading += p.d_rotation.y();
     a2.yaw += p.d_yaw_prev;
     b2.yaw += p.d_yaw_cur;
     REQUIRE(maxAbsDiff(toVisp(R, t), curMprev(rig, a2, b2)) < 1e-12);
   }
+}
+
+namespace {
+/* A random 6-DoF row: wMv from ViSP's pose vector, any orientation. */
+MotionSample randomPoseSample(std::mt19937_64 &rng, long frame)
+{
+  std::uniform_real_distribution<double> pos(-2.0, 2.0), ang(-1.7, 1.7), yaw(-M_PI, M_PI);
+  return MotionSample::fromPose(frame, vpHomogeneousMatrix(pos(rng), pos(rng), pos(rng), ang(rng), ang(rng), ang(rng)),
+                                yaw(rng));
+}
+vpHomogeneousMatrix randomMount(std::mt19937_64 &rng)
+{
+  std::uniform_real_distribution<double> off(-0.1, 0.1), ang(-1.7, 1.7);
+  return vpHomogeneousMatrix(off(rng), off(rng), off(rng), ang(rng), ang(rng), ang(rng));
+}
+} // namespace
+
+TEST_CASE("6-DoF rows and a fixed camera_pose mount: poses and relative motion are ViSP's compositions", "[geometry]")
+{
+  std::mt19937_64 rng(21);
+  for (int k = 0; k < 300; ++k) {
+    const vpHomogeneousMatrix vMc0 = randomMount(rng);
+    const YawRig rig(vMc0);
+    const MotionSample a = randomPoseSample(rng, 1), b = randomPoseSample(rng, 2);
+    // The row is ViSP's pose vector (tx, ty, tz, tux, tuy, tuz).
+    const vpHomogeneousMatrix wMv_a(vpPoseVector(a.x, a.y, a.z, a.theta_u.x(), a.theta_u.y(), a.theta_u.z()));
+    REQUIRE(maxAbsDiff(wMv(a), wMv_a) < kRoundOff);
+    // vMc(yaw) = [Ry(yaw) | 0] vMc0: the pan joint turns the mount about the vision frame's +Y.
+    const vpHomogeneousMatrix yawJoint = toVisp(rotY(a.yaw), Eigen::Vector3d::Zero());
+    REQUIRE(maxAbsDiff(rig.vMc(a.yaw), yawJoint * vMc0) < kRoundOff);
+    REQUIRE(maxAbsDiff(rig.cMv(a.yaw), (yawJoint * vMc0).inverse()) < kRoundOff);
+    const vpHomogeneousMatrix expect = (wMv(b) * rig.vMc(b.yaw)).inverse() * (wMv(a) * rig.vMc(a.yaw));
+    REQUIRE(maxAbsDiff(curMprev(rig, a, b), expect) < kRoundOff);
+    // Points: eq. (7) and its inverse with the mount.
+    const Eigen::Vector3d c_P(0.1, -0.2, 1.3);
+    const Eigen::Vector3d v_P = rig.visionPoint(a.yaw, c_P);
+    const vpColVector v_expect = rig.vMc(a.yaw) * vpColVector({c_P.x(), c_P.y(), c_P.z(), 1.0});
+    for (int i = 0; i < 3; ++i)
+      REQUIRE(v_P(i) == Approx(v_expect[i]).margin(kRoundOff));
+    REQUIRE((rig.cameraPoint(a.yaw, v_P) - c_P).norm() < kRoundOff);
+    // A planar row is the 6-DoF row of rotation (0, heading, 0).
+    const MotionSample p = randomSample(rng, 3);
+    const MotionSample q = MotionSample::fromPose(3, wMv(p), p.yaw);
+    REQUIRE(maxAbsDiff(wMv(q), wMv(p)) < kRoundOff);
+    REQUIRE(maxAbsDiff(curMprev(rig, p, b), curMprev(rig, q, b)) < kRoundOff);
+  }
+}
+
+TEST_CASE("6-DoF rotation perturbations act on the right of the increment's rotation", "[geometry]")
+{
+  std::mt19937_64 rng(22);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (int k = 0; k < 100; ++k) {
+    const YawRig rig(randomMount(rng));
+    const MotionSample a = randomPoseSample(rng, 1), b = randomPoseSample(rng, 2);
+    IncrementPerturbation<double> p;
+    p.d_translation = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    p.d_rotation = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    p.d_yaw_prev = u(rng);
+    p.d_yaw_cur = u(rng);
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    relativeMotion(rig, a, b, p, R, t);
+    // The same from explicitly perturbed rows: the later vision frame's pose in the earlier one
+    // becomes [dR Exp(d_rotation) | d + d_translation].
+    const Eigen::Matrix3d Ra = a.rotation();
+    const Eigen::Matrix3d dR = Ra.transpose() * b.rotation() * expSO3<double>(p.d_rotation);
+    const Eigen::Vector3d d = Ra.transpose() * (b.position() - a.position()) + p.d_translation;
+    MotionSample a2 = a;
+    a2.yaw += p.d_yaw_prev;
+    const MotionSample b2 = MotionSample::fromPose(2, toVisp(Ra * dR, a.position() + Ra * d), b.yaw + p.d_yaw_cur);
+    REQUIRE(maxAbsDiff(toVisp(R, t), curMprev(rig, a2, b2)) < 1e-12);
+  }
+}
+
+TEST_CASE("expSO3 and logSO3 are ViSP's theta-u, and expSO3's derivative at zero is the skew matrix", "[geometry]")
+{
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> ang(-1.7, 1.7);
+  for (int k = 0; k < 100; ++k) {
+    const Eigen::Vector3d w(ang(rng), ang(rng), ang(rng));
+    const vpRotationMatrix R(vpThetaUVector(w.x(), w.y(), w.z()));
+    const Eigen::Matrix3d E = expSO3<double>(w);
+    for (unsigned i = 0; i < 3; ++i)
+      for (unsigned j = 0; j < 3; ++j)
+        REQUIRE(E(i, j) == Approx(R[i][j]).margin(kRoundOff));
+    REQUIRE((logSO3(E) - w).norm() < 1e-9);
+  }
+  // Central differences at zero: dExp/dw_i = [e_i]x; and the small-angle branch is continuous.
+  const double h = 1e-6;
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Vector3d e = Eigen::Vector3d::Zero();
+    e(i) = h;
+    const Eigen::Matrix3d D = (expSO3<double>(e) - expSO3<double>(Eigen::Vector3d(-e))) / (2 * h);
+    Eigen::Matrix3d K = Eigen::Matrix3d::Zero();
+    K(1, 2) = i == 0 ? -1 : 0;
+    K(2, 1) = i == 0 ? 1 : 0;
+    K(0, 2) = i == 1 ? 1 : 0;
+    K(2, 0) = i == 1 ? -1 : 0;
+    K(0, 1) = i == 2 ? -1 : 0;
+    K(1, 0) = i == 2 ? 1 : 0;
+    REQUIRE((D - K).norm() < 1e-9);
+  }
+  const Eigen::Vector3d tiny(3e-9, -2e-9, 1e-9);
+  const vpRotationMatrix Rt(vpThetaUVector(tiny.x(), tiny.y(), tiny.z()));
+  for (unsigned i = 0; i < 3; ++i)
+    for (unsigned j = 0; j < 3; ++j)
+      REQUIRE(expSO3<double>(tiny)(i, j) == Approx(Rt[i][j]).margin(1e-16));
 }

@@ -730,8 +730,6 @@ TEST_CASE("rig file: unknown keys and a yaw axis the estimators do not model are
   requireError(errorOf([&] { readRigFile(typo); }), typo + ":1: ", "unknown key 'camera_ofset' (known: camera_offset");
   const std::string other = dir.write("other.yaml", "camera_offset: [-0.15, 0, 0]\nother: {a: 1}\n");
   requireError(errorOf([&] { readRigFile(other); }), other + ":2: ", "unknown key 'other'");
-  const std::string pose = dir.write("pose.yaml", "camera_pose: [0, 0, 0, 0, 0, 0]\n");
-  requireError(errorOf([&] { readRigFile(pose); }), pose + ":1: ", "'camera_pose' (a fixed 6-DoF camera mount) is not supported");
   const std::string sideways = dir.write("axis.yaml", "camera_offset: [-0.15, 0, 0]\nyaw_axis: [1, 0, 0]\n");
   requireError(errorOf([&] { readRigFile(sideways); }), sideways + ":2: ", "'yaw_axis' is 90.0 deg from the vision frame's +Y");
   const std::string tilted = dir.write("tilt.yaml", "camera_offset: [-0.15, 0, 0]\nyaw_axis: [0.06, 1, 0]\n");
@@ -742,6 +740,82 @@ TEST_CASE("rig file: unknown keys and a yaw axis the estimators do not model are
                   "camera_offset_sigma: [0.0001, 0, 0.0001]\nyaw_offset_sigma: 0.0002\nyaw_offset_estimated: true\n"
                   "yaw_axis_sigma: [0.001, 0, 0.001]\nreprojection_rms_px: 0.05\n");
   CHECK_NOTHROW(readRigFile(calibrated));
+}
+
+TEST_CASE("rig file: camera_pose, a fixed 6-DoF mount (an arm's eMc)", "[io][rig]")
+{
+  TempDir dir;
+  const std::string path = dir.write("eMc.yaml", "camera_pose: [0.0577148, -0.0339261, -0.0422745, 0.00178253, "
+                                                 "0.00917657, 1.58178]\ncamera_pose_sigma: [1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3]\n");
+  const RigFile rig = readRigFile(path);
+  REQUIRE(rig.camera_pose.has_value());
+  CHECK((*rig.camera_pose)[5] == 1.58178);
+  REQUIRE(rig.camera_pose_sigma.has_value());
+  // The mount it describes is ViSP's homogeneous matrix of that pose vector.
+  const YawRig mount = rigOf(rig);
+  const vpHomogeneousMatrix expect(*rig.camera_pose);
+  const vpHomogeneousMatrix got = mount.vMc(0.0);
+  for (unsigned i = 0; i < 3; ++i)
+    for (unsigned j = 0; j < 4; ++j)
+      CHECK(got[i][j] == Approx(expect[i][j]).margin(1e-15));
+  // Round trip, sigmas included.
+  const std::string again = dir.file("again.yaml");
+  writeRigFile(again, rig);
+  const RigFile back = readRigFile(again);
+  REQUIRE(back.camera_pose.has_value());
+  for (unsigned i = 0; i < 6; ++i)
+    CHECK((*back.camera_pose)[i] == (*rig.camera_pose)[i]);
+  CHECK(*back.camera_pose_sigma == *rig.camera_pose_sigma);
+  // Both forms, neither, a wrong count, a sigma without a pose, a rotation beyond pi.
+  const std::string both = dir.write("both.yaml", "camera_offset: [0, 0, 0]\ncamera_pose: [0, 0, 0, 0, 0, 0]\n");
+  requireError(errorOf([&] { readRigFile(both); }), both + ":2: ", "both 'camera_offset' and 'camera_pose'");
+  const std::string neither = dir.write("neither.yaml", "yaw: 0.1\n");
+  requireError(errorOf([&] { readRigFile(neither); }), neither + ": ", "missing key 'camera_offset' (or 'camera_pose')");
+  const std::string five = dir.write("five.yaml", "camera_pose: [0, 0, 0, 0, 0]\n");
+  requireError(errorOf([&] { readRigFile(five); }), five + ":1: ", "'camera_pose' must be a sequence of 6 numbers (it has 5)");
+  const std::string lone = dir.write("lone.yaml", "camera_offset: [0, 0, 0]\ncamera_pose_sigma: [0, 0, 0, 0, 0, 0]\n");
+  requireError(errorOf([&] { readRigFile(lone); }), lone + ":2: ", "'camera_pose_sigma' without 'camera_pose'");
+  const std::string big = dir.write("big.yaml", "camera_pose: [0, 0, 0, 4, 0, 0]\n");
+  requireError(errorOf([&] { readRigFile(big); }), big + ":1: ", "norm of at most pi");
+}
+
+TEST_CASE("motion log: the 6-DoF form (tx, ty, tz, tux, tuy, tuz) reads, round-trips and refuses mixtures", "[io][motion]")
+{
+  TempDir dir;
+  const std::string p = dir.write("arm.csv", "frame,tx,ty,tz,tux,tuy,tuz,image\n"
+                                            "1,0.5,0.1,0.09,2.2,-2.2,0.02,a.png\n"
+                                            "2,0.51,0.12,0.1,2.21,-2.19,0.03,b.png\n");
+  const MotionLog m = readMotionCsv(p);
+  REQUIRE(m.samples.size() == 2);
+  CHECK(m.samples[0].six_dof);
+  CHECK(m.samples[0].yaw == 0.0); // no pan joint: yaw 0 without a yaw column or a rig yaw
+  CHECK(m.samples[1].theta_u.y() == -2.19);
+  // wMv is ViSP's pose vector.
+  const vpHomogeneousMatrix expect(vpPoseVector(0.51, 0.12, 0.1, 2.21, -2.19, 0.03));
+  const vpHomogeneousMatrix got = wMv(m.samples[1]);
+  for (unsigned i = 0; i < 3; ++i)
+    for (unsigned j = 0; j < 4; ++j)
+      CHECK(got[i][j] == Approx(expect[i][j]).margin(1e-14));
+  // A fixed yaw from the rig applies as for planar logs; a yaw column wins.
+  CHECK(readMotionCsv(p, 0.25).samples[0].yaw == 0.25);
+  // Round trip exact to the bit (the planar columns are not written).
+  const std::string out = dir.file("out.csv");
+  writeMotionCsv(out, m);
+  const MotionLog r = readMotionCsv(out);
+  REQUIRE(r.samples.size() == 2);
+  for (std::size_t i = 0; i < 2; ++i) {
+    CHECK(r.samples[i].six_dof);
+    CHECK(r.samples[i].position() == m.samples[i].position());
+    CHECK(r.samples[i].theta_u == m.samples[i].theta_u);
+    CHECK(r.images[i] == m.images[i]);
+  }
+  // One 6-DoF column without the others is an error naming the missing one.
+  const std::string partial = dir.write("partial.csv", "frame,x,y,z,heading,yaw,tux\n0,0,0,0,0,0,0\n");
+  CHECK_THAT(errorOf([&] { readMotionCsv(partial); }), Catch::Contains("tx"));
+  // A writer refuses a log that mixes both forms.
+  MotionLog mixed = m;
+  mixed.samples[1].six_dof = false;
+  CHECK_THAT(errorOf([&] { writeMotionCsv(dir.file("mixed.csv"), mixed); }), Catch::Contains("mixes planar and 6-DoF"));
 }
 
 TEST_CASE("rig file: yaw_offset and yaw_axis", "[io][rig]")

@@ -18,6 +18,7 @@ struct Case {
   double yaw;   // camera yaw (rad)
   double step;  // forward increment (m)
   Eigen::Vector3d c_P_cur;
+  bool six_dof = false; // an arm: 6-DoF rows, a tilted hand-eye mount, the camera moving sideways and turning
 };
 
 struct Setup {
@@ -30,6 +31,15 @@ struct Setup {
 Setup makeSetup(const Case &c)
 {
   Setup s;
+  if (c.six_dof) {
+    s.rig = YawRig(vpHomogeneousMatrix(0.058, -0.034, -0.042, 0.002, 0.009, 1.58));
+    s.prev = MotionSample::fromPose(0, vpHomogeneousMatrix(0.4, 0.1, 0.3, 2.2, -2.2, 0.02), c.yaw);
+    // The camera moves mostly along its own X, turning a little.
+    const Eigen::Vector3d v_d = s.rig.vRc(c.yaw) * Eigen::Vector3d(c.step, 0.2 * c.step, 0.3 * c.step);
+    const Eigen::Matrix3d dR = expSO3<double>(Eigen::Vector3d(0.01, 0.02, -0.015));
+    const vpHomogeneousMatrix wMv_cur = wMv(s.prev) * toVisp(dR, v_d);
+    s.cur = MotionSample::fromPose(1, wMv_cur, c.yaw);
+  } else {
   s.prev.frame = 0;
   s.prev.heading = 0.1;
   s.prev.yaw = c.yaw;
@@ -38,6 +48,7 @@ Setup makeSetup(const Case &c)
   const Eigen::Vector3d w_d = rotY(s.prev.heading) * Eigen::Vector3d(0.0, 0.0, c.step);
   s.cur.x += w_d.x();
   s.cur.z += w_d.z();
+  }
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
   fromVisp(curMprev(s.rig, s.prev, s.cur), R, t);
@@ -48,26 +59,32 @@ Setup makeSetup(const Case &c)
 }
 
 /* Apply a perturbation vector in the estimators' input order to a setup. */
-void perturb(const Setup &s, const Eigen::Matrix<double, 10, 1> &d, MotionSample &prev, MotionSample &cur,
+void perturb(const Setup &s, const Eigen::Matrix<double, kTwoViewInputs, 1> &d, MotionSample &prev, MotionSample &cur,
              Eigen::Vector2d &uv_prev, Eigen::Vector2d &uv_cur)
 {
   prev = s.prev;
   cur = s.cur;
   uv_prev = s.uv_prev + d.segment<2>(0);
   uv_cur = s.uv_cur + d.segment<2>(2);
-  const Eigen::Vector3d w_dd = rotY(s.prev.heading) * d.segment<3>(4);
+  const Eigen::Vector3d w_dd = s.prev.rotation() * d.segment<3>(4);
   cur.x += w_dd.x();
   cur.y += w_dd.y();
   cur.z += w_dd.z();
-  cur.heading += d(7);
-  prev.yaw += d(8);
-  cur.yaw += d(9);
+  if (!cur.six_dof && d(7) == 0 && d(9) == 0) {
+    cur.heading += d(8);
+  } else { // a rotation off the heading axis: as a 6-DoF row
+    cur.theta_u = logSO3(cur.rotation() * expSO3<double>(Eigen::Vector3d(d.segment<3>(7))));
+    cur.six_dof = true;
+  }
+  prev.yaw += d(10);
+  cur.yaw += d(11);
 }
 
 const Case kCases[] = {
     {"front", 0.0, 0.10, Eigen::Vector3d(0.14, 0.09, 0.8)},
     {"oblique", M_PI / 4, 0.02, Eigen::Vector3d(0.05, -0.03, 1.0)},
     {"side", M_PI / 2, 0.02, Eigen::Vector3d(-0.04, 0.06, 1.2)},
+    {"arm", 0.0, 0.02, Eigen::Vector3d(0.03, -0.05, 0.6), true},
 };
 
 using Estimator = PointEstimate (*)(const CameraModel &, const YawRig &, const MotionSample &, const MotionSample &,
@@ -83,12 +100,12 @@ TEST_CASE("exact: the covariance is J Sigma J^T with J checked by finite differe
     TwoViewOptions opt;
     const PointEstimate e = estimateExact(s.camera, s.rig, s.prev, s.cur, s.uv_prev, s.uv_cur, opt);
     REQUIRE(e.ok());
-    const double steps[10] = {1e-4, 1e-4, 1e-4, 1e-4, 1e-7, 1e-7, 1e-7, 1e-8, 1e-8, 1e-8};
+    const double steps[kTwoViewInputs] = {1e-4, 1e-4, 1e-4, 1e-4, 1e-7, 1e-7, 1e-7, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8};
     TwoViewOptions no_cov = opt;
     no_cov.compute_covariance = false;
-    Eigen::Matrix<double, 3, 10> J;
-    for (int i = 0; i < 10; ++i) {
-      Eigen::Matrix<double, 10, 1> d = Eigen::Matrix<double, 10, 1>::Zero();
+    Eigen::Matrix<double, 3, kTwoViewInputs> J;
+    for (int i = 0; i < kTwoViewInputs; ++i) {
+      Eigen::Matrix<double, kTwoViewInputs, 1> d = Eigen::Matrix<double, kTwoViewInputs, 1>::Zero();
       d(i) = steps[i];
       MotionSample p, q;
       Eigen::Vector2d a, b;
@@ -100,7 +117,7 @@ TEST_CASE("exact: the covariance is J Sigma J^T with J checked by finite differe
       REQUIRE(minus.ok());
       J.col(i) = (plus.c_P - minus.c_P) / (2 * steps[i]);
     }
-    const Eigen::Matrix3d cov_fd = J * twoViewInputVariances(opt.noise, 1).asDiagonal() * J.transpose();
+    const Eigen::Matrix3d cov_fd = J * twoViewInputVariances(opt.noise, 1, c.six_dof).asDiagonal() * J.transpose();
     REQUIRE((cov_fd - e.c_cov).norm() < kFdRelTol * cov_fd.norm());
   }
 }
@@ -115,7 +132,7 @@ TEST_CASE("predicted sigma_zc matches the Monte Carlo spread within 10 %", "[unc
       const TwoViewOptions opt; // defaults: 0.3 px, 1 mm, 0.05 deg, 0.05 deg
       const PointEstimate e0 = estimate(s.camera, s.rig, s.prev, s.cur, s.uv_prev, s.uv_cur, opt);
       REQUIRE(e0.ok());
-      const Eigen::Matrix<double, 10, 1> sd = twoViewInputVariances(opt.noise, 1).cwiseSqrt();
+      const Eigen::Matrix<double, kTwoViewInputs, 1> sd = twoViewInputVariances(opt.noise, 1, c.six_dof).cwiseSqrt();
       TwoViewOptions fast = opt;
       fast.compute_covariance = false;
       std::mt19937_64 rng(42);
@@ -123,8 +140,8 @@ TEST_CASE("predicted sigma_zc matches the Monte Carlo spread within 10 %", "[unc
       double sum = 0, sum2 = 0;
       int n = 0;
       for (int k = 0; k < kTrials; ++k) {
-        Eigen::Matrix<double, 10, 1> d;
-        for (int i = 0; i < 10; ++i)
+        Eigen::Matrix<double, kTwoViewInputs, 1> d;
+        for (int i = 0; i < kTwoViewInputs; ++i)
           d(i) = sd(i) * g(rng);
         MotionSample p, q;
         Eigen::Vector2d a, b;

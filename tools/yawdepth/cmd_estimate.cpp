@@ -48,7 +48,7 @@ Runner addEstimate(CLI::App &app)
     checkOutputs(inputs, outputs);
     const CameraModel camera = loadCameraFile(args->camera, args->camera_name);
     const RigFile rig_file = readRigFile(args->rig);
-    const YawRig rig(rig_file.camera_offset);
+    const YawRig rig = rigOf(rig_file);
     MotionLog motion = readMotionCsv(args->motion, rig_file.yaw, args->input.limits());
     applyRigFile(rig_file, motion.samples);
     const std::vector<Track> tracks = readTracksCsv(args->tracks, args->input.limits());

@@ -55,7 +55,7 @@ Runner addMeasure(CLI::App &app)
     const PatternSpec pattern = PatternSpec::parse(a->pattern);
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
     const RigFile rig_file = readRigFile(a->rig);
-    const YawRig rig(rig_file.camera_offset);
+    const YawRig rig = rigOf(rig_file);
     MotionLog motion = readMotionCsv(a->motion, rig_file.yaw, a->input.limits());
     applyRigFile(rig_file, motion.samples);
     if (motion.images.empty())

@@ -68,7 +68,7 @@ Runner addSimulate(CLI::App &app)
   sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset)")->required();
   sub->add_option("--out-dir", a->out_dir, "Output folder (created if missing)")->required();
   SceneOptions &s = a->scene;
-  s.noise = NoiseModel{0.0, 0.0, 0.0, 0.0};
+  s.noise = NoiseModel{0.0, 0.0, 0.0, 0.0, 0.0};
   sub->add_option("--frames", s.frames, "Number of frames")->check(CLI::Range(1, 1000000))->capture_default_str();
   sub->add_option("--step", s.step, "Forward translation per frame (m)")->check(Finite)->capture_default_str();
   sub->add_option("--lateral-step", s.lateral_step, "Sideways translation per frame (m)")->check(Finite)->capture_default_str();
@@ -148,7 +148,7 @@ Runner addSimulate(CLI::App &app)
   return [a]() {
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
     const RigFile rig_file = readRigFile(a->rig);
-    const YawRig rig(rig_file.camera_offset);
+    const YawRig rig = rigOf(rig_file);
     const bool board_mode = !a->pattern.empty();
     SceneOptions so = a->scene;
     if (board_mode)
@@ -281,7 +281,7 @@ Runner addSimulate(CLI::App &app)
       row.estimate.status = Status::Ok;
       row.estimate.frame = frame;
       row.estimate.c_P = R * w_points[i] + tt;
-      row.estimate.v_P = rotY(scene.truth[index].yaw) * (row.estimate.c_P + rig.cameraOffset());
+      row.estimate.v_P = rig.visionPoint(scene.truth[index].yaw, row.estimate.c_P);
       row.estimate.c_cov.setZero();
       rows.push_back(row);
     }

@@ -12,22 +12,23 @@ namespace yawdepth {
 
 namespace {
 
-constexpr int kNoise = 6; // d_x, d_y, d_z, heading, yaw_prev, yaw_cur
-using Vec6 = Eigen::Matrix<double, kNoise, 1>;
-using AD6 = Eigen::AutoDiffScalar<Vec6>;
+constexpr int kNoise = 8; // d_x, d_y, d_z, rot_x, rot_y, rot_z, yaw_prev, yaw_cur
+using Vec8 = Eigen::Matrix<double, kNoise, 1>;
+using AD8 = Eigen::AutoDiffScalar<Vec8>;
 
-// Joint variable of one step: w = (x, y, lambda, e_prev, d_x, d_y, d_z, heading, e_cur), lambda = log(1/Z).
-constexpr int kW = 9;
-using Vec9 = Eigen::Matrix<double, kW, 1>;
-using Mat9 = Eigen::Matrix<double, kW, kW>;
-using Mat49 = Eigen::Matrix<double, 4, kW>;
+// Joint variable of one step: w = (x, y, lambda, e_prev, d_x, d_y, d_z, rot_x, rot_y, rot_z, e_cur),
+// lambda = log(1/Z); the last 7 are the increment's noise (IncrementPrior).
+constexpr int kW = 11;
+constexpr int kN = 7;
+using Vec11 = Eigen::Matrix<double, kW, 1>;
+using Mat4W = Eigen::Matrix<double, 4, kW>;
 // Index of each increment-noise input (IncrementModel order) in w.
-constexpr int kNoiseInW[kNoise] = {4, 5, 6, 7, 3, 8};
+constexpr int kNoiseInW[kNoise] = {4, 5, 6, 7, 8, 9, 3, 10};
 
 /* Prediction s' = g(w) through the increment, and its Jacobian (first order in the noise, which
    is exact at zero noise and accurate to O(sigma^2) ~ 1e-6 around it). Returns false when the
    point would be at or behind the new camera's plane. */
-bool predict(const IncrementModel &inc, const Vec9 &w, Eigen::Vector4d &s, Mat49 *G)
+bool predict(const IncrementModel &inc, const Vec11 &w, Eigen::Vector4d &s, Mat4W *G)
 {
   Eigen::Matrix3d R = inc.R;
   Eigen::Vector3d t = inc.t;
@@ -46,7 +47,7 @@ bool predict(const IncrementModel &inc, const Vec9 &w, Eigen::Vector4d &s, Mat49
   if (!(q.z() > 1e-9))
     return false;
   const double iq = 1.0 / q.z();
-  s << q.x() * iq, q.y() * iq, w(2) - std::log(q.z()), w(8);
+  s << q.x() * iq, q.y() * iq, w(2) - std::log(q.z()), w(10);
   if (G) {
     Eigen::Matrix<double, 3, kW> dq;
     dq.col(0) = R.col(0);
@@ -59,7 +60,7 @@ bool predict(const IncrementModel &inc, const Vec9 &w, Eigen::Vector4d &s, Mat49
     G->row(2) = -iq * dq.row(2);
     (*G)(2, 2) += 1.0;
     G->row(3).setZero();
-    (*G)(3, 8) = 1.0;
+    (*G)(3, 10) = 1.0;
   }
   return true;
 }
@@ -68,15 +69,16 @@ bool predict(const IncrementModel &inc, const Vec9 &w, Eigen::Vector4d &s, Mat49
 
 IncrementModel IncrementModel::between(const YawRig &rig, const MotionSample &prev, const MotionSample &cur)
 {
-  IncrementPerturbation<AD6> p;
-  for (int i = 0; i < 3; ++i)
-    p.d_translation(i) = AD6(0.0, kNoise, i);
-  p.d_heading = AD6(0.0, kNoise, 3);
-  p.d_yaw_prev = AD6(0.0, kNoise, 4);
-  p.d_yaw_cur = AD6(0.0, kNoise, 5);
-  Eigen::Matrix<AD6, 3, 3> R;
-  Eigen::Matrix<AD6, 3, 1> t;
-  relativeMotion<AD6>(rig.cameraOffset(), prev, cur, p, R, t);
+  IncrementPerturbation<AD8> p;
+  for (int i = 0; i < 3; ++i) {
+    p.d_translation(i) = AD8(0.0, kNoise, i);
+    p.d_rotation(i) = AD8(0.0, kNoise, 3 + i);
+  }
+  p.d_yaw_prev = AD8(0.0, kNoise, 6);
+  p.d_yaw_cur = AD8(0.0, kNoise, 7);
+  Eigen::Matrix<AD8, 3, 3> R;
+  Eigen::Matrix<AD8, 3, 1> t;
+  relativeMotion<AD8>(rig, prev, cur, p, R, t);
   IncrementModel inc;
   for (int j = 0; j < kNoise; ++j) {
     inc.dR[j].setZero();
@@ -95,6 +97,7 @@ IncrementModel IncrementModel::between(const YawRig &rig, const MotionSample &pr
   inc.frame_prev = prev.frame;
   inc.frame_cur = cur.frame;
   inc.yaw_cur = cur.yaw;
+  inc.six_dof = prev.six_dof || cur.six_dof;
   return inc;
 }
 
@@ -132,32 +135,15 @@ void DepthFilter::initialize(long frame, double yaw, const Eigen::Vector2d &m, c
   baseline_ = 0;
 }
 
-IncrementPrior DepthFilter::defaultPrior() const
+IncrementPrior DepthFilter::defaultPrior(bool six_dof) const
 {
   IncrementPrior p;
   const double so2 = o_.noise.sigma_odom * o_.noise.sigma_odom;
+  const Eigen::Vector3d rot = incrementRotationSigma(o_.noise, six_dof);
   p.mean.setZero();
   p.cov.setZero();
-  p.cov.diagonal() << so2, so2, so2, o_.noise.sigma_heading * o_.noise.sigma_heading, o_.noise.sigma_yaw * o_.noise.sigma_yaw;
+  p.cov.diagonal() << so2, so2, so2, rot.cwiseAbs2(), o_.noise.sigma_yaw * o_.noise.sigma_yaw;
   return p;
-}
-
-bool DepthFilter::linearize(const IncrementModel &inc, const Eigen::Vector2d &m, const Eigen::Matrix2d &m_cov,
-                            Eigen::Vector2d &nu, Eigen::Matrix2d &R_state, Eigen::Matrix<double, 2, 5> &H_n) const
-{
-  if (!initialized_ || inc.frame_prev != frame_)
-    return false;
-  Vec9 mu;
-  mu << s_, Eigen::Matrix<double, 5, 1>::Zero();
-  Eigen::Vector4d s_new;
-  Mat49 G;
-  if (!predict(inc, mu, s_new, &G))
-    return false;
-  const Eigen::Matrix<double, 2, 4> Hs = G.topLeftCorner<2, 4>();
-  H_n = G.topRightCorner<2, 5>();
-  nu = m - s_new.head<2>();
-  R_state = Hs * P_ * Hs.transpose() + m_cov;
-  return nu.allFinite() && R_state.allFinite();
 }
 
 DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Vector2d *m, const Eigen::Matrix2d *m_cov,
@@ -179,21 +165,21 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
   // Prior of the joint variable w = (state, increment noise): block diagonal, the state block is
   // P_ and the noise block Q (the noise model, or what other features told about this increment).
   // Products with it are done by blocks.
-  const IncrementPrior np = prior ? *prior : defaultPrior();
+  const IncrementPrior np = prior ? *prior : defaultPrior(inc.six_dof);
   if (!np.mean.allFinite() || !np.cov.allFinite())
     throw Error("depth filter: non-finite increment prior");
-  Vec9 mu;
+  Vec11 mu;
   mu << s_, np.mean;
-  const Eigen::Matrix<double, 5, 5> &Q = np.cov;
-  // G Pw G^T for a 4x9 G.
-  auto propagate = [&](const Mat49 &G) -> Eigen::Matrix4d {
+  const Eigen::Matrix<double, kN, kN> &Q = np.cov;
+  // G Pw G^T for a 4x11 G.
+  auto propagate = [&](const Mat4W &G) -> Eigen::Matrix4d {
     const Eigen::Matrix4d Gs = G.leftCols<4>();
-    const Eigen::Matrix<double, 4, 5> Gn = G.rightCols<5>();
+    const Eigen::Matrix<double, 4, kN> Gn = G.rightCols<kN>();
     return Gs * P_ * Gs.transpose() + Gn * Q * Gn.transpose();
   };
 
   Eigen::Vector4d s_new;
-  Mat49 G;
+  Mat4W G;
   const bool can_predict = predict(inc, mu, s_new, &G);
   frame_ = inc.frame_cur;
   yaw_ = inc.yaw_cur;
@@ -216,12 +202,12 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
   }
 
   // Iterated EKF on w: the measurement h(w) is the first two components of g(w).
-  Vec9 w = mu;
+  Vec11 w = mu;
   for (int it = 0; it < o_.max_iterations; ++it) {
     const Eigen::Matrix<double, 2, kW> H = G.topRows<2>();
     Eigen::Matrix<double, kW, 2> PHt;
     PHt.topRows<4>() = P_ * H.leftCols<4>().transpose();
-    PHt.bottomRows<5>() = Q * H.rightCols<5>().transpose();
+    PHt.bottomRows<kN>() = Q * H.rightCols<kN>().transpose();
     const Eigen::Matrix2d S = H * PHt + *m_cov;
     const double det = S.determinant();
     if (!(det > 0) || !std::isfinite(det))
@@ -237,7 +223,7 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
       predictOnly();
       return Update::Outlier;
     }
-    const Vec9 w_next = mu + PHt * (S_inv * nu);
+    const Vec11 w_next = mu + PHt * (S_inv * nu);
     const double change = std::abs(w_next(2) - w(2));
     w = w_next;
     if (!predict(inc, w, s_new, &G))
@@ -309,7 +295,7 @@ PointEstimate DepthFilter::estimate(const YawRig &rig) const
   J << Z, 0, -s_(0) * Z, 0, Z, -s_(1) * Z, 0, 0, -Z;
   e.c_cov = J * P_.topLeftCorner<3, 3>() * J.transpose();
   // Vision frame with the filter's estimate of the current yaw (reading + estimated error).
-  e.v_P = rotY(yaw_ + s_(3)) * (e.c_P + rig.cameraOffset());
+  e.v_P = rig.visionPoint(yaw_ + s_(3), e.c_P);
   return e;
 }
 

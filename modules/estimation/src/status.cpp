@@ -64,6 +64,7 @@ void NoiseModel::validate() const
   checkSigma(sigma_px, "sigma-px");
   checkSigma(sigma_odom, "sigma-odom");
   checkSigma(sigma_heading, "sigma-heading");
+  checkSigma(sigma_rot, "sigma-rot");
   checkSigma(sigma_yaw, "sigma-yaw");
 }
 

@@ -11,9 +11,9 @@ namespace yawdepth {
 
 namespace {
 
-constexpr int kInputs = 10; // u_prev, v_prev, u_cur, v_cur, d(3), heading, yaw_prev, yaw_cur
-using Vec10 = Eigen::Matrix<double, kInputs, 1>;
-using AD = Eigen::AutoDiffScalar<Vec10>;
+constexpr int kInputs = kTwoViewInputs; // u_prev, v_prev, u_cur, v_cur, d(3), rotation(3), yaw_prev, yaw_cur
+using VecIn = Eigen::Matrix<double, kInputs, 1>;
+using AD = Eigen::AutoDiffScalar<VecIn>;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 Eigen::Vector3d homog(const Eigen::Vector2d &m) { return Eigen::Vector3d(m.x(), m.y(), 1.0); }
@@ -48,21 +48,16 @@ double parallaxPx(const CameraModel &camera, const Eigen::Vector3d &r, const Eig
   return std::hypot(camera.kx() * (m_cur.x() - r.x() / r.z()), camera.ky() * (m_cur.y() - r.y() / r.z()));
 }
 
-Eigen::Vector3d toVisionFrame(const YawRig &rig, double yaw, const Eigen::Vector3d &c_P)
-{
-  return rotY(yaw) * (c_P + rig.cameraOffset());
-}
-
 } // namespace
 
-Eigen::Matrix<double, 10, 1> twoViewInputVariances(const NoiseModel &noise, int increments)
+Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel &noise, int increments, bool six_dof)
 {
   const double n = std::max(1, increments);
-  Vec10 var;
+  VecIn var;
   const double px2 = noise.sigma_px * noise.sigma_px;
   const double od2 = n * noise.sigma_odom * noise.sigma_odom;
-  var << px2, px2, px2, px2, od2, od2, od2, n * noise.sigma_heading * noise.sigma_heading,
-      noise.sigma_yaw * noise.sigma_yaw, noise.sigma_yaw * noise.sigma_yaw;
+  const Eigen::Vector3d rot2 = n * incrementRotationSigma(noise, six_dof).cwiseAbs2();
+  var << px2, px2, px2, px2, od2, od2, od2, rot2, noise.sigma_yaw * noise.sigma_yaw, noise.sigma_yaw * noise.sigma_yaw;
   return var;
 }
 
@@ -111,17 +106,18 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
     duv_prev(i) = AD(0.0, kInputs, i);
     duv_cur(i) = AD(0.0, kInputs, 2 + i);
   }
-  for (int i = 0; i < 3; ++i)
+  for (int i = 0; i < 3; ++i) {
     p.d_translation(i) = AD(0.0, kInputs, 4 + i);
-  p.d_heading = AD(0.0, kInputs, 7);
-  p.d_yaw_prev = AD(0.0, kInputs, 8);
-  p.d_yaw_cur = AD(0.0, kInputs, 9);
+    p.d_rotation(i) = AD(0.0, kInputs, 7 + i);
+  }
+  p.d_yaw_prev = AD(0.0, kInputs, 10);
+  p.d_yaw_cur = AD(0.0, kInputs, 11);
 
   const Eigen::Matrix<AD, 2, 1> m_prev = und.m_prev.cast<AD>() + und.J_prev.cast<AD>() * duv_prev;
   const Eigen::Matrix<AD, 2, 1> m_cur = und.m_cur.cast<AD>() + und.J_cur.cast<AD>() * duv_cur;
   Eigen::Matrix<AD, 3, 3> R;
   Eigen::Matrix<AD, 3, 1> t;
-  relativeMotion<AD>(rig.cameraOffset(), prev, cur, p, R, t);
+  relativeMotion<AD>(rig, prev, cur, p, R, t);
   const Eigen::Matrix<AD, 3, 1> r = R * Eigen::Matrix<AD, 3, 1>(m_prev(0), m_prev(1), AD(1.0));
   const AD a_u = m_cur(0) * r(2) - r(0), b_u = t(0) * r(2) - t(2) * r(0);
   const AD a_v = m_cur(1) * r(2) - r(1), b_v = t(1) * r(2) - t(2) * r(1);
@@ -145,7 +141,8 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
   Da.row(1) = a_v.derivatives().transpose();
   Db.row(0) = b_u.derivatives().transpose();
   Db.row(1) = b_v.derivatives().transpose();
-  const Vec10 var = twoViewInputVariances(options.noise, options.increments);
+  const bool six_dof = prev.six_dof || cur.six_dof;
+  const VecIn var = twoViewInputVariances(options.noise, options.increments, six_dof);
 
   // Start from pixel-scaled least squares, then generalised least squares with the residual
   // covariance Sigma_e = (Z Da - Db) Sigma (Z Da - Db)^T evaluated at the current estimate.
@@ -173,7 +170,7 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
   e.frame = cur.frame;
   e.parallax_px = parallax;
   e.c_P = Z * m1h;
-  e.v_P = toVisionFrame(rig, cur.yaw, e.c_P);
+  e.v_P = rig.visionPoint(cur.yaw, e.c_P);
   if (options.compute_covariance) {
     // dZ with the weights held fixed: [a^T W (Db - Z Da) + (b - Z a)^T W Da] / (a^T W a).
     const double aWa = a.dot(W * a);
@@ -200,19 +197,19 @@ struct PaperEval {
 };
 
 bool paperEval(const CameraModel &camera, const YawRig &rig, const MotionSample &prev, const MotionSample &cur,
-               const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv_cur, const Vec10 &delta, PaperEval &out)
+               const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv_cur, const VecIn &delta, PaperEval &out)
 {
   Eigen::Vector2d m_prev, m_cur;
   if (!camera.undistort(uv_prev + delta.segment<2>(0), m_prev) || !camera.undistort(uv_cur + delta.segment<2>(2), m_cur))
     return false;
   IncrementPerturbation<double> p;
   p.d_translation = delta.segment<3>(4);
-  p.d_heading = delta(7);
-  p.d_yaw_prev = delta(8);
-  p.d_yaw_cur = delta(9);
+  p.d_rotation = delta.segment<3>(7);
+  p.d_yaw_prev = delta(10);
+  p.d_yaw_cur = delta(11);
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
-  relativeMotion<double>(rig.cameraOffset(), prev, cur, p, R, t);
+  relativeMotion<double>(rig, prev, cur, p, R, t);
   // Camera motion over the increment in the current camera frame: P_cur = R P_prev + t with
   // R ~ I - [omega]x and t ~ -c_d (eq. (4)).
   const Eigen::AngleAxisd aa(R);
@@ -240,7 +237,7 @@ PointEstimate estimatePaper(const CameraModel &camera, const YawRig &rig, const 
                             const TwoViewOptions &options)
 {
   PaperEval nominal;
-  if (!paperEval(camera, rig, prev, cur, uv_prev, uv_cur, Vec10::Zero(), nominal))
+  if (!paperEval(camera, rig, prev, cur, uv_prev, uv_cur, VecIn::Zero(), nominal))
     return failed(Status::UndistortFailed, cur.frame);
   if (!(nominal.baseline >= options.gates.min_baseline))
     return failed(Status::NoMotion, cur.frame);
@@ -256,13 +253,13 @@ PointEstimate estimatePaper(const CameraModel &camera, const YawRig &rig, const 
   e.frame = cur.frame;
   e.parallax_px = nominal.parallax_px;
   e.c_P = nominal.c_P;
-  e.v_P = toVisionFrame(rig, cur.yaw, e.c_P);
+  e.v_P = rig.visionPoint(cur.yaw, e.c_P);
   if (options.compute_covariance) {
     // Central differences: steps small against each input's noise, large against round-off.
-    const double steps[kInputs] = {1e-3, 1e-3, 1e-3, 1e-3, 1e-6, 1e-6, 1e-6, 1e-7, 1e-7, 1e-7};
+    const double steps[kInputs] = {1e-3, 1e-3, 1e-3, 1e-3, 1e-6, 1e-6, 1e-6, 1e-7, 1e-7, 1e-7, 1e-7, 1e-7};
     Eigen::Matrix<double, 3, kInputs> J;
     for (int i = 0; i < kInputs; ++i) {
-      Vec10 d = Vec10::Zero();
+      VecIn d = VecIn::Zero();
       d(i) = steps[i];
       PaperEval plus, minus;
       if (!paperEval(camera, rig, prev, cur, uv_prev, uv_cur, d, plus) ||
@@ -272,7 +269,8 @@ PointEstimate estimatePaper(const CameraModel &camera, const YawRig &rig, const 
       }
       J.col(i) = (plus.c_P - minus.c_P) / (2 * steps[i]);
     }
-    e.c_cov = J * twoViewInputVariances(options.noise, options.increments).asDiagonal() * J.transpose();
+    e.c_cov = J * twoViewInputVariances(options.noise, options.increments, prev.six_dof || cur.six_dof).asDiagonal() *
+              J.transpose();
   }
   return e;
 }

@@ -34,13 +34,47 @@ void fromVisp(const vpHomogeneousMatrix &M, Eigen::Matrix3d &R, Eigen::Vector3d 
   }
 }
 
+YawRig::YawRig(const vpHomogeneousMatrix &vMc0)
+{
+  fromVisp(vMc0, v_R0_, v_t0_);
+  if (!v_R0_.allFinite() || !v_t0_.allFinite())
+    throw Error("camera pose: not a finite pose");
+  if (!(((v_R0_.transpose() * v_R0_) - Eigen::Matrix3d::Identity()).norm() < 1e-6) || !(v_R0_.determinant() > 0))
+    throw Error("camera pose: the rotation is not a rotation matrix");
+}
+
 vpHomogeneousMatrix YawRig::vMc(double yaw) const
 {
   const Eigen::Matrix3d R = rotY(yaw);
-  return toVisp(R, R * v_t0_);
+  return toVisp(R * v_R0_, R * v_t0_);
 }
 
-vpHomogeneousMatrix YawRig::cMv(double yaw) const { return toVisp(rotY(yaw).transpose(), -v_t0_); }
+vpHomogeneousMatrix YawRig::cMv(double yaw) const
+{
+  return toVisp(v_R0_.transpose() * rotY(yaw).transpose(), -(v_R0_.transpose() * v_t0_));
+}
+
+Eigen::Vector3d logSO3(const Eigen::Matrix3d &R)
+{
+  const Eigen::AngleAxisd aa(R);
+  return aa.angle() * aa.axis();
+}
+
+MotionSample MotionSample::fromPose(long frame, const vpHomogeneousMatrix &wMv, double yaw)
+{
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  fromVisp(wMv, R, t);
+  MotionSample s;
+  s.frame = frame;
+  s.x = t.x();
+  s.y = t.y();
+  s.z = t.z();
+  s.yaw = yaw;
+  s.six_dof = true;
+  s.theta_u = logSO3(R);
+  return s;
+}
 
 static Eigen::Vector3d toEigen3(const vpColVector &v, const char *what)
 {
@@ -60,21 +94,20 @@ static vpColVector toVisp3(const Eigen::Vector3d &e)
 
 vpColVector YawRig::cameraIncrement(double yaw, const vpColVector &v_d) const
 {
-  return toVisp3(rotY(yaw).transpose() * toEigen3(v_d, "cameraIncrement"));
+  return toVisp3(v_R0_.transpose() * (rotY(yaw).transpose() * toEigen3(v_d, "cameraIncrement")));
 }
 
 vpColVector YawRig::toVision(double yaw, const vpColVector &c_P) const
 {
-  const Eigen::Matrix3d R = rotY(yaw);
-  return toVisp3(R * (toEigen3(c_P, "toVision") + v_t0_));
+  return toVisp3(visionPoint(yaw, toEigen3(c_P, "toVision")));
 }
 
 vpColVector YawRig::toCamera(double yaw, const vpColVector &v_P) const
 {
-  return toVisp3(rotY(yaw).transpose() * toEigen3(v_P, "toCamera") - v_t0_);
+  return toVisp3(v_R0_.transpose() * (rotY(yaw).transpose() * toEigen3(v_P, "toCamera") - v_t0_));
 }
 
-vpHomogeneousMatrix wMv(const MotionSample &s) { return toVisp(rotY(s.heading), Eigen::Vector3d(s.x, s.y, s.z)); }
+vpHomogeneousMatrix wMv(const MotionSample &s) { return toVisp(s.rotation(), s.position()); }
 
 vpHomogeneousMatrix wMc(const YawRig &rig, const MotionSample &s) { return wMv(s) * rig.vMc(s.yaw); }
 
@@ -82,7 +115,7 @@ vpHomogeneousMatrix curMprev(const YawRig &rig, const MotionSample &prev, const 
 {
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
-  relativeMotion<double>(rig.cameraOffset(), prev, cur, IncrementPerturbation<double>(), R, t);
+  relativeMotion<double>(rig, prev, cur, IncrementPerturbation<double>(), R, t);
   return toVisp(R, t);
 }
 

@@ -34,12 +34,26 @@ MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw
 {
   CsvReader csv(path, limits);
   const std::size_t c_frame = csv.requireColumn("frame");
-  const std::size_t c_x = csv.requireColumn("x");
-  const std::size_t c_y = csv.requireColumn("y");
-  const std::size_t c_z = csv.requireColumn("z");
-  const std::size_t c_heading = csv.requireColumn("heading");
+  // The 6-DoF form (tx, ty, tz, tux, tuy, tuz: wMv as a vpPoseVector) when any of its columns is
+  // there; then all six are required and x, y, z, heading are not read.
+  static const char *const kPose[6] = {"tx", "ty", "tz", "tux", "tuy", "tuz"};
+  bool six_dof = false;
+  for (const char *name : kPose)
+    six_dof = six_dof || csv.column(name).has_value();
+  std::size_t c_pose[6] = {0, 0, 0, 0, 0, 0};
+  if (six_dof) {
+    for (int i = 0; i < 6; ++i)
+      c_pose[i] = csv.requireColumn(kPose[i]);
+  } else {
+    c_pose[0] = csv.requireColumn("x");
+    c_pose[1] = csv.requireColumn("y");
+    c_pose[2] = csv.requireColumn("z");
+    c_pose[3] = csv.requireColumn("heading");
+  }
   const auto c_yaw = csv.column("yaw");
   const auto c_image = csv.column("image");
+  if (!c_yaw && six_dof && !fixed_yaw)
+    fixed_yaw = 0.0; // a 6-DoF log without a pan joint: the camera is fixed to the vision frame
   if (!c_yaw) {
     if (!fixed_yaw)
       csv.failFile("no 'yaw' column and the rig file has no 'yaw'");
@@ -53,10 +67,18 @@ MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw
   while (csv.next()) {
     MotionSample s;
     s.frame = csv.integer(c_frame);
-    s.x = csv.number(c_x);
-    s.y = csv.number(c_y);
-    s.z = csv.number(c_z);
-    s.heading = csv.number(c_heading);
+    s.x = csv.number(c_pose[0]);
+    s.y = csv.number(c_pose[1]);
+    s.z = csv.number(c_pose[2]);
+    if (six_dof) {
+      s.six_dof = true;
+      s.theta_u = Eigen::Vector3d(csv.number(c_pose[3]), csv.number(c_pose[4]), csv.number(c_pose[5]));
+      if (!(s.theta_u.norm() <= 4 * M_PI))
+        csv.fail("frame " + std::to_string(s.frame) + ": the rotation (tux, tuy, tuz) has a norm above 4 pi: not a "
+                 "theta-u vector in radians");
+    } else {
+      s.heading = csv.number(c_pose[3]);
+    }
     s.yaw = c_yaw ? csv.number(*c_yaw) : *fixed_yaw;
     if (!log.samples.empty()) {
       const long prev = log.samples.back().frame;
@@ -105,14 +127,22 @@ void writeMotionCsv(const std::string &path, const MotionLog &motion)
     throwError(path + ": the motion log has " + std::to_string(motion.samples.size()) + " samples but " +
                std::to_string(motion.images.size()) + " images");
   const fs::path folder = fs::path(path).parent_path();
-  std::string out = with_images ? "frame,x,y,z,heading,yaw,image\n" : "frame,x,y,z,heading,yaw\n";
+  const bool six_dof = !motion.samples.empty() && motion.samples.front().six_dof;
+  for (const MotionSample &s : motion.samples)
+    if (s.six_dof != six_dof)
+      throwError(path + ": the motion log mixes planar and 6-DoF rows (frame " + std::to_string(s.frame) + ")");
+  std::string out = six_dof ? "frame,tx,ty,tz,tux,tuy,tuz,yaw" : "frame,x,y,z,heading,yaw";
+  out += with_images ? ",image\n" : "\n";
   for (std::size_t i = 0; i < motion.samples.size(); ++i) {
     const MotionSample &s = motion.samples[i];
-    for (double v : {s.x, s.y, s.z, s.heading, s.yaw})
+    std::vector<double> values = {s.x, s.y, s.z, s.heading, s.yaw};
+    if (six_dof)
+      values = {s.x, s.y, s.z, s.theta_u.x(), s.theta_u.y(), s.theta_u.z(), s.yaw};
+    for (double v : values)
       if (!std::isfinite(v))
         throwError(path + ": frame " + std::to_string(s.frame) + " has a non-finite value");
     out += std::to_string(s.frame);
-    for (double v : {s.x, s.y, s.z, s.heading, s.yaw}) {
+    for (double v : values) {
       out += ',';
       out += formatNumber(v);
     }

@@ -68,20 +68,16 @@ RigFile readRigFile(const std::string &path)
     // Every key is one we know: a typo ('camera_ofset') must not silently drop a setting.
     // The *_sigma, yaw_offset_estimated and reprojection_rms_px keys are what calibrate-rig
     // writes beside the values (read as information, not used).
-    static const std::set<std::string> kKnown = {"camera_offset",       "yaw",           "yaw_offset",
-                                                 "yaw_axis",            "camera_offset_sigma",
-                                                 "yaw_offset_sigma",    "yaw_offset_estimated",
-                                                 "yaw_axis_sigma",      "reprojection_rms_px"};
+    static const std::set<std::string> kKnown = {"camera_offset",       "camera_pose",   "yaw",
+                                                 "yaw_offset",          "yaw_axis",      "camera_offset_sigma",
+                                                 "camera_pose_sigma",   "yaw_offset_sigma",
+                                                 "yaw_offset_estimated", "yaw_axis_sigma", "reprojection_rms_px"};
     std::set<std::string> seen;
     YAML::Mark yaw_mark = YAML::Mark::null_mark();
     for (const auto &kv : root) {
       if (!kv.first.IsScalar())
         throwError(where(path, kv.first.Mark()) + "a key must be a name");
       const std::string &key = kv.first.Scalar();
-      if (key == "camera_pose")
-        throwError(where(path, kv.first.Mark()) +
-                   "'camera_pose' (a fixed 6-DoF camera mount) is not supported by this version: give "
-                   "'camera_offset: [x, y, z]' for a camera on the yaw joint");
       if (kKnown.count(key) == 0) {
         std::string known;
         for (const std::string &k : kKnown)
@@ -95,14 +91,41 @@ RigFile readRigFile(const std::string &path)
     }
 
     const YAML::Node offset = root["camera_offset"];
-    if (!offset)
-      throwError(path + ": missing key 'camera_offset'");
-    if (!offset.IsSequence() || offset.size() != 3)
-      throwError(where(path, offset.Mark()) + "'camera_offset' must be a sequence of 3 numbers [x, y, z]" +
-                 (offset.IsSequence() ? " (it has " + std::to_string(offset.size()) + ")" : ""));
-    for (std::size_t i = 0; i < 3; ++i)
-      rig.camera_offset(static_cast<Eigen::Index>(i)) =
-          finiteNumber(path, offset[i], "'camera_offset' value " + std::to_string(i + 1));
+    const YAML::Node pose = root["camera_pose"];
+    if (offset && pose)
+      throwError(where(path, pose.Mark()) +
+                 "both 'camera_offset' and 'camera_pose': give one (camera_offset: [x, y, z] for a camera on a yaw "
+                 "joint with its axes along the vision frame's, camera_pose: [tx, ty, tz, tux, tuy, tuz] for any "
+                 "fixed mount)");
+    if (!offset && !pose)
+      throwError(path + ": missing key 'camera_offset' (or 'camera_pose')");
+    auto numbers = [&](const YAML::Node &node, const std::string &key, std::size_t n) {
+      if (!node.IsSequence() || node.size() != n)
+        throwError(where(path, node.Mark()) + "'" + key + "' must be a sequence of " + std::to_string(n) + " numbers" +
+                   (node.IsSequence() ? " (it has " + std::to_string(node.size()) + ")" : ""));
+      std::vector<double> v(n);
+      for (std::size_t i = 0; i < n; ++i)
+        v[i] = finiteNumber(path, node[i], "'" + key + "' value " + std::to_string(i + 1));
+      return v;
+    };
+    if (offset) {
+      const std::vector<double> v = numbers(offset, "camera_offset", 3);
+      rig.camera_offset = Eigen::Vector3d(v[0], v[1], v[2]);
+    } else {
+      const std::vector<double> v = numbers(pose, "camera_pose", 6);
+      // theta-u beyond pi is the same rotation as a smaller one, but a file with it is more likely wrong.
+      if (!(Eigen::Vector3d(v[3], v[4], v[5]).norm() <= M_PI + 1e-9))
+        throwError(where(path, pose.Mark()) + "'camera_pose' rotation (tux, tuy, tuz) must have a norm of at most pi");
+      rig.camera_pose = vpPoseVector(v[0], v[1], v[2], v[3], v[4], v[5]);
+      rig.camera_offset = Eigen::Vector3d(v[0], v[1], v[2]);
+    }
+    const YAML::Node pose_sigma = root["camera_pose_sigma"];
+    if (pose_sigma) {
+      if (!pose)
+        throwError(where(path, pose_sigma.Mark()) + "'camera_pose_sigma' without 'camera_pose'");
+      const std::vector<double> v = numbers(pose_sigma, "camera_pose_sigma", 6);
+      rig.camera_pose_sigma = Eigen::Matrix<double, 6, 1>(v.data());
+    }
 
     const YAML::Node yaw = root["yaw"];
     if (yaw && !yaw.IsNull())
@@ -142,14 +165,41 @@ RigFile readRigFile(const std::string &path)
   return rig;
 }
 
+YawRig rigOf(const RigFile &rig)
+{
+  if (rig.camera_pose)
+    return YawRig(vpHomogeneousMatrix(*rig.camera_pose));
+  return YawRig(rig.camera_offset);
+}
+
 void writeRigFile(const std::string &path, const RigFile &rig)
 {
   if (!rig.camera_offset.allFinite())
     throwError(path + ": camera_offset is not finite");
   if (rig.yaw && !std::isfinite(*rig.yaw))
     throwError(path + ": yaw is not finite");
-  std::string out = "camera_offset: [" + formatNumber(rig.camera_offset.x()) + ", " +
-                    formatNumber(rig.camera_offset.y()) + ", " + formatNumber(rig.camera_offset.z()) + "]\n";
+  auto list = [](const double *v, int n) {
+    std::string s = "[";
+    for (int i = 0; i < n; ++i)
+      s += (i ? ", " : "") + formatNumber(v[i]);
+    return s + "]";
+  };
+  std::string out;
+  if (rig.camera_pose) {
+    const vpPoseVector &p = *rig.camera_pose;
+    const double v[6] = {p[0], p[1], p[2], p[3], p[4], p[5]};
+    for (double x : v)
+      if (!std::isfinite(x))
+        throwError(path + ": camera_pose is not finite");
+    out = "camera_pose: " + list(v, 6) + "\n";
+    if (rig.camera_pose_sigma) {
+      if (!rig.camera_pose_sigma->allFinite())
+        throwError(path + ": camera_pose_sigma is not finite");
+      out += "camera_pose_sigma: " + list(rig.camera_pose_sigma->data(), 6) + "\n";
+    }
+  } else {
+    out = "camera_offset: " + list(rig.camera_offset.data(), 3) + "\n";
+  }
   if (rig.yaw)
     out += "yaw: " + formatNumber(*rig.yaw) + "\n";
   if (!std::isfinite(rig.yaw_offset))

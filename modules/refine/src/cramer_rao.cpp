@@ -34,17 +34,25 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
   };
 
   Model m;
-  const Eigen::Vector3d &t0 = rig.cameraOffset();
-  std::copy(t0.data(), t0.data() + 3, m.t0);
-  m.poses_free = noise.sigma_odom > 0 || noise.sigma_heading > 0;
-  m.yaws_free = noise.sigma_yaw > 0;
-  m.inv_sigma_yaw = m.yaws_free ? 1.0 / noise.sigma_yaw : 0.0;
+  setModelMotion(m, rig, truth, noise);
   for (const MotionSample &s : truth) {
-    m.poses.push_back({s.x, s.y, s.z, s.heading});
+    if (m.general)
+      m.poses.push_back({s.x, s.y, s.z, 0.0, 0.0, 0.0}); // at the reference orientation, the truth's
+    else
+      m.poses.push_back({s.x, s.y, s.z, s.heading, 0.0, 0.0});
     m.yaws.push_back(s.yaw);
   }
-  for (std::size_t r = 1; r < truth.size(); ++r)
-    m.odometry.push_back(measuredIncrement(truth[r - 1], truth[r], noise));
+  // The camera's rotation and centre at a row.
+  auto cameraAt = [&](int row, Eigen::Matrix3d &R, Eigen::Vector3d &c) {
+    if (m.general) {
+      double f[7];
+      std::copy(m.poses[row].begin(), m.poses[row].end(), f);
+      f[6] = m.yaws[row];
+      cameraInWorldGeneral(f, m.Rref[row], m.mount, R, c);
+    } else {
+      cameraInWorld(m.poses[row].data(), m.yaws[row], rig.cameraOffset(), R, c);
+    }
+  };
 
   std::vector<double> out(tracks.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<int> point_of_track(tracks.size(), -1);
@@ -57,7 +65,7 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
     // The true point anchored in its first camera frame.
     Eigen::Matrix3d Ra;
     Eigen::Vector3d ca;
-    cameraInWorld(m.poses[ra].data(), m.yaws[ra], t0, Ra, ca);
+    cameraAt(ra, Ra, ca);
     const Eigen::Vector3d Pa = Ra.transpose() * (w_points[t] - ca);
     if (!(Pa.z() > 0))
       continue;
@@ -67,7 +75,7 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
       const int row = rowOf(ob.frame);
       Eigen::Matrix3d R;
       Eigen::Vector3d c;
-      cameraInWorld(m.poses[row].data(), m.yaws[row], t0, R, c);
+      cameraAt(row, R, c);
       const Eigen::Vector3d P = R.transpose() * (w_points[t] - c);
       if (!(P.z() > 0)) {
         valid = false;

@@ -15,42 +15,146 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Local parameter layout of an observation: point(3), pose_a(4), yaw_a(1), pose_k(4), yaw_k(1).
-constexpr int kLocal = 13;
-using AD13 = Eigen::AutoDiffScalar<Eigen::Matrix<double, kLocal, 1>>;
-using AD8 = Eigen::AutoDiffScalar<Eigen::Matrix<double, 8, 1>>;
+/* Local parameter layout of an observation: point(3), frame_a(PD + 1), frame_k(PD + 1), a frame
+   being the pose (PD values) then the yaw. */
+template <int PD> struct Layout {
+  static constexpr int kFrame = PD + 1;
+  static constexpr int kLocal = 3 + 2 * kFrame;
+  using AD = Eigen::AutoDiffScalar<Eigen::Matrix<double, kLocal, 1>>;
+  using ADPrior = Eigen::AutoDiffScalar<Eigen::Matrix<double, 2 * PD, 1>>;
+};
 
-struct Local {
-  AD13 x[kLocal];
+template <int PD> struct Local {
+  using AD = typename Layout<PD>::AD;
+  static constexpr int kLocal = Layout<PD>::kLocal;
+  AD x[kLocal];
   Local(const double *point, const double *pose_a, double yaw_a, const double *pose_k, double yaw_k)
   {
     double v[kLocal];
     std::copy(point, point + 3, v);
-    std::copy(pose_a, pose_a + 4, v + 3);
-    v[7] = yaw_a;
-    std::copy(pose_k, pose_k + 4, v + 8);
-    v[12] = yaw_k;
+    std::copy(pose_a, pose_a + PD, v + 3);
+    v[3 + PD] = yaw_a;
+    std::copy(pose_k, pose_k + PD, v + 4 + PD);
+    v[4 + 2 * PD] = yaw_k;
     for (int i = 0; i < kLocal; ++i)
-      x[i] = AD13(v[i], kLocal, i);
+      x[i] = AD(v[i], kLocal, i);
   }
+  const AD *point() const { return x; }
+  const AD *frameA() const { return x + 3; }
+  const AD *frameK() const { return x + 4 + PD; }
 };
 
-/* Global motion index of each local column (-1: a point column or a known parameter). */
-std::array<int, kLocal> motionColumns(const Model &m, int row_a, int row_k)
+/* rho times the camera-frame point at row k (anchoredPoint of the model's chain). */
+template <int PD, typename T>
+void modelAnchoredPoint(const Model &m, int ra, int rk, const T *frame_a, const T *frame_k, const T *point, T *q)
 {
-  std::array<int, kLocal> c;
+  if constexpr (PD == 6)
+    anchoredPointGeneral(frame_a, m.Rref[ra], frame_k, m.Rref[rk], point, m.mount, q);
+  else
+    anchoredPoint(frame_a, frame_a + 4, frame_k, frame_k + 4, point, m.t0, q);
+}
+
+/* Global motion index of each local column (-1: a point column or a known parameter). */
+template <int PD> std::array<int, Layout<PD>::kLocal> motionColumns(const Model &m, int row_a, int row_k)
+{
+  std::array<int, Layout<PD>::kLocal> c;
   c.fill(-1);
-  for (int j = 0; j < 4; ++j) {
-    const int pa = m.poseIndex(row_a), pk = m.poseIndex(row_k);
-    c[3 + j] = pa >= 0 ? pa + j : -1;
-    c[8 + j] = pk >= 0 ? pk + j : -1;
+  for (int j = 0; j < PD; ++j) {
+    c[3 + j] = m.poseIndex(row_a, j);
+    c[4 + PD + j] = m.poseIndex(row_k, j);
   }
-  c[7] = m.yawIndex(row_a);
-  c[12] = m.yawIndex(row_k);
+  c[3 + PD] = m.yawIndex(row_a);
+  c[4 + 2 * PD] = m.yawIndex(row_k);
   return c;
 }
 
 } // namespace
+
+int Model::freePoseComponents() const
+{
+  int n = 0;
+  for (int j = 0; j < poseDim(); ++j)
+    n += componentFree(j) ? 1 : 0;
+  return n;
+}
+
+int Model::poseIndex(int row, int j) const
+{
+  if (!poses_free || row <= 0 || !componentFree(j))
+    return -1;
+  int k = 0;
+  for (int i = 0; i < j; ++i)
+    k += componentFree(i) ? 1 : 0;
+  return freePoseComponents() * (row - 1) + k;
+}
+
+int Model::yawIndex(int row) const
+{
+  return yaws_free ? (poses_free ? freePoseComponents() * (rows() - 1) : 0) + row : -1;
+}
+
+int Model::motionParameters() const
+{
+  return (poses_free ? freePoseComponents() * (rows() - 1) : 0) + (yaws_free ? rows() : 0);
+}
+
+bool needsGeneralChain(const YawRig &rig, const std::vector<MotionSample> &motion)
+{
+  if (!rig.cameraRotation().isIdentity(0.0))
+    return true;
+  return std::any_of(motion.begin(), motion.end(), [](const MotionSample &s) { return s.six_dof; });
+}
+
+void cameraInWorldGeneral(const double *frame, const Eigen::Matrix3d &Rref, const Mount &mount, Eigen::Matrix3d &R,
+                          Eigen::Vector3d &c)
+{
+  const Eigen::Matrix3d V = yawedRotation<double>(Rref, frame);
+  R = V * mount.R0;
+  c = Eigen::Vector3d(frame[0], frame[1], frame[2]) + V * mount.t0;
+}
+
+void setModelMotion(Model &m, const YawRig &rig, const std::vector<MotionSample> &measured, const NoiseModel &noise)
+{
+  m.general = needsGeneralChain(rig, measured);
+  const Eigen::Vector3d &t0 = rig.cameraOffset();
+  std::copy(t0.data(), t0.data() + 3, m.t0);
+  m.mount.R0 = rig.cameraRotation();
+  m.mount.t0 = t0;
+  const bool six_dof = std::any_of(measured.begin(), measured.end(), [](const MotionSample &s) { return s.six_dof; });
+  const Eigen::Vector3d sr = incrementRotationSigma(noise, six_dof);
+  for (int i = 0; i < 3; ++i)
+    m.rotation_free[i] = six_dof || i == 1;
+  m.poses_free = noise.sigma_odom > 0 || sr.maxCoeff() > 0;
+  m.yaws_free = noise.sigma_yaw > 0;
+  m.inv_sigma_yaw = m.yaws_free ? 1.0 / noise.sigma_yaw : 0.0;
+  m.Rref.clear();
+  m.odometry.clear();
+  m.odometry_general.clear();
+  for (const MotionSample &s : measured)
+    m.Rref.push_back(s.rotation());
+  for (std::size_t r = 1; r < measured.size(); ++r) {
+    if (m.general)
+      m.odometry_general.push_back(measuredIncrementGeneral(measured[r - 1], measured[r], noise));
+    else
+      m.odometry.push_back(measuredIncrement(measured[r - 1], measured[r], noise));
+  }
+}
+
+OdometryMeasurementGeneral measuredIncrementGeneral(const MotionSample &prev, const MotionSample &cur,
+                                                    const NoiseModel &noise)
+{
+  OdometryMeasurementGeneral o;
+  o.Rref_prev = prev.rotation();
+  o.Rref_cur = cur.rotation();
+  const Eigen::Vector3d d = o.Rref_prev.transpose() * (cur.position() - prev.position());
+  std::copy(d.data(), d.data() + 3, o.d);
+  o.dR = o.Rref_prev.transpose() * o.Rref_cur;
+  o.inv_sigma_t = 1.0 / std::max(noise.sigma_odom, kMinSigmaLength);
+  const Eigen::Vector3d sr = incrementRotationSigma(noise, prev.six_dof || cur.six_dof);
+  for (int i = 0; i < 3; ++i)
+    o.inv_sigma_r[i] = 1.0 / std::max(sr(i), kMinSigmaAngle);
+  return o;
+}
 
 WhitenedObservation whitenObservation(const Eigen::Vector2d &m, const Eigen::Matrix2d &J, double sigma_px)
 {
@@ -87,8 +191,15 @@ OdometryMeasurement measuredIncrement(const MotionSample &prev, const MotionSamp
   return o;
 }
 
-void pointCovariances(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &cov, std::vector<char> &ok)
+namespace {
+
+template <int PD>
+void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &cov, std::vector<char> &ok)
 {
+  using AD = typename Layout<PD>::AD;
+  using ADPrior = typename Layout<PD>::ADPrior;
+  constexpr int kLocal = Layout<PD>::kLocal;
+  constexpr int kR = PD == 6 ? 6 : 4; // odometry residuals
   const int np = static_cast<int>(m.points.size());
   const int nl = m.motionParameters();
   cov.assign(np, Eigen::Matrix3d::Constant(kNaN));
@@ -98,24 +209,27 @@ void pointCovariances(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &
   Eigen::MatrixXd Hprior = Eigen::MatrixXd::Zero(nl, nl);
   if (m.poses_free) {
     for (int row = 1; row < m.rows(); ++row) {
-      AD8 x[8];
-      for (int j = 0; j < 4; ++j) {
-        x[j] = AD8(m.poses[row - 1][j], 8, j);
-        x[4 + j] = AD8(m.poses[row][j], 8, 4 + j);
+      ADPrior x[2 * PD];
+      for (int j = 0; j < PD; ++j) {
+        x[j] = ADPrior(m.poses[row - 1][j], 2 * PD, j);
+        x[PD + j] = ADPrior(m.poses[row][j], 2 * PD, PD + j);
       }
-      AD8 r[4];
-      odometryResidual(x, x + 4, m.odometry[row - 1], r);
-      Eigen::Matrix<double, 4, 8> J;
-      for (int i = 0; i < 4; ++i)
+      ADPrior r[kR];
+      if constexpr (PD == 6)
+        odometryResidualGeneral(x, x + PD, m.odometry_general[row - 1], r);
+      else
+        odometryResidual(x, x + PD, m.odometry[row - 1], r);
+      Eigen::Matrix<double, kR, 2 * PD> J;
+      for (int i = 0; i < kR; ++i)
         J.row(i) = r[i].derivatives().transpose();
-      int idx[8];
-      for (int j = 0; j < 4; ++j) {
-        idx[j] = m.poseIndex(row - 1) >= 0 ? m.poseIndex(row - 1) + j : -1;
-        idx[4 + j] = m.poseIndex(row) + j;
+      int idx[2 * PD];
+      for (int j = 0; j < PD; ++j) {
+        idx[j] = m.poseIndex(row - 1, j);
+        idx[PD + j] = m.poseIndex(row, j);
       }
-      const Eigen::Matrix<double, 8, 8> JtJ = J.transpose() * J;
-      for (int a = 0; a < 8; ++a)
-        for (int b = 0; b < 8; ++b)
+      const Eigen::Matrix<double, 2 * PD, 2 * PD> JtJ = J.transpose() * J;
+      for (int a = 0; a < 2 * PD; ++a)
+        for (int b = 0; b < 2 * PD; ++b)
           if (idx[a] >= 0 && idx[b] >= 0)
             Hprior(idx[a], idx[b]) += JtJ(a, b);
     }
@@ -150,19 +264,21 @@ void pointCovariances(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &
         J(0, 1) = o.w.s01;
         J(1, 1) = o.w.s11;
       } else {
-        Local x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[o.row].data(), m.yaws[o.row]);
-        AD13 r[2];
-        reprojectionResidual(x.x + 3, x.x + 7, x.x + 8, x.x + 12, x.x, m.t0, o.w, r);
+        const Local<PD> x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[o.row].data(), m.yaws[o.row]);
+        AD q[3];
+        modelAnchoredPoint<PD>(m, ra, o.row, x.frameA(), x.frameK(), x.point(), q);
+        AD r[2];
+        whiten(o.w, AD(q[0] / q[2] - o.w.m[0]), AD(q[1] / q[2] - o.w.m[1]), r);
         J.row(0) = r[0].derivatives().transpose();
         J.row(1) = r[1].derivatives().transpose();
       }
-      const std::array<int, kLocal> col = motionColumns(m, ra, o.row);
+      const std::array<int, kLocal> col = motionColumns<PD>(m, ra, o.row);
       const Eigen::Matrix<double, kLocal, kLocal> JtJ = J.transpose() * J;
-      Hpp[p] += JtJ.topLeftCorner<3, 3>();
+      Hpp[p] += JtJ.template topLeftCorner<3, 3>();
       for (int b = 3; b < kLocal; ++b) {
         if (col[b] < 0)
           continue;
-        Hpl[p].col(col[b]) += JtJ.block<3, 1>(0, b);
+        Hpl[p].col(col[b]) += JtJ.template block<3, 1>(0, b);
         for (int a = 3; a < kLocal; ++a)
           if (col[a] >= 0)
             Hll_i(col[a], col[b]) += JtJ(a, b);
@@ -202,16 +318,16 @@ void pointCovariances(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &
     if (!ok[p])
       continue;
     const int ra = m.anchor_row[p], rk = m.report_row[p];
-    Local x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[rk].data(), m.yaws[rk]);
-    AD13 q[3];
-    anchoredPoint(x.x + 3, x.x + 7, x.x + 8, x.x + 12, x.x, m.t0, q);
+    const Local<PD> x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[rk].data(), m.yaws[rk]);
+    AD q[3];
+    modelAnchoredPoint<PD>(m, ra, rk, x.frameA(), x.frameK(), x.point(), q);
     Eigen::Matrix<double, 3, kLocal> G;
     for (int i = 0; i < 3; ++i) {
-      const AD13 c = q[i] / x.x[2];
+      const AD c = q[i] / x.x[2];
       G.row(i) = c.derivatives().transpose();
     }
-    const std::array<int, kLocal> col = motionColumns(m, ra, rk);
-    const Eigen::Matrix3d Gp = G.leftCols<3>();
+    const std::array<int, kLocal> col = motionColumns<PD>(m, ra, rk);
+    const Eigen::Matrix3d Gp = G.template leftCols<3>();
     Eigen::Matrix3d C = Gp * Hpp_inv[p] * Gp.transpose();
     if (nl > 0) {
       Eigen::MatrixXd B = -(Gp * Hpp_inv[p]) * Hpl[p];
@@ -225,6 +341,16 @@ void pointCovariances(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &
     if (!cov[p].allFinite())
       ok[p] = 0;
   }
+}
+
+} // namespace
+
+void pointCovariances(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &cov, std::vector<char> &ok)
+{
+  if (m.general)
+    pointCovariancesT<6>(m, joint, cov, ok);
+  else
+    pointCovariancesT<4>(m, joint, cov, ok);
 }
 
 } // namespace refine_detail

@@ -26,25 +26,38 @@ struct ModelObservation {
 /*!
   The refine model at one value of its parameters (the solution, or the truth for the bound).
   Frame 0's pose is known (the gauge). Poses are free when odometry noise is modelled
-  (sigma_odom > 0 or sigma_heading > 0), yaws when sigma_yaw > 0; otherwise they are known.
+  (sigma_odom > 0, or the rotation's sigma > 0), yaws when sigma_yaw > 0; otherwise they are known.
+  Two chains (refine_model.h): planar (pose = x, y, z, heading; mount t0 only) and general (pose =
+  x, y, z, d(3) about the row's reference orientation; any mount), where a planar log frees only
+  the heading component dy.
 */
 struct Model {
-  double t0[3] = {0, 0, 0};
-  std::vector<std::array<double, 4>> poses; //!< per row
+  bool general = false;
+  double t0[3] = {0, 0, 0};                 //!< planar chain's mount
+  Mount mount;                              //!< general chain's mount
+  std::vector<std::array<double, 6>> poses; //!< per row: planar (x, y, z, heading, -, -), general (x, y, z, d)
+  std::vector<Eigen::Matrix3d> Rref;        //!< per row, general chain
   std::vector<double> yaws;                 //!< per row
   std::vector<std::array<double, 3>> points;
   std::vector<int> anchor_row, report_row;  //!< per point
   std::vector<ModelObservation> observations;
-  std::vector<OdometryMeasurement> odometry; //!< per row >= 1 (index row - 1); only sigmas used here
+  std::vector<OdometryMeasurement> odometry; //!< planar: per row >= 1 (index row - 1); only sigmas used here
+  std::vector<OdometryMeasurementGeneral> odometry_general; //!< general: the same
   double inv_sigma_yaw = 0;
   bool poses_free = false, yaws_free = false;
+  bool rotation_free[3] = {false, true, false}; //!< general chain: which components of d are estimated
 
   int rows() const { return static_cast<int>(poses.size()); }
-  /*! Index of a row's pose (4 values) among the motion parameters, or -1 when known. */
-  int poseIndex(int row) const { return poses_free && row > 0 ? 4 * (row - 1) : -1; }
+  int poseDim() const { return general ? 6 : 4; }
+  /*! Index of component j of a row's pose among the motion parameters, or -1 when known. */
+  int poseIndex(int row, int j) const;
   /*! Index of a row's yaw among the motion parameters, or -1 when known. */
-  int yawIndex(int row) const { return yaws_free ? (poses_free ? 4 * (rows() - 1) : 0) + row : -1; }
-  int motionParameters() const { return (poses_free ? 4 * (rows() - 1) : 0) + (yaws_free ? rows() : 0); }
+  int yawIndex(int row) const;
+  int motionParameters() const;
+  /*! Estimated components per pose (row >= 1). */
+  int freePoseComponents() const;
+  /*! Whether component j of a pose is estimated (for rows >= 1, when poses are free). */
+  bool componentFree(int j) const { return j < 3 || !general || rotation_free[j - 3]; }
 };
 
 /*!
@@ -58,11 +71,27 @@ void pointCovariances(const Model &model, bool joint, std::vector<Eigen::Matrix3
 /*! Whitening of an observation at undistorted point m with undistortion Jacobian J = d(x,y)/d(u,v). */
 WhitenedObservation whitenObservation(const Eigen::Vector2d &m, const Eigen::Matrix2d &J, double sigma_px);
 
-/*! The camera's rotation Ry(heading + yaw) and centre p + R t0 in the world. */
+/*! The camera's rotation Ry(heading + yaw) and centre p + R t0 in the world (planar chain). */
 void cameraInWorld(const double *pose, double yaw, const Eigen::Vector3d &t0, Eigen::Matrix3d &R, Eigen::Vector3d &c);
+/*! The camera's rotation and centre in the world (general chain; frame[7], see refine_model.h). */
+void cameraInWorldGeneral(const double *frame, const Eigen::Matrix3d &Rref, const Mount &mount, Eigen::Matrix3d &R,
+                          Eigen::Vector3d &c);
 
-/*! The measured increment between two motion-log rows (the priors). */
+/*! The measured increment between two motion-log rows (the priors), planar chain. */
 OdometryMeasurement measuredIncrement(const MotionSample &prev, const MotionSample &cur, const NoiseModel &noise);
+/*! The measured increment between two motion-log rows, general chain (reference orientations: the rows'). */
+OdometryMeasurementGeneral measuredIncrementGeneral(const MotionSample &prev, const MotionSample &cur,
+                                                    const NoiseModel &noise);
+
+/*! Whether refine must use the general chain: a 6-DoF row, or a mount with a rotation. */
+bool needsGeneralChain(const YawRig &rig, const std::vector<MotionSample> &motion);
+
+/*!
+  The model's chain, mount, free parameters and motion priors for a rig and the measured motion log
+  (the reference orientations are the measured rows'); poses, yaws and points are left to the caller
+  (a planar pose is (x, y, z, heading), a general one (x, y, z, d) about Rref).
+*/
+void setModelMotion(Model &m, const YawRig &rig, const std::vector<MotionSample> &measured, const NoiseModel &noise);
 
 /*! Lower bounds used instead of a zero sigma for a parameter that is estimated. */
 constexpr double kMinSigmaLength = 1e-9; // m

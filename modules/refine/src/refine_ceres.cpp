@@ -77,20 +77,63 @@ struct OdometryCost {
   OdometryMeasurement o_;
 };
 
-/* Yaw reading prior. Parameter block: frame[5] = (x, y, z, heading, yaw), only the yaw [rad]
-   used. Residual[1]: (yaw - reading) / sigma_yaw. */
-struct YawCost {
+/* Yaw reading prior. Parameter block: frame[N] = (pose..., yaw) (N = 5 planar, 7 general), only
+   the yaw [rad], the last value, used. Residual[1]: (yaw - reading) / sigma_yaw. */
+template <int N> struct YawCost {
   YawCost(double measured, double inv_sigma) : measured_(measured), inv_sigma_(inv_sigma) {}
   template <typename T> bool operator()(const T *frame, T *r) const
   {
-    yawResidual(frame + 4, measured_, inv_sigma_, r);
+    yawResidual(frame + N - 1, measured_, inv_sigma_, r);
     return true;
   }
   static ceres::CostFunction *Create(double measured, double inv_sigma)
   {
-    return new ceres::AutoDiffCostFunction<YawCost, 1, 5>(new YawCost(measured, inv_sigma));
+    return new ceres::AutoDiffCostFunction<YawCost, 1, N>(new YawCost(measured, inv_sigma));
   }
   double measured_, inv_sigma_;
+};
+
+/* Reprojection of an anchored point, general chain (refine_model.h).
+   Parameter blocks: frame_a[7] = (x, y, z [m], dx, dy, dz [rad], yaw [rad]) of the anchor frame,
+   the vision frame's orientation being Rref_a Exp(d); frame_k[7] the same for the observing frame;
+   point[3] = (alpha, beta [-], rho [1/m]). Stored by value: the two rows' reference orientations
+   and the camera mount. Residual[2]: whitened normalised reprojection error (units of sigma_px). */
+struct ReprojectionCostGeneral {
+  ReprojectionCostGeneral(const WhitenedObservation &w, const Eigen::Matrix3d &Rref_a, const Eigen::Matrix3d &Rref_k,
+                          const Mount &mount)
+      : w_(w), Rref_a_(Rref_a), Rref_k_(Rref_k), mount_(mount)
+  {
+  }
+  template <typename T> bool operator()(const T *frame_a, const T *frame_k, const T *point, T *r) const
+  {
+    return reprojectionResidualGeneral(frame_a, Rref_a_, frame_k, Rref_k_, point, mount_, w_, r);
+  }
+  static ceres::CostFunction *Create(const WhitenedObservation &w, const Eigen::Matrix3d &Rref_a,
+                                     const Eigen::Matrix3d &Rref_k, const Mount &mount)
+  {
+    return new ceres::AutoDiffCostFunction<ReprojectionCostGeneral, 2, 7, 7, 3>(
+        new ReprojectionCostGeneral(w, Rref_a, Rref_k, mount));
+  }
+  WhitenedObservation w_;
+  Eigen::Matrix3d Rref_a_, Rref_k_;
+  Mount mount_;
+};
+
+/* Odometry increment prior, general chain. Parameter blocks: frame_prev[7], frame_cur[7] as in
+   ReprojectionCostGeneral (the yaw unused). Residual[6]: (estimated - measured) increment,
+   translation in the earlier vision frame over sigma_odom, rotation error over its sigma per axis. */
+struct OdometryCostGeneral {
+  explicit OdometryCostGeneral(const OdometryMeasurementGeneral &o) : o_(o) {}
+  template <typename T> bool operator()(const T *frame_prev, const T *frame_cur, T *r) const
+  {
+    odometryResidualGeneral(frame_prev, frame_cur, o_, r);
+    return true;
+  }
+  static ceres::CostFunction *Create(const OdometryMeasurementGeneral &o)
+  {
+    return new ceres::AutoDiffCostFunction<OdometryCostGeneral, 6, 7, 7>(new OdometryCostGeneral(o));
+  }
+  OdometryMeasurementGeneral o_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -107,10 +150,11 @@ struct TrackData {
   std::array<double, 3> point{{0, 0, 1}};
 };
 
-/* Parameters of the motion: one block per motion-log row, (x, y, z, heading, yaw) (m, rad); one
-   block per row rather than a pose and a yaw block keeps the Schur complement's block count low. */
+/* Parameters of the motion: one block per motion-log row, (x, y, z, heading, yaw) (m, rad) for the
+   planar chain, (x, y, z, dx, dy, dz, yaw) for the general one; one block per row rather than a
+   pose and a yaw block keeps the Schur complement's block count low. */
 struct State {
-  std::vector<std::array<double, 5>> frames;
+  std::vector<std::array<double, 7>> frames;
 };
 
 class Refiner {
@@ -123,6 +167,10 @@ public:
     std::copy(t0v_.data(), t0v_.data() + 3, t0_);
   }
 
+  /* Values per frame block and the yaw's index in it. */
+  int blockSize() const { return model_.general ? 7 : 5; }
+  int yawIndex() const { return model_.general ? 6 : 4; }
+
   RefineResult run();
 
 private:
@@ -130,6 +178,8 @@ private:
   void prepare();
   void initialise();
   void gate(TrackData &t, bool inliers_only) const;
+  void cameraAt(int row, Eigen::Matrix3d &R, Eigen::Vector3d &c) const;
+  void anchored(int row_a, int row_k, const double *point, double *q) const;
   bool candidateScore(const TrackData &t, const std::array<double, 3> &p, double &score) const;
   bool anchorFromCamera(const TrackData &t, int row, const Eigen::Vector3d &c_P, std::array<double, 3> &p) const;
   ceres::Solver::Summary solve(bool robust, bool &solved);
@@ -146,8 +196,8 @@ private:
   const YawRig &rig_;
   double t0_[3];
   bool poses_free_ = false, yaws_free_ = false;
+  Model model_; // the chain, mount, reference orientations and motion priors (refine_model.h)
   State state_;
-  std::vector<OdometryMeasurement> odometry_;
   std::vector<TrackData> data_;
 };
 
@@ -160,12 +210,31 @@ int Refiner::rowOf(long frame) const
   return static_cast<int>(it - motion_.begin());
 }
 
+/* The camera's world rotation and centre at a row, with the current state. */
+void Refiner::cameraAt(int row, Eigen::Matrix3d &R, Eigen::Vector3d &c) const
+{
+  const double *f = state_.frames[row].data();
+  if (model_.general)
+    cameraInWorldGeneral(f, model_.Rref[row], model_.mount, R, c);
+  else
+    cameraInWorld(f, f[4], t0v_, R, c);
+}
+
+/* rho times the camera-frame point at row_k of a point anchored at row_a, with the current state. */
+void Refiner::anchored(int row_a, int row_k, const double *point, double *q) const
+{
+  const double *fa = state_.frames[row_a].data(), *fk = state_.frames[row_k].data();
+  if (model_.general)
+    anchoredPointGeneral(fa, model_.Rref[row_a], fk, model_.Rref[row_k], point, model_.mount, q);
+  else
+    anchoredPoint(fa, fa + 4, fk, fk + 4, point, t0_, q);
+}
+
 /* Camera-frame point of a track at a row, with the current state. */
 Eigen::Vector3d Refiner::cameraPoint(const TrackData &t, int row) const
 {
   double q[3];
-  anchoredPoint(state_.frames[t.anchor_row].data(), (state_.frames[t.anchor_row].data() + 4), state_.frames[row].data(),
-                (state_.frames[row].data() + 4), t.point.data(), t0_, q);
+  anchored(t.anchor_row, row, t.point.data(), q);
   return Eigen::Vector3d(q[0], q[1], q[2]) / t.point[2];
 }
 
@@ -173,8 +242,7 @@ Eigen::Vector3d Refiner::cameraPoint(const TrackData &t, int row) const
 double Refiner::pixelError(const TrackData &t, std::size_t j) const
 {
   double q[3];
-  anchoredPoint(state_.frames[t.anchor_row].data(), (state_.frames[t.anchor_row].data() + 4), state_.frames[t.rows[j]].data(),
-                state_.frames[t.rows[j]].data() + 4, t.point.data(), t0_, q);
+  anchored(t.anchor_row, t.rows[j], t.point.data(), q);
   if (!(q[2] > 0))
     return kInf;
   const Eigen::Vector2d uv = camera_.project(Eigen::Vector2d(q[0] / q[2], q[1] / q[2]));
@@ -192,13 +260,15 @@ void Refiner::prepare()
     throw Error("refine: one initial estimate per track is needed (or none)");
 
   const NoiseModel &n = o_.noise;
-  poses_free_ = n.sigma_odom > 0 || n.sigma_heading > 0;
-  yaws_free_ = n.sigma_yaw > 0;
+  setModelMotion(model_, rig_, motion_, n);
+  poses_free_ = model_.poses_free;
+  yaws_free_ = model_.yaws_free;
   for (const MotionSample &s : motion_) {
-    state_.frames.push_back({s.x, s.y, s.z, s.heading, s.yaw});
+    if (model_.general) // at the reference orientation (the measured one)
+      state_.frames.push_back({s.x, s.y, s.z, 0.0, 0.0, 0.0, s.yaw});
+    else
+      state_.frames.push_back({s.x, s.y, s.z, s.heading, s.yaw, 0.0, 0.0});
   }
-  for (std::size_t r = 1; r < motion_.size(); ++r)
-    odometry_.push_back(measuredIncrement(motion_[r - 1], motion_[r], n));
 
   data_.resize(tracks_.size());
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
@@ -252,8 +322,8 @@ void Refiner::gate(TrackData &t, bool inliers_only) const
   const std::size_t j0 = use.front();
   Eigen::Matrix3d R0, R;
   Eigen::Vector3d c0, c;
-  cameraInWorld(state_.frames[t.rows[j0]].data(), state_.frames[t.rows[j0]][4], t0v_, R0, c0);
-  cameraInWorld(state_.frames[t.rows[use.back()]].data(), state_.frames[t.rows[use.back()]][4], t0v_, R, c);
+  cameraAt(t.rows[j0], R0, c0);
+  cameraAt(t.rows[use.back()], R, c);
   if (!((c - c0).norm() >= o_.gates.min_baseline)) {
     t.status = Status::NoMotion;
     return;
@@ -262,7 +332,7 @@ void Refiner::gate(TrackData &t, bool inliers_only) const
   double parallax = 0;
   for (std::size_t u = 1; u < use.size(); ++u) {
     const std::size_t j = use[u];
-    cameraInWorld(state_.frames[t.rows[j]].data(), state_.frames[t.rows[j]][4], t0v_, R, c);
+    cameraAt(t.rows[j], R, c);
     const Eigen::Vector3d r = R.transpose() * (R0 * b0);
     const double p = r.z() > 1e-12 ? std::hypot(camera_.kx() * (t.w[j].m[0] - r.x() / r.z()),
                                                 camera_.ky() * (t.w[j].m[1] - r.y() / r.z()))
@@ -278,8 +348,8 @@ bool Refiner::anchorFromCamera(const TrackData &t, int row, const Eigen::Vector3
 {
   Eigen::Matrix3d Rk, Ra;
   Eigen::Vector3d ck, ca;
-  cameraInWorld(state_.frames[row].data(), state_.frames[row][4], t0v_, Rk, ck);
-  cameraInWorld(state_.frames[t.anchor_row].data(), state_.frames[t.anchor_row][4], t0v_, Ra, ca);
+  cameraAt(row, Rk, ck);
+  cameraAt(t.anchor_row, Ra, ca);
   const Eigen::Vector3d Pa = Ra.transpose() * (Rk * c_P + ck - ca);
   if (!(Pa.z() > 0) || !Pa.allFinite())
     return false;
@@ -295,8 +365,7 @@ bool Refiner::candidateScore(const TrackData &t, const std::array<double, 3> &p,
   score = 0;
   for (std::size_t j = 0; j < t.rows.size(); ++j) {
     double q[3];
-    anchoredPoint(state_.frames[t.anchor_row].data(), (state_.frames[t.anchor_row].data() + 4), state_.frames[t.rows[j]].data(),
-                  state_.frames[t.rows[j]].data() + 4, p.data(), t0_, q);
+    anchored(t.anchor_row, t.rows[j], p.data(), q);
     if (!(q[2] > 0) || !(p[2] > 0))
       return false;
     const double ex = camera_.kx() * (q[0] / q[2] - t.w[j].m[0]);
@@ -383,30 +452,34 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
   ceres::Problem problem;
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   const int rows = static_cast<int>(state_.frames.size());
+  const int block = blockSize(), pose_dim = block - 1;
   for (int r = 0; r < rows; ++r) {
     double *f = state_.frames[r].data();
-    problem.AddParameterBlock(f, 5);
+    problem.AddParameterBlock(f, block);
     ordering->AddElementToGroup(f, 1);
-    // Known parts: frame 0's pose (the gauge), every pose or yaw whose noise is not modelled.
+    // Known parts: frame 0's pose (the gauge), every pose or yaw whose noise is not modelled (and
+    // for a planar log in the general chain, the rotation off the heading axis).
     std::vector<int> known;
-    if (r == 0 || !poses_free_)
-      for (int j = 0; j < 4; ++j)
+    for (int j = 0; j < pose_dim; ++j)
+      if (r == 0 || !poses_free_ || !model_.componentFree(j))
         known.push_back(j);
     if (!yaws_free_)
-      known.push_back(4);
-    if (known.size() == 5)
+      known.push_back(pose_dim);
+    if (static_cast<int>(known.size()) == block)
       problem.SetParameterBlockConstant(f);
     else if (!known.empty())
-      problem.SetManifold(f, new ceres::SubsetManifold(5, known));
+      problem.SetManifold(f, new ceres::SubsetManifold(block, known));
   }
   if (poses_free_)
     for (int r = 1; r < rows; ++r)
-      problem.AddResidualBlock(OdometryCost::Create(odometry_[r - 1]), nullptr, state_.frames[r - 1].data(),
-                               state_.frames[r].data());
+      problem.AddResidualBlock(model_.general ? OdometryCostGeneral::Create(model_.odometry_general[r - 1])
+                                              : OdometryCost::Create(model_.odometry[r - 1]),
+                               nullptr, state_.frames[r - 1].data(), state_.frames[r].data());
   if (yaws_free_)
     for (int r = 0; r < rows; ++r)
-      problem.AddResidualBlock(YawCost::Create(motion_[r].yaw, 1.0 / o_.noise.sigma_yaw), nullptr,
-                               state_.frames[r].data());
+      problem.AddResidualBlock(model_.general ? YawCost<7>::Create(motion_[r].yaw, 1.0 / o_.noise.sigma_yaw)
+                                              : YawCost<5>::Create(motion_[r].yaw, 1.0 / o_.noise.sigma_yaw),
+                               nullptr, state_.frames[r].data());
 
   const double scale = o_.robust_threshold_px / std::max(o_.noise.sigma_px, kMinSigmaPx);
   int observations = 0;
@@ -423,6 +496,9 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
       const int k = t.rows[j];
       if (k == a)
         problem.AddResidualBlock(AnchorCost::Create(t.w[j]), loss, t.point.data());
+      else if (model_.general)
+        problem.AddResidualBlock(ReprojectionCostGeneral::Create(t.w[j], model_.Rref[a], model_.Rref[k], model_.mount),
+                                 loss, state_.frames[a].data(), state_.frames[k].data(), t.point.data());
       else
         problem.AddResidualBlock(ReprojectionCost::Create(t.w[j], t0_), loss, state_.frames[a].data(),
                                  state_.frames[k].data(), t.point.data());
@@ -436,7 +512,7 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
 
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_SCHUR;
-  const int motion_parameters = (poses_free_ ? 4 * (rows - 1) : 0) + (yaws_free_ ? rows : 0);
+  const int motion_parameters = model_.motionParameters();
   if (motion_parameters > 400 && ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE))
     so.linear_solver_type = ceres::SPARSE_SCHUR;
   so.linear_solver_ordering = ordering;
@@ -509,16 +585,11 @@ RefineResult Refiner::run()
   std::vector<Eigen::Matrix3d> cov;
   std::vector<int> index(data_.size(), -1);
   if (o_.compute_covariance) {
-    Model m;
-    std::copy(t0_, t0_ + 3, m.t0);
+    Model m = model_;
     for (const auto &f : state_.frames) {
-      m.poses.push_back({f[0], f[1], f[2], f[3]});
-      m.yaws.push_back(f[4]);
+      m.poses.push_back({f[0], f[1], f[2], f[3], model_.general ? f[4] : 0.0, model_.general ? f[5] : 0.0});
+      m.yaws.push_back(f[yawIndex()]);
     }
-    m.odometry = odometry_;
-    m.poses_free = poses_free_;
-    m.yaws_free = yaws_free_;
-    m.inv_sigma_yaw = yaws_free_ ? 1.0 / o_.noise.sigma_yaw : 0.0;
     for (std::size_t i = 0; i < data_.size(); ++i) {
       const TrackData &t = data_[i];
       if (!t.active)
@@ -550,17 +621,24 @@ RefineResult Refiner::run()
     if (t.status != Status::Ok)
       continue;
     e.c_P = cameraPoint(t, t.report_row);
-    e.v_P = rotY(state_.frames[t.report_row][4]) * (e.c_P + t0v_);
+    e.v_P = rig_.visionPoint(state_.frames[t.report_row][yawIndex()], e.c_P);
     if (index[i] >= 0)
       e.c_cov = cov[index[i]];
   }
   result.motion = motion_;
   for (std::size_t r = 0; r < motion_.size(); ++r) {
-    result.motion[r].x = state_.frames[r][0];
-    result.motion[r].y = state_.frames[r][1];
-    result.motion[r].z = state_.frames[r][2];
-    result.motion[r].heading = state_.frames[r][3];
-    result.motion[r].yaw = state_.frames[r][4];
+    const auto &f = state_.frames[r];
+    MotionSample &s = result.motion[r];
+    s.x = f[0];
+    s.y = f[1];
+    s.z = f[2];
+    s.yaw = f[yawIndex()];
+    if (!model_.general)
+      s.heading = f[3];
+    else if (s.six_dof)
+      s.theta_u = logSO3(model_.Rref[r] * expSO3<double>(Eigen::Vector3d(f[3], f[4], f[5])));
+    else
+      s.heading += f[4]; // a planar log in the general chain: only dy is free
   }
   return result;
 }

@@ -14,8 +14,17 @@
   - point[3] = (alpha, beta, rho): anchored inverse depth in the camera frame of the track's first
                observation, P_a = (alpha, beta, 1) / rho (-, -, 1/m).
   Residuals are whitened (dimensionless, in units of their sigma).
+
+  The general chain (6-DoF logs, or any camera mount with a rotation, yawdepth::YawRig):
+  - frame[7] = (x, y, z, dx, dy, dz, yaw): the vision frame at p = (x, y, z) with orientation
+               Rref Exp(d), Rref the row's measured orientation (a constant of the model) and
+               d = (dx, dy, dz) a rotation vector (rad); yaw as above. The camera's world rotation
+               is Rref Exp(d) Ry(yaw) R0 and its centre p + Rref Exp(d) Ry(yaw) t0, with the
+               mount (R0, t0) = vMc at yaw 0. For a planar log only dy (the heading) is free.
 */
+#include <Eigen/Core>
 #include <cmath>
+#include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {
 namespace refine_detail {
@@ -135,6 +144,91 @@ void odometryResidual(const T *pose_prev, const T *pose_cur, const OdometryMeasu
 template <typename T> void yawResidual(const T *yaw, double measured, double inv_sigma, T *r)
 {
   r[0] = (yaw[0] - measured) * inv_sigma;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The general chain.
+
+/*! The camera mount (R0, t0) and a row's reference orientation, as the general model needs them. */
+struct Mount {
+  Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t0 = Eigen::Vector3d::Zero();
+};
+
+/*! The yawed vision frame's orientation Rref Exp(d) Ry(yaw) of a general frame block. */
+template <typename T> Eigen::Matrix<T, 3, 3> yawedRotation(const Eigen::Matrix3d &Rref, const T *frame)
+{
+  return Rref.cast<T>() * expSO3<T>(Eigen::Matrix<T, 3, 1>(frame[3], frame[4], frame[5])) * rotY<T>(frame[6]);
+}
+
+/*!
+  rho times the point in the camera frame of frame k, for a point anchored in frame a (general chain):
+  \f[ q = R_0^T \left( V_k^T \left[ V_a (R_0 (\alpha, \beta, 1) + \rho t_0) + \rho (p_a - p_k) \right] - \rho t_0 \right),
+      \quad V = R_{ref} \exp(d) R_y(\text{yaw}) \f]
+*/
+template <typename T>
+void anchoredPointGeneral(const T *frame_a, const Eigen::Matrix3d &Rref_a, const T *frame_k, const Eigen::Matrix3d &Rref_k,
+                          const T *point, const Mount &mount, T *q)
+{
+  using V3 = Eigen::Matrix<T, 3, 1>;
+  const Eigen::Matrix<T, 3, 3> Va = yawedRotation(Rref_a, frame_a), Vk = yawedRotation(Rref_k, frame_k);
+  const T rho = point[2];
+  const V3 t0 = mount.t0.cast<T>();
+  const V3 a = mount.R0.cast<T>() * V3(point[0], point[1], T(1)) + rho * t0;
+  const V3 w = Va * a + rho * V3(frame_a[0] - frame_k[0], frame_a[1] - frame_k[1], frame_a[2] - frame_k[2]);
+  const V3 out = mount.R0.transpose().cast<T>() * (Vk.transpose() * w - rho * t0);
+  q[0] = out(0);
+  q[1] = out(1);
+  q[2] = out(2);
+}
+
+/*! Reprojection residual (general chain); false when the point is not in front of the camera. */
+template <typename T>
+bool reprojectionResidualGeneral(const T *frame_a, const Eigen::Matrix3d &Rref_a, const T *frame_k,
+                                 const Eigen::Matrix3d &Rref_k, const T *point, const Mount &mount,
+                                 const WhitenedObservation &o, T *r)
+{
+  T q[3];
+  anchoredPointGeneral(frame_a, Rref_a, frame_k, Rref_k, point, mount, q);
+  if (!(q[2] > T(0))) {
+    r[0] = T(0);
+    r[1] = T(0);
+    return false;
+  }
+  whiten(o, T(q[0] / q[2] - o.m[0]), T(q[1] / q[2] - o.m[1]), r);
+  return true;
+}
+
+/*!
+  A measured increment of the general chain: d = Rp^T (p_cur - p_prev) (m, in the earlier vision
+  frame) and dR = Rp^T Rc, with the rows' reference orientations and the inverse sigmas per axis.
+*/
+struct OdometryMeasurementGeneral {
+  double d[3] = {0, 0, 0};
+  Eigen::Matrix3d dR = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d Rref_prev = Eigen::Matrix3d::Identity(), Rref_cur = Eigen::Matrix3d::Identity();
+  double inv_sigma_t = 1;
+  double inv_sigma_r[3] = {1, 1, 1};
+};
+
+/*!
+  Residual[6]: (estimated - measured) increment, whitened: the translation in the earlier vision
+  frame, and the rotation error E = dR^T Rp^T Rc as vee((E - E^T) / 2) (its rotation vector to
+  third order: the error is at noise level).
+*/
+template <typename T>
+void odometryResidualGeneral(const T *frame_prev, const T *frame_cur, const OdometryMeasurementGeneral &o, T *r)
+{
+  using V3 = Eigen::Matrix<T, 3, 1>;
+  const Eigen::Matrix<T, 3, 3> Rp = o.Rref_prev.cast<T>() * expSO3<T>(V3(frame_prev[3], frame_prev[4], frame_prev[5]));
+  const Eigen::Matrix<T, 3, 3> Rc = o.Rref_cur.cast<T>() * expSO3<T>(V3(frame_cur[3], frame_cur[4], frame_cur[5]));
+  const V3 d = Rp.transpose() * V3(frame_cur[0] - frame_prev[0], frame_cur[1] - frame_prev[1], frame_cur[2] - frame_prev[2]);
+  for (int i = 0; i < 3; ++i)
+    r[i] = (d(i) - o.d[i]) * o.inv_sigma_t;
+  const Eigen::Matrix<T, 3, 3> E = o.dR.transpose().cast<T>() * Rp.transpose() * Rc;
+  r[3] = T(0.5) * (E(2, 1) - E(1, 2)) * o.inv_sigma_r[0];
+  r[4] = T(0.5) * (E(0, 2) - E(2, 0)) * o.inv_sigma_r[1];
+  r[5] = T(0.5) * (E(1, 0) - E(0, 1)) * o.inv_sigma_r[2];
 }
 
 } // namespace refine_detail

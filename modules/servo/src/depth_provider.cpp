@@ -85,7 +85,7 @@ PointEstimate DepthProvider::estimate(long id) const
   fromVisp(curMprev(rig_, last_fed_, current_), R, t);
   e.c_P = R * e.c_P + t;
   e.c_cov = R * e.c_cov * R.transpose();
-  e.v_P = rotY(current_.yaw) * (e.c_P + rig_.cameraOffset());
+  e.v_P = rig_.visionPoint(current_.yaw, e.c_P);
   if (!(e.c_P.z() > 0))
     e.status = Status::Behind;
   return e;

@@ -55,12 +55,12 @@ Candidate evaluate(const CameraModel &camera, const YawRig &rig, double yaw, dou
   Candidate c;
   c.yaw = yaw;
   c.visible = true;
-  const Eigen::Matrix3d Rt = rotY(yaw).transpose();
+  const Eigen::Matrix3d cRv = rig.vRc(yaw).transpose();
   std::vector<YawHelperFeature> seen = features;
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
   const double w = camera.width(), h = camera.height();
   for (std::size_t i = 0; i < v_points.size(); ++i) {
-    const Eigen::Vector3d c_P = Rt * v_points[i] - rig.cameraOffset();
+    const Eigen::Vector3d c_P = rig.cameraPoint(yaw, v_points[i]);
     if (!(c_P.z() > 1e-9)) {
       c.visible = false;
       seen[i].Z = 1.0; // keep a finite score
@@ -80,7 +80,7 @@ Candidate evaluate(const CameraModel &camera, const YawRig &rig, double yaw, dou
   // Panning at `rate` moves the optical centre (offset t0 from the yaw axis): rate * (e_y x Ry(yaw) t0).
   const Eigen::Vector3d off = rotY(yaw) * rig.cameraOffset();
   const Eigen::Vector3d v_cam = v_velocity + rate * Eigen::Vector3d(off.z(), 0, -off.x());
-  c.parallax = parallaxRate(camera, Rt * v_cam, seen);
+  c.parallax = parallaxRate(camera, cRv * v_cam, seen);
   return c;
 }
 
@@ -103,7 +103,7 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
     if (!(std::isfinite(f.x) && std::isfinite(f.y) && std::isfinite(f.Z) && f.Z > 0 && std::isfinite(f.weight) &&
           f.weight >= 0))
       throw Error("yaw helper: each feature needs finite x, y, a positive depth and a non-negative weight");
-    v_points.emplace_back(rotY(yaw) * (Eigen::Vector3d(f.x * f.Z, f.y * f.Z, f.Z) + rig.cameraOffset()));
+    v_points.emplace_back(rig.visionPoint(yaw, Eigen::Vector3d(f.x * f.Z, f.y * f.Z, f.Z)));
   }
 
   const double reach = options.max_rate * options.horizon;

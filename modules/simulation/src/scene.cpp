@@ -19,6 +19,8 @@ void SceneOptions::validate() const
     throw Error("simulate: depths must satisfy 0 < min-depth <= max-depth");
   if (margin_px < 0)
     throw Error("simulate: margin must be non-negative");
+  if (!vision_poses.empty() && static_cast<std::size_t>(frames) != vision_poses.size())
+    throw Error("simulate: frames must equal the number of vision poses");
   noise.validate();
 }
 
@@ -40,11 +42,14 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
   std::uniform_real_distribution<double> uni(0.0, 1.0);
 
   Scene scene;
+  const bool six_dof = !o.vision_poses.empty();
   // True trajectory: steps along the vision frame's own axes, so a turning robot curves.
   MotionSample s;
   s.heading = o.heading;
   s.yaw = o.yaw;
-  for (int k = 0; k < o.frames; ++k) {
+  for (int k = 0; six_dof && k < o.frames; ++k)
+    scene.truth.push_back(MotionSample::fromPose(k, o.vision_poses[static_cast<std::size_t>(k)], o.yaw + k * o.yaw_rate));
+  for (int k = 0; !six_dof && k < o.frames; ++k) {
     s.frame = k;
     if (k > 0) {
       const Eigen::Vector3d w_d = rotY(s.heading) * Eigen::Vector3d(o.lateral_step, 0, o.step);
@@ -59,7 +64,22 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
   // Dead reckoning: each increment (in the earlier vision frame) and heading change is perturbed
   // and accumulated; each yaw reading is perturbed independently.
   scene.measured = scene.truth;
-  for (int k = 1; k < o.frames; ++k) {
+  for (int k = 1; six_dof && k < o.frames; ++k) {
+    const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
+    const Eigen::Matrix3d Ra = a.rotation();
+    const Eigen::Vector3d d_noisy =
+        Ra.transpose() * (b.position() - a.position()) + o.noise.sigma_odom * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+    const Eigen::Vector3d n(gauss(rng), gauss(rng), gauss(rng));
+    const Eigen::Matrix3d dR_noisy = Ra.transpose() * b.rotation() * expSO3<double>(o.noise.sigma_rot * n);
+    MotionSample &pm = scene.measured[k - 1], &m = scene.measured[k];
+    const Eigen::Matrix3d Rpm = pm.rotation();
+    const Eigen::Vector3d p = pm.position() + Rpm * d_noisy;
+    m.x = p.x();
+    m.y = p.y();
+    m.z = p.z();
+    m.theta_u = logSO3(Rpm * dR_noisy);
+  }
+  for (int k = 1; !six_dof && k < o.frames; ++k) {
     const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
     const Eigen::Vector3d d = rotY(a.heading).transpose() * Eigen::Vector3d(b.x - a.x, b.y - a.y, b.z - a.z);
     const Eigen::Vector3d d_noisy =
@@ -108,6 +128,84 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
     }
   }
   return scene;
+}
+
+ArmPath armPathFromString(const std::string &word)
+{
+  if (word == "approach")
+    return ArmPath::Approach;
+  if (word == "orbit")
+    return ArmPath::Orbit;
+  if (word == "random")
+    return ArmPath::Random;
+  throw Error("unknown arm path '" + word + "' (approach, orbit or random)");
+}
+
+namespace {
+
+/* Camera pose wMc at `position` looking at `target`, image +Y toward the world's +Y (down), then
+   rolled about the optical axis. */
+Eigen::Isometry3d lookAt(const Eigen::Vector3d &position, const Eigen::Vector3d &target, double roll)
+{
+  const Eigen::Vector3d z = (target - position).normalized();
+  Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z);
+  if (!(x.norm() > 1e-9))
+    x = Eigen::Vector3d::UnitX();
+  x.normalize();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d R;
+  R << x, y, z;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = position;
+  return T;
+}
+
+} // namespace
+
+std::vector<vpHomogeneousMatrix> armTrajectory(const YawRig &rig, ArmPath path, int frames, double distance,
+                                               std::uint64_t seed, double yaw)
+{
+  if (frames < 1 || frames > 1000000)
+    throw Error("arm trajectory: frames must be between 1 and 1000000");
+  if (!(distance > 0) || !std::isfinite(distance) || !std::isfinite(yaw))
+    throw Error("arm trajectory: the distance must be finite and positive, the yaw finite");
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  const Eigen::Vector3d target(0, 0, distance);
+  const Eigen::Isometry3d cMv = toIsometry(rig.vMc(yaw)).inverse();
+  const double jitter = 0.5 * M_PI / 180;
+  std::vector<vpHomogeneousMatrix> poses;
+  for (int k = 0; k < frames; ++k) {
+    const double s = frames > 1 ? static_cast<double>(k) / (frames - 1) : 0.0;
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    double roll = 0;
+    switch (path) {
+    case ArmPath::Approach:
+      p = distance * Eigen::Vector3d(0.08 * s, 0.04 * s, 0.3 * s);
+      roll = 0.1 * s;
+      break;
+    case ArmPath::Orbit: {
+      const double phi = s * 40 * M_PI / 180;
+      p = target + distance * Eigen::Vector3d(-std::sin(phi), 0.05 * std::sin(2 * M_PI * s), -std::cos(phi));
+      break;
+    }
+    case ArmPath::Random:
+      if (k > 0) {
+        p = 0.15 * distance * Eigen::Vector3d(uni(rng), uni(rng), uni(rng));
+        roll = 0.3 * uni(rng);
+      }
+      break;
+    }
+    Eigen::Vector3d aim = target;
+    if (k > 0)
+      aim += jitter * distance * Eigen::Vector3d(gauss(rng), gauss(rng), 0.0);
+    const Eigen::Isometry3d wMc = lookAt(p, aim, roll);
+    const Eigen::Isometry3d wMv = wMc * cMv;
+    poses.push_back(toVisp(wMv.linear(), wMv.translation()));
+  }
+  return poses;
 }
 
 } // namespace yawdepth

@@ -10,8 +10,8 @@
   one observation:
   - prediction through the increment, rotation included: with \f$\rho = e^{\lambda}\f$,
     \f$ q = R(n)\,(x, y, 1)^T + \rho\, t(n),\ (x', y', \lambda') = (q_1/q_3,\ q_2/q_3,\ \lambda - \log q_3) \f$,
-    with \f$ n = (\delta d, \delta h, e_k, e_{k+1}) \f$ the increment's translation and heading
-    noise and both yaw-reading errors (see yawdepth/geometry/rig.h). The yaw error of the earlier
+    with \f$ n = (\delta d, \delta\omega, e_k, e_{k+1}) \f$ the increment's translation and
+    rotation noise (for a planar log only the heading, \f$\delta\omega_y\f$) and both yaw-reading errors (see yawdepth/geometry/rig.h). The yaw error of the earlier
     frame is carried in the state because consecutive increments share that reading: it is what
     makes the filter's odometry model exact rather than an inflated process noise.
   - update with the observed normalised point, which is linear in the state; the prediction's
@@ -40,13 +40,15 @@ namespace yawdepth {
 /*!
   \brief One odometry increment between consecutive motion-log rows, \f$ P_{cur} = R P_{prev} + t \f$,
   with the first-order sensitivity of R and t to the increment's noisy inputs, in the order
-  (d_x, d_y, d_z, heading, yaw_prev, yaw_cur). Computed once per frame, shared by every feature.
+  (d_x, d_y, d_z, rot_x, rot_y, rot_z, yaw_prev, yaw_cur) (see IncrementPerturbation; rot_y is a
+  planar log's heading). Computed once per frame, shared by every feature.
 */
 struct IncrementModel {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity(); //!< rotation from the earlier to the later camera frame
   Eigen::Vector3d t = Eigen::Vector3d::Zero();     //!< translation from the earlier to the later camera frame (m)
-  std::array<Eigen::Matrix3d, 6> dR;               //!< dR/d(input) for each noisy input, in the order above
-  std::array<Eigen::Vector3d, 6> dt;               //!< dt/d(input) for each noisy input, in the order above
+  std::array<Eigen::Matrix3d, 8> dR;               //!< dR/d(input) for each noisy input, in the order above
+  std::array<Eigen::Vector3d, 8> dt;               //!< dt/d(input) for each noisy input, in the order above
+  bool six_dof = false; //!< from a 6-DoF log: the rotation is noisy about every axis, not only the heading
   /*! frame number of the earlier row */
   long frame_prev = 0, frame_cur = 0; //!< frame number of the later row
   double yaw_cur = 0; //!< yaw reading of the later frame (rad)
@@ -55,13 +57,13 @@ struct IncrementModel {
 };
 
 /*!
-  \brief A Gaussian prior on one increment's noise (d_x, d_y, d_z, heading, yaw of the later frame),
-  the quantities the filter estimates along with the feature at each step. By default zero mean
-  with the noise model's variances; FusedEstimator replaces it by what the other features observed.
+  \brief A Gaussian prior on one increment's noise (d_x, d_y, d_z, rot_x, rot_y, rot_z, yaw of the
+  later frame), the quantities the filter estimates along with the feature at each step. By default
+  zero mean with the noise model's variances.
 */
 struct IncrementPrior {
-  Eigen::Matrix<double, 5, 1> mean = Eigen::Matrix<double, 5, 1>::Zero(); //!< prior mean of the increment noise
-  Eigen::Matrix<double, 5, 5> cov = Eigen::Matrix<double, 5, 5>::Zero();  //!< prior covariance of the increment noise
+  Eigen::Matrix<double, 7, 1> mean = Eigen::Matrix<double, 7, 1>::Zero(); //!< prior mean of the increment noise
+  Eigen::Matrix<double, 7, 7> cov = Eigen::Matrix<double, 7, 7>::Zero();  //!< prior covariance of the increment noise
 };
 
 /*! \brief Options of DepthFilter. */
@@ -113,17 +115,8 @@ public:
   Update step(const IncrementModel &inc, const Eigen::Vector2d *m = nullptr, const Eigen::Matrix2d *m_cov = nullptr,
               const IncrementPrior *prior = nullptr);
 
-  /*! \brief The noise model's prior on an increment (zero mean). */
-  IncrementPrior defaultPrior() const;
-
-  /*!
-    \brief Linearise the next observation at the prediction (zero increment noise): its innovation
-    `nu`, the innovation covariance from the state and pixel noise `R_state`, and the Jacobian
-    `H_n` of the predicted point with respect to the increment noise. What FusedEstimator needs to
-    estimate the shared increment noise from every feature. False when not possible.
-  */
-  bool linearize(const IncrementModel &inc, const Eigen::Vector2d &m, const Eigen::Matrix2d &m_cov, Eigen::Vector2d &nu,
-                 Eigen::Matrix2d &R_state, Eigen::Matrix<double, 2, 5> &H_n) const;
+  /*! \brief The noise model's prior on an increment (zero mean); \param six_dof from a 6-DoF log. */
+  IncrementPrior defaultPrior(bool six_dof = false) const;
 
   /*! \brief The point at the filter's current frame, with status (see the class description). */
   PointEstimate estimate(const YawRig &rig) const;

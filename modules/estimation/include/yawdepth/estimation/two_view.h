@@ -11,8 +11,8 @@
 
   Uncertainty: the inputs that carry noise are the four observed pixel coordinates
   (`NoiseModel::sigma_px` each), the odometry increment between the frames (translation
-  `sigma_odom` per axis and heading `sigma_heading`, both scaled by sqrt(n) when the two frames
-  are n motion-log rows apart) and the two yaw readings (`sigma_yaw` each). The covariance of
+  `sigma_odom` per axis, and rotation: the heading `sigma_heading` for a planar log, `sigma_rot`
+  per axis for a 6-DoF log; all scaled by sqrt(n) when the two frames are n motion-log rows apart) and the two yaw readings (`sigma_yaw` each). The covariance of
   (Xc, Yc, Zc) is their first-order propagation \f$ \Sigma_P = J \Sigma J^T \f$.
 */
 #include <Eigen/Core>
@@ -101,10 +101,16 @@ PointEstimate estimatePaper(const CameraModel &camera, const YawRig &rig, const 
                             const MotionSample &cur, const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv_cur,
                             const TwoViewOptions &options = TwoViewOptions());
 
+/*! \brief Number of noisy inputs of the two-view estimators (see twoViewInputVariances()). */
+constexpr int kTwoViewInputs = 12;
+
 /*!
   \brief The diagonal input covariance used by the two-view estimators, in the order
-  (u_prev, v_prev, u_cur, v_cur, d_x, d_y, d_z, heading, yaw_prev, yaw_cur).
+  (u_prev, v_prev, u_cur, v_cur, d_x, d_y, d_z, rot_x, rot_y, rot_z, yaw_prev, yaw_cur) (the
+  increment's perturbations of yawdepth::IncrementPerturbation; rot_y is a planar log's heading).
+  \param six_dof whether the increment comes from a 6-DoF log (see incrementRotationSigma()).
 */
-Eigen::Matrix<double, 10, 1> twoViewInputVariances(const NoiseModel &noise, int increments);
+Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel &noise, int increments,
+                                                              bool six_dof = false);
 
 } // namespace yawdepth

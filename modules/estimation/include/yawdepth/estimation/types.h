@@ -78,11 +78,22 @@ struct PointEstimate {
 struct NoiseModel {
   double sigma_px = 0.3;            //!< Pixel noise per coordinate of an observation (px).
   double sigma_odom = 1e-3;         //!< Translation noise per frame-to-frame increment, per axis (m).
-  double sigma_heading = 0.05 * M_PI / 180.0; //!< Heading noise per increment (rad); 0.05 degree.
+  double sigma_heading = 0.05 * M_PI / 180.0; //!< Heading noise per increment (rad), planar logs; 0.05 degree.
   double sigma_yaw = 0.05 * M_PI / 180.0;     //!< Noise of each yaw reading (rad); 0.05 degree.
+  double sigma_rot = 0.05 * M_PI / 180.0;     //!< Rotation noise per increment per axis (rad), 6-DoF logs; 0.05 degree.
   /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative. */
   void validate() const;
 };
+
+/*!
+  \brief 1-sigma of the rotation perturbation of one increment (IncrementPerturbation::d_rotation),
+  per axis of the later vision frame: \f$ (0, \sigma_h, 0) \f$ for a planar log (only the heading
+  is noisy), \f$ (\sigma_r, \sigma_r, \sigma_r) \f$ for a 6-DoF log.
+*/
+inline Eigen::Vector3d incrementRotationSigma(const NoiseModel &noise, bool six_dof)
+{
+  return six_dof ? Eigen::Vector3d::Constant(noise.sigma_rot) : Eigen::Vector3d(0.0, noise.sigma_heading, 0.0);
+}
 
 /*!
   \brief Gates that turn bad geometry into a status word instead of a wrong number.

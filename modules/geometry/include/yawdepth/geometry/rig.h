@@ -5,10 +5,16 @@
 
   Frames (ViSP's camera convention throughout: X right, Y down, Z forward):
   - `c`  camera frame: origin at the optical centre, Z along the optical axis.
-  - `v`  vision frame: fixed on the robot body at the yaw axis; coincides in orientation with `c`
-         at yaw 0. The yaw turns the camera about +Y (down), so positive yaw turns the optical axis
-         toward +X.
-  - `w`  world frame: fixed, camera convention, the robot's start (the motion log's frame).
+  - `v`  vision frame: fixed on the robot body at the yaw axis (an arm's end-effector, or any body
+         whose pose the motion log gives). The yaw turns the camera about the vision frame's +Y
+         axis (down), so positive yaw turns the optical axis toward +X. With `camera_offset` the
+         vision frame coincides in orientation with `c` at yaw 0; with `camera_pose` the camera's
+         pose in it at yaw 0 is any fixed pose (an arm's hand-eye eMc).
+  - `w`  world frame: fixed, the motion log's frame (a mobile robot's start, an arm's base).
+
+  The motion is a kinematic chain: world -> vision frame (planar odometry `x, y, z, heading`, or a
+  full 6-DoF pose) -> yaw joint -> camera. The estimators only see relative camera motion and its
+  noise; this header and the file readers are the only places that know which form a log had.
 
   Names carry frames: `aMb` is the pose of frame b in frame a (so a point maps as
   `a_P = aMb * b_P`); `a_t_b` is the origin of b expressed in a. `cur`/`prev` name the camera
@@ -38,25 +44,67 @@ template <typename T> Eigen::Matrix<T, 3, 3> rotY(const T &angle)
 }
 
 /*!
+  \brief Rotation of a rotation vector (theta-u, as ViSP's vpThetaUVector), templated so that
+  estimators can differentiate through it: \f[ \exp([\omega]_\times) = I + \frac{\sin\theta}{\theta}
+  [\omega]_\times + \frac{1-\cos\theta}{\theta^2} [\omega]_\times^2,\quad \theta = \|\omega\| \f]
+  (a Taylor expansion, exact in value and first derivative, below 1e-8 rad).
+*/
+template <typename T> Eigen::Matrix<T, 3, 3> expSO3(const Eigen::Matrix<T, 3, 1> &w)
+{
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  Eigen::Matrix<T, 3, 3> K;
+  K << T(0), -w(2), w(1), w(2), T(0), -w(0), -w(1), w(0), T(0);
+  const T theta2 = w.squaredNorm();
+  Eigen::Matrix<T, 3, 3> R = Eigen::Matrix<T, 3, 3>::Identity();
+  if (theta2 < T(1e-16)) {
+    R += K + T(0.5) * K * K;
+    return R;
+  }
+  const T theta = sqrt(theta2);
+  R += (sin(theta) / theta) * K + ((T(1) - cos(theta)) / theta2) * (K * K);
+  return R;
+}
+
+/*! \brief The rotation vector (theta-u) of a rotation matrix, the inverse of expSO3() for angles below pi. */
+Eigen::Vector3d logSO3(const Eigen::Matrix3d &R);
+
+/*!
   \brief One row of a motion log: the pose of the vision frame in the world and the camera yaw.
 
-  `heading` is the robot's rotation about the world's +Y axis, `yaw` the camera's yaw relative
-  to the vision frame; both right-handed about +Y (down), positive turns toward +X.
+  Two forms. Planar (a mobile robot's odometry): the position (x, y, z) and `heading`, the robot's
+  rotation about the world's +Y axis. 6-DoF (`six_dof`, an arm's forward kinematics, mocap, VIO):
+  the position (x, y, z) and the orientation `theta_u`, i.e. wMv as a ViSP vpPoseVector
+  (tx, ty, tz, tux, tuy, tuz); `heading` is then not used. `yaw` is the camera's yaw relative to the
+  vision frame in both; angles are right-handed about +Y (down), positive turns toward +X.
 */
 struct MotionSample {
   long frame = 0;       //!< Frame number, as in the motion log.
   double x = 0;         //!< Position of the vision-frame origin in the world: X (m).
   double y = 0;         //!< Position of the vision-frame origin in the world: Y (m).
   double z = 0;         //!< Position of the vision-frame origin in the world: Z (m).
-  double heading = 0;   //!< Robot heading about +Y (rad).
+  double heading = 0;   //!< Robot heading about +Y (rad); planar form only.
   double yaw = 0;       //!< Camera yaw relative to the vision frame (rad).
+  bool six_dof = false; //!< The 6-DoF form: the orientation is `theta_u`, not `heading`.
+  Eigen::Vector3d theta_u = Eigen::Vector3d::Zero(); //!< Orientation of the vision frame in the world, theta-u (rad); 6-DoF form only.
+
+  /*! \brief A 6-DoF sample from the vision frame's pose in the world (wMv) and the yaw reading. */
+  static MotionSample fromPose(long frame, const vpHomogeneousMatrix &wMv, double yaw = 0);
+  /*! \brief Orientation of the vision frame in the world: \f$ R_y(h) \f$ (planar) or \f$ \exp(\theta u) \f$. */
+  Eigen::Matrix3d rotation() const { return six_dof ? expSO3<double>(theta_u) : rotY(heading); }
+  /*! \brief Position of the vision frame's origin in the world (m). */
+  Eigen::Vector3d position() const { return Eigen::Vector3d(x, y, z); }
 };
 
 /*!
-  \brief Geometry of the yaw mechanism: the optical centre's offset from the yaw axis.
+  \brief Geometry of the camera mount: the yaw joint and the camera's fixed pose on it.
 
   The paper puts the vision-frame origin on the camera X axis at distance Lb from the optical
-  centre, i.e. `v_t0 = (-Lb, 0, 0)`; any offset vector is accepted here.
+  centre, i.e. `v_t0 = (-Lb, 0, 0)`, with the camera's axes parallel to the vision frame's at yaw 0
+  (a rig file's `camera_offset`); any offset vector is accepted here. A camera mounted at any fixed
+  orientation (a rig file's `camera_pose`, an arm's hand-eye eMc) has the pose
+  \f$ {}^vT_{c}(0) = [R_0 \,|\, t_0] \f$ at yaw 0; the yaw joint turns it about the vision frame's +Y.
 */
 class YawRig {
 public:
@@ -64,18 +112,39 @@ public:
   explicit YawRig(const Eigen::Vector3d &v_t0 = Eigen::Vector3d::Zero()) : v_t0_(v_t0) {}
   /*! \brief Convenience constructor from a ViSP translation vector. */
   explicit YawRig(const vpTranslationVector &v_t0) : v_t0_(v_t0[0], v_t0[1], v_t0[2]) {}
+  /*! \brief A camera at any fixed pose: \param vMc0 the camera's pose in the vision frame at yaw 0
+      (for an arm without a pan joint, the hand-eye eMc). */
+  explicit YawRig(const vpHomogeneousMatrix &vMc0);
 
   /*! \brief Position of the optical centre in the vision frame at yaw 0 (m). */
   const Eigen::Vector3d &cameraOffset() const { return v_t0_; }
+  /*! \brief Orientation \f$ R_0 \f$ of the camera in the vision frame at yaw 0 (identity for `camera_offset`). */
+  const Eigen::Matrix3d &cameraRotation() const { return v_R0_; }
 
   /*!
-    \brief Pose of the camera in the vision frame, eq. (1):
-    \f[ {}^v T_c(\theta) = \begin{bmatrix} R_y(\theta) & R_y(\theta)\, t_0 \\ 0 & 1 \end{bmatrix} \f]
+    \brief Pose of the camera in the vision frame, eq. (1) (with \f$ R_0 = I \f$ in the paper):
+    \f[ {}^v T_c(\theta) = \begin{bmatrix} R_y(\theta) R_0 & R_y(\theta)\, t_0 \\ 0 & 1 \end{bmatrix} \f]
     \param yaw Camera yaw \f$\theta\f$ (rad).
   */
   vpHomogeneousMatrix vMc(double yaw) const;
-  /*! \brief Inverse of vMc(): \f$ {}^c T_v = [R_y(\theta)^T \;|\; -t_0] \f$. */
+  /*! \brief Inverse of vMc(): \f$ {}^c T_v = [R_0^T R_y(\theta)^T \;|\; -R_0^T t_0] \f$. */
   vpHomogeneousMatrix cMv(double yaw) const;
+
+  /*!
+    \brief A camera-frame point in the vision frame, eq. (7), as Eigen vectors:
+    \f$ {}^vP = R_y(\theta) (R_0\, {}^cP + t_0) \f$.
+  */
+  Eigen::Vector3d visionPoint(double yaw, const Eigen::Vector3d &c_P) const
+  {
+    return rotY(yaw) * (v_R0_ * c_P + v_t0_);
+  }
+  /*! \brief The inverse of visionPoint(): \f$ {}^cP = R_0^T (R_y(\theta)^T\, {}^vP - t_0) \f$. */
+  Eigen::Vector3d cameraPoint(double yaw, const Eigen::Vector3d &v_P) const
+  {
+    return v_R0_.transpose() * (rotY(yaw).transpose() * v_P - v_t0_);
+  }
+  /*! \brief Orientation of the camera in the vision frame, \f$ {}^vR_c(\theta) = R_y(\theta) R_0 \f$. */
+  Eigen::Matrix3d vRc(double yaw) const { return rotY(yaw) * v_R0_; }
 
   /*!
     \brief Camera translation increment in the camera frame, eq. (4):
@@ -94,9 +163,10 @@ public:
 
 private:
   Eigen::Vector3d v_t0_;
+  Eigen::Matrix3d v_R0_ = Eigen::Matrix3d::Identity();
 };
 
-/*! \brief Pose of the vision frame in the world: \f$ {}^wT_v = [R_y(h) \;|\; (x, y, z)] \f$. */
+/*! \brief Pose of the vision frame in the world: \f$ {}^wT_v = [R_y(h) \;|\; (x, y, z)] \f$, or the 6-DoF pose. */
 vpHomogeneousMatrix wMv(const MotionSample &s);
 /*! \brief Pose of the camera in the world: \f$ {}^wT_c = {}^wT_v\, {}^vT_c(\theta) \f$. */
 vpHomogeneousMatrix wMc(const YawRig &rig, const MotionSample &s);
@@ -110,12 +180,14 @@ vpHomogeneousMatrix curMprev(const YawRig &rig, const MotionSample &prev, const 
   \brief Noisy quantities of one motion increment, as perturbations of a motion-log pair.
 
   The estimators' uncertainty is first-order in these perturbations. The odometry increment is the
-  pose of the later vision frame in the earlier one, \f$ {}^{v,prev}T_{v,cur} = [R_y(\Delta h) | d] \f$
-  with `d` expressed in the earlier vision frame.
+  pose of the later vision frame in the earlier one, \f$ {}^{v,prev}T_{v,cur} = [\Delta R | d] \f$
+  with `d` expressed in the earlier vision frame; the rotation perturbation acts on the right,
+  \f$ \Delta R \exp(\delta) \f$ (in the later vision frame). For a planar log,
+  \f$ \Delta R = R_y(\Delta h) \f$ and only \f$ \delta_y \f$ (the heading) is noisy.
 */
 template <typename T> struct IncrementPerturbation {
   Eigen::Matrix<T, 3, 1> d_translation = Eigen::Matrix<T, 3, 1>::Zero(); //!< added to d (m)
-  T d_heading = T(0);  //!< added to the heading change \f$\Delta h\f$ (rad)
+  Eigen::Matrix<T, 3, 1> d_rotation = Eigen::Matrix<T, 3, 1>::Zero();    //!< rotation vector on \f$\Delta R\f$ (rad); y is the heading
   T d_yaw_prev = T(0); //!< added to the earlier yaw reading (rad)
   T d_yaw_cur = T(0);  //!< added to the later yaw reading (rad)
 };
@@ -124,22 +196,27 @@ template <typename T> struct IncrementPerturbation {
   \brief Relative camera motion \f$ P_{cur} = R P_{prev} + t \f$ from two motion-log rows, with
   optional perturbations; templated so that estimators can differentiate through it.
 
-  \f[ R = R_y(\theta_p - \Delta h - \theta_c),\quad
-      t = R_y(\theta_c)^T R_y(\Delta h)^T (R_y(\theta_p) t_0 - d) - t_0 \f]
+  \f[ R = R_0^T R_y(\theta_c)^T \Delta R^T R_y(\theta_p) R_0,\quad
+      t = R_0^T \left(R_y(\theta_c)^T \Delta R^T (R_y(\theta_p) t_0 - d) - t_0\right) \f]
+  which for a planar log and \f$ R_0 = I \f$ is \f$ R = R_y(\theta_p - \Delta h - \theta_c) \f$,
+  \f$ t = R_y(\theta_c)^T R_y(\Delta h)^T (R_y(\theta_p) t_0 - d) - t_0 \f$.
 */
 template <typename T>
-void relativeMotion(const Eigen::Vector3d &v_t0, const MotionSample &prev, const MotionSample &cur,
+void relativeMotion(const YawRig &rig, const MotionSample &prev, const MotionSample &cur,
                     const IncrementPerturbation<T> &p, Eigen::Matrix<T, 3, 3> &R, Eigen::Matrix<T, 3, 1> &t)
 {
-  const Eigen::Matrix3d Rhp = rotY(prev.heading);
-  const Eigen::Vector3d d0 = Rhp.transpose() * Eigen::Vector3d(cur.x - prev.x, cur.y - prev.y, cur.z - prev.z);
+  const Eigen::Matrix3d Rp = prev.rotation();
+  const Eigen::Vector3d d0 = Rp.transpose() * (cur.position() - prev.position());
   const Eigen::Matrix<T, 3, 1> d = d0.cast<T>() + p.d_translation;
-  const T dh = T(cur.heading - prev.heading) + p.d_heading;
   const T yp = T(prev.yaw) + p.d_yaw_prev;
   const T yc = T(cur.yaw) + p.d_yaw_cur;
+  const Eigen::Vector3d &v_t0 = rig.cameraOffset();
   const Eigen::Matrix<T, 3, 1> t0(T(v_t0.x()), T(v_t0.y()), T(v_t0.z()));
-  R = rotY<T>(yp - dh - yc);
-  t = rotY<T>(yc).transpose() * (rotY<T>(dh).transpose() * (rotY<T>(yp) * t0 - d)) - t0;
+  const Eigen::Matrix3d dR0 = Rp.transpose() * cur.rotation();
+  const Eigen::Matrix<T, 3, 3> dR = dR0.cast<T>() * expSO3<T>(p.d_rotation);
+  const Eigen::Matrix<T, 3, 3> R0 = rig.cameraRotation().cast<T>();
+  R = R0.transpose() * rotY<T>(yc).transpose() * dR.transpose() * rotY<T>(yp) * R0;
+  t = R0.transpose() * (rotY<T>(yc).transpose() * (dR.transpose() * (rotY<T>(yp) * t0 - d)) - t0);
 }
 
 /*! \brief A ViSP homogeneous matrix as an Eigen isometry. */

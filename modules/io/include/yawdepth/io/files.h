@@ -12,6 +12,7 @@
 #include <ostream>
 #include <string>
 #include <vector>
+#include <visp3/core/vpPoseVector.h>
 #include <yawdepth/core/files.h>
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
@@ -20,7 +21,14 @@ namespace yawdepth {
 
 /*! \brief Contents of a rig file (YAML). */
 struct RigFile {
-  Eigen::Vector3d camera_offset = Eigen::Vector3d::Zero(); //!< `camera_offset: [x, y, z]` (m), required.
+  /*! `camera_offset: [x, y, z]` (m): the optical centre in the vision frame at yaw 0, the camera's
+      axes parallel to the vision frame's; or the translation of `camera_pose`. */
+  Eigen::Vector3d camera_offset = Eigen::Vector3d::Zero();
+  /*! `camera_pose: [tx, ty, tz, tux, tuy, tuz]`, instead of `camera_offset`: the camera's pose in the
+      vision frame at yaw 0 (vMc; an arm's hand-eye eMc) as a ViSP vpPoseVector (m, theta-u rad). */
+  std::optional<vpPoseVector> camera_pose;
+  /*! `camera_pose_sigma: [6 numbers]`: 1-sigma of camera_pose (m, rad), as calibrate-rig writes it (informational). */
+  std::optional<Eigen::Matrix<double, 6, 1>> camera_pose_sigma;
   std::optional<double> yaw; //!< optional `yaw:` (rad), used when the motion log has no yaw column.
   /*! optional `yaw_offset:` (rad), the zero of the yaw reading: true yaw = reading + yaw_offset.
       Applied to every yaw of the motion log (applyRigFile()). Written by `calibrate-rig`. */
@@ -31,6 +39,9 @@ struct RigFile {
   std::optional<Eigen::Vector3d> yaw_axis;
 };
 
+/*! \brief The camera mount a rig file describes (from `camera_pose` or `camera_offset`). */
+YawRig rigOf(const RigFile &rig);
+
 /*!
   \brief Bring a motion log's yaw readings to true yaws with the rig file: adds `yaw_offset` to
   every row's yaw.
@@ -38,7 +49,8 @@ struct RigFile {
 void applyRigFile(const RigFile &rig, std::vector<MotionSample> &motion);
 
 /*!
-  \brief Read a rig YAML file. Required key `camera_offset` (3 finite numbers); optional `yaw`,
+  \brief Read a rig YAML file. Required: `camera_offset` (3 finite numbers) or `camera_pose` (6),
+  not both; optional `yaw`,
   `yaw_offset`, `yaw_axis` (refused when more than 2 degrees from +Y, which is the axis the
   estimators model), and the uncertainties calibrate-rig writes beside them. Any other key is an
   error naming it (a typo must not drop a setting silently).
@@ -57,9 +69,10 @@ struct MotionLog {
 };
 
 /*!
-  \brief Read a motion log CSV: columns frame,x,y,z,heading,yaw (+ optional image); column order
-  free, unknown columns ignored. When the file has no `yaw` column, `fixed_yaw` is used for every
-  row; without either, it is an error. Read as a stream within `limits` (core/files.h: a regular
+  \brief Read a motion log CSV: columns frame,x,y,z,heading,yaw, or in the 6-DoF form
+  frame,tx,ty,tz,tux,tuy,tuz[,yaw] (wMv as a vpPoseVector; MotionSample::six_dof), + optional image;
+  column order free, unknown columns ignored. When the file has no `yaw` column, `fixed_yaw` is used
+  for every row; without either, it is an error for a planar log and yaw 0 for a 6-DoF one. Read as a stream within `limits` (core/files.h: a regular
   file or a pipe, 256 MiB and 1 MiB per line by default).
 */
 MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw = std::nullopt,
@@ -96,7 +109,8 @@ void writePointsCsv(std::ostream &out, const std::vector<PointRow> &rows);
 */
 void writePointsCsv(const std::string &path, const std::vector<PointRow> &rows);
 
-/*! \brief Write a motion log CSV (frame,x,y,z,heading,yaw[,image]), atomically, 17 significant digits. */
+/*! \brief Write a motion log CSV (frame,x,y,z,heading,yaw[,image], or the 6-DoF form when the
+    samples are 6-DoF), atomically, 17 significant digits. */
 void writeMotionCsv(const std::string &path, const MotionLog &motion);
 /*! \brief Write feature tracks CSV (frame,id,u,v), rows ordered by frame then id, atomically. */
 void writeTracksCsv(const std::string &path, const std::vector<Track> &tracks);

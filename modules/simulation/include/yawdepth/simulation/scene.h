@@ -1,14 +1,17 @@
 #pragma once
 /*!
   \file scene.h
-  \brief Seeded synthetic scenes with known truth: a robot driving with a yawing camera, random
-  3D points, their observed (distorted, noisy) pixels and a dead-reckoned (noisy) motion log.
+  \brief Seeded synthetic scenes with known truth: a robot driving with a yawing camera (or any
+  6-DoF trajectory, e.g. an arm's), random 3D points, their observed (distorted, noisy) pixels and
+  a dead-reckoned (noisy) motion log.
 
   Used by the tests, the benchmarks and `yawdepth simulate`. The same seed gives the same scene.
 */
 #include <Eigen/Core>
 #include <cstdint>
+#include <string>
 #include <vector>
+#include <visp3/core/vpHomogeneousMatrix.h>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
@@ -28,7 +31,11 @@ struct SceneOptions {
   double min_depth = 0.5;     //!< Points' depth range in the first camera frame (m).
   double max_depth = 3.0;     //!< Upper end of the depth range (m).
   double margin_px = 20.0;    //!< Points start at least this far inside the image border (px).
-  NoiseModel noise{0.0, 0.0, 0.0, 0.0}; //!< Noise added to pixels and to the motion log (default: none).
+  /*! A 6-DoF trajectory: the true pose of the vision frame in the world (wMv) per frame. When not
+      empty it replaces the planar one (step, lateral_step, heading, turn_rate), `frames` is its
+      length, and the motion logs are 6-DoF (MotionSample::six_dof). See armTrajectory(). */
+  std::vector<vpHomogeneousMatrix> vision_poses;
+  NoiseModel noise{0.0, 0.0, 0.0, 0.0, 0.0}; //!< Noise added to pixels and to the motion log (default: none).
   std::uint64_t seed = 1;     //!< Random seed.
   /*! \brief Throws yawdepth::Error for invalid options. */
   void validate() const;
@@ -37,7 +44,8 @@ struct SceneOptions {
 /*! \brief A synthetic scene. */
 struct Scene {
   std::vector<MotionSample> truth;    //!< True motion log.
-  std::vector<MotionSample> measured; //!< Dead-reckoned motion log (odometry and yaw noise).
+  std::vector<MotionSample> measured; //!< Dead-reckoned motion log (odometry and yaw noise): each
+                                      //!< increment perturbed (translation, and heading or 6-DoF rotation) and accumulated.
   std::vector<Track> tracks;          //!< Observed pixels (distortion and pixel noise), ids 0..points-1.
   std::vector<Eigen::Vector3d> w_points; //!< True points in the world frame, by id.
   /*! \brief True point of feature `id` in the camera frame at motion-log row `index`. */
@@ -50,5 +58,23 @@ struct Scene {
   (the image size is the camera's, or 640x480 when the camera has none).
 */
 Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOptions &options);
+
+/*! \brief Kinds of arm-like camera paths (armTrajectory()). */
+enum class ArmPath {
+  Approach, //!< toward the target along the optical axis, drifting sideways, 30 % of the distance
+  Orbit,    //!< an arc of 40 degrees around the target at constant distance, swaying vertically
+  Random    //!< random positions within 15 % of the distance around the start, random roll
+};
+/*! \brief "approach", "orbit", "random"; throws yawdepth::Error for another word. */
+ArmPath armPathFromString(const std::string &word);
+
+/*!
+  \brief An arm-like 6-DoF trajectory: the camera always looks at a target `distance` metres ahead
+  of its first pose (within a few degrees), the world frame being the first camera frame. Returns
+  the vision frame's poses wMv for SceneOptions::vision_poses, through the rig's mount at `yaw`.
+  \param seed Random perturbations (Random path, and a small look-at jitter on every path).
+*/
+std::vector<vpHomogeneousMatrix> armTrajectory(const YawRig &rig, ArmPath path, int frames, double distance,
+                                               std::uint64_t seed, double yaw = 0.0);
 
 } // namespace yawdepth
