@@ -61,16 +61,25 @@ const char *const kMethodNames[kMethods] = {"paper", "exact", "fused", "refine",
 struct SceneSpec {
   double yaw_deg;
   double turn_deg; // heading change per frame
+  int arm = -1;    // an arm scene (ArmPath) instead of the planar robot
+  bool isArm() const { return arm >= 0; }
+  const char *armName() const { return arm == 0 ? "approach" : arm == 1 ? "orbit" : "random"; }
   std::string name() const
   {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "yaw %2.0f deg, %s", yaw_deg, turn_deg == 0 ? "straight" : "turning 1 deg/frame");
+    char buf[96];
+    if (isArm())
+      std::snprintf(buf, sizeof buf, "arm, %s (6-DoF, hand-eye mount)", armName());
+    else
+      std::snprintf(buf, sizeof buf, "yaw %2.0f deg, %s", yaw_deg, turn_deg == 0 ? "straight" : "turning 1 deg/frame");
     return buf;
   }
   std::string shortName() const
   {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "yaw %2.0f %s", yaw_deg, turn_deg == 0 ? "straight" : "turning");
+    if (isArm())
+      std::snprintf(buf, sizeof buf, "arm %s", armName());
+    else
+      std::snprintf(buf, sizeof buf, "yaw %2.0f %s", yaw_deg, turn_deg == 0 ? "straight" : "turning");
     return buf;
   }
 };
@@ -332,11 +341,20 @@ int main(int argc, char **argv)
     return 2;
   }
 
-  const CameraModel camera =
+  const CameraModel paper_camera =
       CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-  const YawRig rig(Eigen::Vector3d(-0.1503, 0, 0));
-  const NoiseModel noise{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg};
-  const std::vector<SceneSpec> specs = {{0, 0}, {45, 0}, {90, 0}, {0, 1}, {45, 1}, {90, 1}};
+  const YawRig paper_rig(Eigen::Vector3d(-0.1503, 0, 0));
+  const NoiseModel paper_noise{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg};
+  const std::vector<SceneSpec> specs = {{0, 0},     {45, 0},    {90, 0},    {0, 1},   {45, 1},
+                                        {90, 1},    {0, 0, 0},  {0, 0, 1},  {0, 0, 2}};
+  // Arm scenes: the franka set's camera (RealSense, 600 px) and a hand-eye mount like its eMc;
+  // 1 mm and 0.05 deg per increment per axis, no pan joint (the yaw is exact).
+  const CameraModel arm_camera =
+      CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
+  const YawRig arm_rig(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818));
+  NoiseModel arm_noise = paper_noise;
+  arm_noise.sigma_yaw = 0.0;
+  arm_noise.sigma_rot = 0.05 * kDeg;
   const double outlier_fraction = 0.05;
   const bool refine_ok = refineAvailable();
 
@@ -350,6 +368,11 @@ int main(int argc, char **argv)
               "  10 frames, 0.02 m forward per frame; 30 points, depth 0.5 to 3 m in the first frame.\n");
   std::printf("Noise (simulation = estimators' model): pixels 0.3 px, odometry 1 mm per axis per increment,\n"
               "  heading 0.05 deg per increment, yaw reading 0.05 deg.\n");
+  std::printf("Arm scenes (6-DoF motion log): camera fx 601.7, fy 602.1, u0 324.4, v0 239.6, Brown distortion,\n"
+              "  640x480; camera_pose (0.0577, -0.0339, -0.0423 m; theta-u 0.0018, 0.0092, 1.5818 rad); 10 frames of\n"
+              "  armTrajectory (approach: 30 %% of 0.6 m toward the target; orbit: 40 deg around it at 0.6 m; random:\n"
+              "  poses within 9 cm and 17 deg of roll), 30 points at 0.4 to 0.8 m; noise 0.3 px, 1 mm and 0.05 deg per\n"
+              "  increment per axis, no yaw joint.\n");
   std::printf("Bound: CRLB of zc from depthCramerRao at the truth; joint = all points + motion (the bound\n"
               "  for refine), per-point = one point + motion (the bound for per-feature methods).\n"
               "  RMSE/CRLB = sqrt(mean((e/crlb)^2)); 1.0 means the bound is reached. 2-sigma coverage =\n"
@@ -364,34 +387,40 @@ int main(int argc, char **argv)
   std::fflush(stdout);
 
   TrackEstimatorOptions opt;
-  opt.two_view.noise = noise;
-  opt.filter.noise = noise;
   RefineOptions ropt;
-  ropt.noise = noise;
 
   const auto t_start = Clock::now();
   std::vector<CleanStats> clean(specs.size());
   std::vector<OutlierStats> dirty(specs.size());
-  std::vector<double> refine_ms;
+  std::vector<double> refine_ms, refine_arm_ms;
   double fused_ms = 0;
   long fused_obs = 0;
   long refine_errors = 0;
 
   for (std::size_t si = 0; si < specs.size(); ++si) {
+    const bool arm = specs[si].isArm();
+    const CameraModel &camera = arm ? arm_camera : paper_camera;
+    const YawRig &rig = arm ? arm_rig : paper_rig;
+    const NoiseModel &noise = arm ? arm_noise : paper_noise;
+    opt.two_view.noise = noise;
+    opt.filter.noise = noise;
+    ropt.noise = noise;
     SceneOptions so;
     so.frames = 10;
     so.step = 0.02;
     so.yaw = specs[si].yaw_deg * kDeg;
     so.turn_rate = specs[si].turn_deg * kDeg;
     so.points = 30;
-    so.min_depth = 0.5;
-    so.max_depth = 3.0;
+    so.min_depth = arm ? 0.4 : 0.5;
+    so.max_depth = arm ? 0.8 : 3.0;
     so.noise = noise;
     CleanStats &cs = clean[si];
     OutlierStats &os = dirty[si];
 
     for (long trial = 0; trial < trials; ++trial) {
       so.seed = seed + 100000ULL * si + static_cast<std::uint64_t>(trial);
+      if (arm)
+        so.vision_poses = armTrajectory(rig, static_cast<ArmPath>(specs[si].arm), so.frames, 0.6, so.seed);
       const Scene scene = simulateScene(camera, rig, so);
       std::map<long, std::size_t> row;
       for (std::size_t k = 0; k < scene.truth.size(); ++k)
@@ -437,7 +466,7 @@ int main(int argc, char **argv)
         try {
           t0 = Clock::now();
           const RefineResult rr = refineWindow(camera, rig, scene.measured, scene.tracks, fused, ropt);
-          refine_ms.push_back(msSince(t0));
+          (arm ? refine_arm_ms : refine_ms).push_back(msSince(t0));
           take(kRefine, rr.points);
         } catch (const std::exception &e) {
           if (refine_errors++ == 0)
@@ -524,12 +553,13 @@ int main(int argc, char **argv)
   std::printf("   not ok = points (>= 2 observations) the method did not report ok; each is excluded for all methods.\n"
               "   gross = points with |e| > %.0f x their per-point CRLB (they dominate an RMSE; the median does not).\n",
               kGross);
-  CleanStats pooled;
+  CleanStats pooled, pooled_arm;
   for (std::size_t si = 0; si < specs.size(); ++si) {
     printCleanTable("Scene: " + specs[si].name(), clean[si], trials, refine_ok);
-    pooled.merge(clean[si]);
+    (specs[si].isArm() ? pooled_arm : pooled).merge(clean[si]);
   }
-  printCleanTable("Pooled over the six scenes (normalised squared errors pooled)", pooled, trials, refine_ok);
+  printCleanTable("Pooled over the six planar scenes (normalised squared errors pooled)", pooled, trials, refine_ok);
+  printCleanTable("Pooled over the three arm scenes (normalised squared errors pooled)", pooled_arm, trials, refine_ok);
 
   // Compact summary: RMSE/CRLB(joint) per scene and method.
   {
@@ -557,19 +587,20 @@ int main(int argc, char **argv)
     for (std::size_t si = 0; si < specs.size(); ++si)
       row(specs[si].shortName(), clean[si]);
     printRule(W);
-    row("pooled", pooled);
+    row("pooled planar", pooled);
+    row("pooled arm", pooled_arm);
     printRule(W);
   }
 
   // ---- Outliers.
   {
-    std::printf("\n2. OUTLIER SCENES: the same six scenes, %.0f %% of observations moved by 10 to 50 px in a random\n"
+    std::printf("\n2. OUTLIER SCENES: the same scenes, %.0f %% of observations moved by 10 to 50 px in a random\n"
                 "   direction (inside the image). Bound: CRLB of the clean tracks (inlier CRLB).\n"
                 "   recall = corrupted observations flagged / corrupted; precision = flagged and corrupted / flagged.\n",
                 100 * outlier_fraction);
-    OutlierStats op;
-    for (const auto &o : dirty)
-      op.merge(o);
+    OutlierStats op, op_arm;
+    for (std::size_t si = 0; si < specs.size(); ++si)
+      (specs[si].isArm() ? op_arm : op).merge(dirty[si]);
     const int W = 112;
     printRule(W);
     std::printf("%-16s %-7s %7s %10s %9s %10s %10s %6s %9s %7s %9s\n", "scene", "method", "not ok", "RMSE zc", "median",
@@ -597,9 +628,10 @@ int main(int argc, char **argv)
     for (std::size_t si = 0; si < specs.size(); ++si)
       rows(specs[si].shortName(), dirty[si]);
     printRule(W);
-    rows("pooled", op);
+    rows("pooled planar", op);
+    rows("pooled arm", op_arm);
     printRule(W);
-    std::printf("  pooled: %ld points, %ld used (fused and refine ok, >= 2 observations), %ld corrupted observations.\n",
+    std::printf("  pooled planar: %ld points, %ld used (fused and refine ok, >= 2 observations), %ld corrupted observations.\n",
                 op.points, op.used, op.corrupted);
   }
 
@@ -613,6 +645,12 @@ int main(int argc, char **argv)
           t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
       std::printf("  refineWindow, 30 points x 10 frames, default RefineOptions (%zu runs): min %.2f ms, median %.2f ms\n",
                   t.size(), t.front(), median);
+      if (!refine_arm_ms.empty()) {
+        std::vector<double> ta = refine_arm_ms;
+        std::sort(ta.begin(), ta.end());
+        std::printf("  refineWindow on the arm scenes (6-DoF chain, %zu runs): min %.2f ms, median %.2f ms\n", ta.size(),
+                    ta.front(), ta[ta.size() / 2]);
+      }
     } else {
       std::printf("  refineWindow: refine: unavailable\n");
     }

@@ -632,6 +632,66 @@ refused measure_image_huge "32000 x 32000" "${MEF[@]}" --motion "$F/huge_img_mot
 printf 'P5\n99999999999999 99999999999999\n255\n' >"$F/huge.pgm"
 sed "s|,frame_|,$PE/frame_|; s|[^,]*frame_0001.png|$F/huge.pgm|" "$PE/motion.csv" >"$F/huge_pgm_motion.csv"
 refused measure_image_huge_pgm "pixels are read" "${MEF[@]}" --motion "$F/huge_pgm_motion.csv"
+# ---------------------------------------------------------------------------
+# 6-DoF motion logs (an arm's poses, tx,ty,tz,tux,tuy,tuz) and a camera_pose mount (hand-eye eMc).
+A="$W/arm"; mkdir -p "$A"
+printf 'camera_pose: [0.0577148, -0.0339261, -0.0422745, 0.00178253, 0.00917657, 1.58178]\n' >"$A/eMc.yaml"
+for path in approach orbit random; do
+  D="$A/sim_$path"
+  run "$D" simulate --camera "$YML" --rig "$A/eMc.yaml" --out-dir "$D" --arm "$path" --arm-distance 0.7 --points 40 \
+    --min-depth 0.5 --max-depth 0.9 --frames 8 --seed 4
+  if [ "$(rc_of "$D")" -ne 0 ]; then fail "simulate --arm $path: exit $(rc_of "$D"): $(first "$D.err")"; continue; fi
+  case $(head -n 1 "$D/motion.csv") in
+    frame,tx,ty,tz,tux,tuy,tuz,yaw) pass ;;
+    *) fail "simulate --arm $path: motion.csv header '$(first "$D/motion.csv")'" ;;
+  esac
+  # The arm's log has no pan joint: without a yaw column the yaw is 0 (and exact).
+  cut -d, -f1-7 "$D/motion_truth.csv" >"$D/motion_noyaw.csv"
+  for m in exact fused refine; do
+    E="$A/est_${m}_$path"
+    run "$E" estimate --method "$m" --sigma-px 1e-4 --sigma-odom 1e-8 --sigma-rot 1e-9 --camera "$YML" --rig "$A/eMc.yaml" \
+      --motion "$D/motion_noyaw.csv" --tracks "$D/tracks.csv"
+    if [ "$(rc_of "$E")" -ne 0 ]; then fail "estimate $m 6-DoF $path: exit $(rc_of "$E"): $(first "$E.err")"; continue; fi
+    if [ "$m" = exact ]; then tol=1e-6; else tol=1e-3; fi
+    res=$(compare_points "$E.out" "$D/truth.csv" "$tol" 0.6)
+    case $res in
+      OK*) pass ;;
+      *) fail "estimate $m 6-DoF $path: $(echo "$res" | head -n 3 | tr '\n' ';')" ;;
+    esac
+  done
+done
+# Noisy 6-DoF data: refine's depths within 4 sigma of the truth.
+D="$A/noisy"
+run "$D" simulate --camera "$YML" --rig "$A/eMc.yaml" --out-dir "$D" --arm orbit --arm-distance 0.7 --points 40 \
+  --min-depth 0.5 --max-depth 0.9 --frames 8 --seed 5 --sigma-px 0.3 --sigma-odom 0.001 --sigma-rot 0.0009
+run "$A/noisy_refine" estimate --method refine --camera "$YML" --rig "$A/eMc.yaml" --motion "$D/motion.csv" \
+  --tracks "$D/tracks.csv" --sigma-yaw 0
+res=$(awk -F, 'FNR == 1 { next } FILENAME == ARGV[1] { z[$1] = $8; next }
+               $10 == "ok" { n++; e = $8 - z[$1]; if (e < 0) e = -e; if (e > 4 * $9) bad++ }
+               END { if (n < 20 || bad > 0) print "ok " n+0 ", beyond 4 sigma " bad+0; else print "OK" }' "$D/truth.csv" "$A/noisy_refine.out")
+[ "$res" = OK ] && pass || fail "estimate refine on a noisy 6-DoF orbit: $res"
+# A board measured from the arm's poses.
+D="$A/board"
+run "$D" simulate --camera "$YML" --rig "$A/eMc.yaml" --out-dir "$D" --arm approach --arm-distance 0.6 --frames 4 \
+  --pattern chessboard:5x4:0.03 --board-distance 0.6 --supersampling 2
+if [ "$(rc_of "$D")" -ne 0 ]; then
+  fail "simulate --arm --pattern: exit $(rc_of "$D"): $(first "$D.err")"
+else
+  run "$A/board_measure" measure --camera "$YML" --rig "$A/eMc.yaml" --motion "$D/motion.csv" \
+    --pattern chessboard:5x4:0.03 --method exact --quiet
+  res=$(awk -F, 'NR > 1 && $10 == "ok" { n++ } END { print n+0 }' "$A/board_measure.out")
+  [ "$(rc_of "$A/board_measure")" -eq 0 ] && [ "$res" -ge 18 ] && pass ||
+    fail "measure on a 6-DoF board sequence: exit $(rc_of "$A/board_measure"), $res ok rows: $(first "$A/board_measure.err")"
+fi
+# Bad 6-DoF input: one reason, non-zero exit.
+printf 'camera_offset: [0, 0, 0]\ncamera_pose: [0, 0, 0, 0, 0, 0]\n' >"$A/both.yaml"
+refused rig_both_forms "both 'camera_offset' and 'camera_pose'" estimate --camera "$YML" --rig "$A/both.yaml" \
+  --motion "$A/sim_orbit/motion.csv" --tracks "$A/sim_orbit/tracks.csv"
+printf 'frame,tx,ty,tz,tux,tuy\n0,0,0,0,0,0\n' >"$A/five.csv"
+refused motion_missing_tuz "tuz" estimate --camera "$YML" --rig "$A/eMc.yaml" --motion "$A/five.csv" \
+  --tracks "$A/sim_orbit/tracks.csv"
+refused simulate_arm_with_step "excludes" simulate --camera "$YML" --rig "$A/eMc.yaml" --out-dir "$A/x" --arm orbit --step 0.1
+
 # No stray temporary files anywhere.
 left=$(find "$W" -name '.*.tmp*' | head -3)
 [ -z "$left" ] && pass || fail "files: temporary files left: $left"

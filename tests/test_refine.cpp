@@ -562,3 +562,333 @@ TEST_CASE("refine converges without initial estimates on a side-view scene", "[r
     CHECK((v - a.points[i].v_P).norm() < 1e-12);
   }
 }
+
+// ---------------------------------------------------------------------------------------------
+// The general chain: 6-DoF logs (an arm) and camera mounts with a rotation.
+
+namespace {
+
+/* A wide camera as on an arm (the franka set's RealSense: 600 px, 640x480). */
+CameraModel armCamera() { return CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480); }
+/* A hand-eye mount like the franka set's eMc. */
+YawRig armRig() { return YawRig(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818)); }
+
+/* Arm noise: 0.3 px, 1 mm and 0.05 deg per increment per axis, no pan joint (yaw exact). */
+NoiseModel armNoise()
+{
+  NoiseModel n = issueNoise();
+  n.sigma_yaw = 0.0;
+  n.sigma_rot = 0.05 * kDeg;
+  return n;
+}
+
+Scene armScene(ArmPath path, std::uint64_t seed, bool noisy, int frames = 10, int points = 30)
+{
+  SceneOptions o;
+  o.frames = frames;
+  o.points = points;
+  o.min_depth = 0.4;
+  o.max_depth = 0.8;
+  o.vision_poses = armTrajectory(armRig(), path, frames, 0.6, seed);
+  o.seed = seed;
+  if (noisy)
+    o.noise = armNoise();
+  return simulateScene(armCamera(), armRig(), o);
+}
+
+const ArmPath kArmPaths[] = {ArmPath::Approach, ArmPath::Orbit, ArmPath::Random};
+
+} // namespace
+
+TEST_CASE("refine (general chain) returns the truth on noise-free arm scenes and camera_pose mounts", "[refine][6dof]")
+{
+  if (unavailableChecked())
+    return;
+  const CameraModel camera = armCamera();
+  const YawRig rig = armRig();
+  for (ArmPath path : kArmPaths) {
+    const Scene s = armScene(path, 17, false);
+    REQUIRE(s.measured.front().six_dof);
+    RefineOptions opt;
+    opt.noise = armNoise();
+    const RefineResult r = refineWindow(camera, rig, s.measured, s.tracks, {}, opt);
+    REQUIRE(r.available);
+    int ok = 0;
+    for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+      if (!r.points[i].ok())
+        continue;
+      ++ok;
+      const Eigen::Vector3d truth = truePoint(s, rig, i);
+      CHECK((r.points[i].c_P - truth).norm() / truth.norm() < 1e-6);
+      CHECK((rig.visionPoint(s.truth[rowOfFrame(s, r.points[i].frame)].yaw, r.points[i].c_P) - r.points[i].v_P).norm() < 1e-12);
+      CHECK(std::isfinite(r.points[i].sigmaZ()));
+    }
+    CHECK(ok >= 20);
+    for (std::size_t k = 0; k < s.truth.size(); ++k) {
+      CHECK(r.motion[k].six_dof);
+      CHECK((r.motion[k].position() - s.truth[k].position()).norm() < 1e-9);
+      CHECK((r.motion[k].rotation() - s.truth[k].rotation()).norm() < 1e-9);
+    }
+  }
+  // A planar log with a tilted mount runs the general chain with only the heading free.
+  const YawRig tilted(vpHomogeneousMatrix(-0.15, 0.0, 0.02, 0.1, 0.0, 0.05));
+  SceneOptions so = sceneOptions(45 * kDeg, 1 * kDeg, 7, false);
+  const Scene s = simulateScene(paperCamera(), tilted, so);
+  RefineOptions opt;
+  opt.noise = issueNoise();
+  const RefineResult r = refineWindow(paperCamera(), tilted, s.measured, s.tracks, {}, opt);
+  int ok = 0;
+  for (std::size_t i = 0; i < s.tracks.size(); ++i)
+    if (r.points[i].ok()) {
+      ++ok;
+      const Eigen::Vector3d truth = truePoint(s, tilted, i);
+      CHECK((r.points[i].c_P - truth).norm() / truth.norm() < 1e-6);
+    }
+  CHECK(ok >= 25);
+  for (std::size_t k = 0; k < s.truth.size(); ++k) {
+    CHECK_FALSE(r.motion[k].six_dof);
+    CHECK(std::abs(r.motion[k].heading - s.truth[k].heading) < 1e-9);
+  }
+}
+
+TEST_CASE("refine general-chain residual Jacobians match central finite differences", "[refine][6dof]")
+{
+  using refine_detail::WhitenedObservation;
+  constexpr int N = 17; // point(3), frame_a(7), frame_k(7)
+  using AD = Eigen::AutoDiffScalar<Eigen::Matrix<double, N, 1>>;
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  refine_detail::Mount mount;
+  mount.R0 = expSO3<double>(Eigen::Vector3d(0.1, -0.2, 1.5));
+  mount.t0 = Eigen::Vector3d(0.05, -0.03, -0.04);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Matrix3d Rref_a = expSO3<double>(Eigen::Vector3d(U(rng), U(rng), U(rng)));
+    const Eigen::Matrix3d Rref_k = Rref_a * expSO3<double>(Eigen::Vector3d(0.1 * U(rng), 0.1 * U(rng), 0.1 * U(rng)));
+    // A point in front of the anchor camera, seen by a camera close to it.
+    double x[N] = {0.1 * U(rng), 0.1 * U(rng), 1.5 + 0.3 * U(rng),
+                   0.1 * U(rng), 0.1 * U(rng), 0.1 * U(rng), 0.01 * U(rng), 0.01 * U(rng), 0.01 * U(rng), 0.2 * U(rng),
+                   0.0,          0.0,          0.0,          0.01 * U(rng), 0.01 * U(rng), 0.01 * U(rng), 0.2 * U(rng)};
+    for (int i = 0; i < 3; ++i)
+      x[10 + i] = x[3 + i] + 0.02 * U(rng);
+    WhitenedObservation w;
+    w.m[0] = 0.05;
+    w.m[1] = -0.02;
+    w.s00 = 2000 + 100 * U(rng);
+    w.s01 = 50 * U(rng);
+    w.s11 = 2100 + 100 * U(rng);
+    auto eval = [&](const double *v, double *r) {
+      return refine_detail::reprojectionResidualGeneral(v + 3, Rref_a, v + 10, Rref_k, v, mount, w, r);
+    };
+    AD xa[N];
+    for (int i = 0; i < N; ++i)
+      xa[i] = AD(x[i], N, i);
+    AD ra[2];
+    REQUIRE(refine_detail::reprojectionResidualGeneral(xa + 3, Rref_a, xa + 10, Rref_k, xa, mount, w, ra));
+    for (int i = 0; i < N; ++i) {
+      const double h = 1e-6;
+      double xp[N], xm[N], rp[2], rm[2];
+      std::copy(x, x + N, xp);
+      std::copy(x, x + N, xm);
+      xp[i] += h;
+      xm[i] -= h;
+      REQUIRE(eval(xp, rp));
+      REQUIRE(eval(xm, rm));
+      for (int k = 0; k < 2; ++k) {
+        const double fd = (rp[k] - rm[k]) / (2 * h);
+        CHECK(ra[k].derivatives()(i) == Approx(fd).margin(1e-5 * (1 + std::abs(fd))).epsilon(1e-6));
+      }
+    }
+    // The anchored point is the plain chain of ViSP-style poses: wMc = [Rref Exp(d) | p] vMc(yaw).
+    auto wMcOf = [&](const double *f, const Eigen::Matrix3d &Rref) {
+      const vpHomogeneousMatrix wMv_ = toVisp(Rref * expSO3<double>(Eigen::Vector3d(f[3], f[4], f[5])),
+                                              Eigen::Vector3d(f[0], f[1], f[2]));
+      const YawRig r(toVisp(mount.R0, mount.t0));
+      return toIsometry(wMv_ * r.vMc(f[6]));
+    };
+    const Eigen::Vector3d Pa = Eigen::Vector3d(x[0], x[1], 1.0) / x[2];
+    const Eigen::Vector3d Pk = wMcOf(x + 10, Rref_k).inverse() * (wMcOf(x + 3, Rref_a) * Pa);
+    double q[3];
+    refine_detail::anchoredPointGeneral(x + 3, Rref_a, x + 10, Rref_k, x, mount, q);
+    CHECK((Eigen::Vector3d(q[0], q[1], q[2]) / x[2] - Pk).norm() < 1e-12);
+
+    // Odometry residual: zero at the measurement, derivatives by finite differences.
+    refine_detail::OdometryMeasurementGeneral om;
+    om.Rref_prev = Rref_a;
+    om.Rref_cur = Rref_k;
+    om.dR = Rref_a.transpose() * Rref_k;
+    const Eigen::Vector3d d = Rref_a.transpose() * Eigen::Vector3d(x[10] - x[3], x[11] - x[4], x[12] - x[5]);
+    std::copy(d.data(), d.data() + 3, om.d);
+    om.inv_sigma_t = 1000;
+    for (double &v : om.inv_sigma_r)
+      v = 1.0 / (0.05 * kDeg);
+    double zero_prev[7] = {x[3], x[4], x[5], 0, 0, 0, 0}, zero_cur[7] = {x[10], x[11], x[12], 0, 0, 0, 0}, r0[6];
+    refine_detail::odometryResidualGeneral(zero_prev, zero_cur, om, r0);
+    for (double v : r0)
+      CHECK(std::abs(v) < 1e-9);
+    using AD14 = Eigen::AutoDiffScalar<Eigen::Matrix<double, 14, 1>>;
+    AD14 pa[14];
+    for (int i = 0; i < 14; ++i)
+      pa[i] = AD14(x[3 + i], 14, i);
+    AD14 ro[6];
+    refine_detail::odometryResidualGeneral(pa, pa + 7, om, ro);
+    for (int i = 0; i < 14; ++i) {
+      double pp[14], pm[14], rp[6], rm[6];
+      for (int j = 0; j < 14; ++j)
+        pp[j] = pm[j] = pa[j].value();
+      pp[i] += 1e-7;
+      pm[i] -= 1e-7;
+      refine_detail::odometryResidualGeneral(pp, pp + 7, om, rp);
+      refine_detail::odometryResidualGeneral(pm, pm + 7, om, rm);
+      for (int k = 0; k < 6; ++k) {
+        const double fd = (rp[k] - rm[k]) / 2e-7;
+        CHECK(ro[k].derivatives()(i) == Approx(fd).margin(1e-4 * (1 + std::abs(fd))));
+      }
+    }
+  }
+}
+
+namespace {
+
+/* Brute-force joint bound of a 6-DoF scene: numerical Jacobian of every whitened measurement with
+   respect to (per row >= 1: position, rotation vector about the truth; every point in the world),
+   with the rotation increment's residual the exact log of dR_true^T Rp^T Rc (yaws exact). */
+std::vector<double> bruteForceCrlb6(const CameraModel &camera, const YawRig &rig, const Scene &s, const NoiseModel &n)
+{
+  const int rows = static_cast<int>(s.truth.size()), np = static_cast<int>(s.w_points.size());
+  const int nl = 6 * (rows - 1), nth = nl + 3 * np;
+  auto unpack = [&](const Eigen::VectorXd &th, std::vector<MotionSample> &m, std::vector<Eigen::Vector3d> &P) {
+    m = s.truth;
+    for (int r = 1; r < rows; ++r) {
+      const Eigen::Vector3d p = th.segment<3>(6 * (r - 1));
+      m[r].x = p.x();
+      m[r].y = p.y();
+      m[r].z = p.z();
+      m[r].theta_u = logSO3(s.truth[r].rotation() * expSO3<double>(Eigen::Vector3d(th.segment<3>(6 * (r - 1) + 3))));
+    }
+    P.resize(np);
+    for (int i = 0; i < np; ++i)
+      P[i] = th.segment<3>(nl + 3 * i);
+  };
+  auto h = [&](const Eigen::VectorXd &th) {
+    std::vector<MotionSample> m;
+    std::vector<Eigen::Vector3d> P;
+    unpack(th, m, P);
+    std::vector<double> z;
+    for (int i = 0; i < np; ++i)
+      for (const Observation &ob : s.tracks[i].observations) {
+        const Eigen::Vector3d c = toIsometry(wMc(rig, m[rowOfFrame(s, ob.frame)])).inverse() * P[i];
+        const Eigen::Vector2d uv = camera.project(c.head<2>() / c.z());
+        z.push_back(uv.x() / n.sigma_px);
+        z.push_back(uv.y() / n.sigma_px);
+      }
+    for (int r = 1; r < rows; ++r) {
+      const Eigen::Matrix3d Rp = m[r - 1].rotation();
+      const Eigen::Vector3d d = Rp.transpose() * (m[r].position() - m[r - 1].position());
+      const Eigen::Matrix3d dRt = s.truth[r - 1].rotation().transpose() * s.truth[r].rotation();
+      const Eigen::Vector3d e = logSO3(dRt.transpose() * Rp.transpose() * m[r].rotation());
+      for (int k = 0; k < 3; ++k)
+        z.push_back(d(k) / n.sigma_odom);
+      for (int k = 0; k < 3; ++k)
+        z.push_back(e(k) / n.sigma_rot);
+    }
+    return Eigen::Map<Eigen::VectorXd>(z.data(), z.size()).eval();
+  };
+  Eigen::VectorXd th = Eigen::VectorXd::Zero(nth);
+  for (int r = 1; r < rows; ++r)
+    th.segment<3>(6 * (r - 1)) = s.truth[r].position();
+  for (int i = 0; i < np; ++i)
+    th.segment<3>(nl + 3 * i) = s.w_points[i];
+  const Eigen::VectorXd z0 = h(th);
+  Eigen::MatrixXd J(z0.size(), nth);
+  const double eps = 1e-7;
+  for (int k = 0; k < nth; ++k) {
+    Eigen::VectorXd tp = th, tm = th;
+    tp(k) += eps;
+    tm(k) -= eps;
+    J.col(k) = (h(tp) - h(tm)) / (2 * eps);
+  }
+  const Eigen::MatrixXd cov = (J.transpose() * J).inverse();
+  std::vector<double> out(np);
+  for (int i = 0; i < np; ++i) {
+    // Zc at the last observation: d Zc / d (theta) through the last row's pose and the point.
+    const std::size_t row = rowOfFrame(s, s.tracks[i].observations.back().frame);
+    auto zc = [&](const Eigen::VectorXd &t) {
+      std::vector<MotionSample> m;
+      std::vector<Eigen::Vector3d> P;
+      unpack(t, m, P);
+      return (toIsometry(wMc(rig, m[row])).inverse() * P[i]).z();
+    };
+    Eigen::RowVectorXd g(nth);
+    for (int k = 0; k < nth; ++k) {
+      Eigen::VectorXd tp = th, tm = th;
+      tp(k) += eps;
+      tm(k) -= eps;
+      g(k) = (zc(tp) - zc(tm)) / (2 * eps);
+    }
+    out[i] = std::sqrt(g * cov * g.transpose());
+  }
+  return out;
+}
+
+} // namespace
+
+TEST_CASE("depthCramerRao on 6-DoF scenes matches a brute-force Fisher information", "[refine][crlb][6dof]")
+{
+  const CameraModel camera = armCamera();
+  const YawRig rig = armRig();
+  const NoiseModel noise = armNoise();
+  for (ArmPath path : kArmPaths) {
+    const Scene s = armScene(path, 23, false, 4, 5);
+    const std::vector<double> joint = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
+    const std::vector<double> alone = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, false);
+    const std::vector<double> brute = bruteForceCrlb6(camera, rig, s, noise);
+    for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+      if (s.tracks[i].observations.size() < 2)
+        continue;
+      REQUIRE(std::isfinite(joint[i]));
+      CHECK(joint[i] == Approx(brute[i]).epsilon(1e-4));
+      CHECK(joint[i] <= alone[i] * (1 + 1e-12));
+    }
+  }
+}
+
+TEST_CASE("refine on arm scenes is efficient and honest (Monte Carlo against the joint bound)", "[refine][montecarlo][6dof]")
+{
+  if (unavailableChecked())
+    return;
+  const CameraModel camera = armCamera();
+  const YawRig rig = armRig();
+  const NoiseModel noise = armNoise();
+  constexpr int kTrials = 20;
+  Stats pooled;
+  for (ArmPath path : kArmPaths) {
+    Stats st;
+    for (int trial = 0; trial < kTrials; ++trial) {
+      const Scene s = armScene(path, 2000 + trial, true);
+      RefineOptions opt;
+      opt.noise = noise;
+      const RefineResult r = refineWindow(camera, rig, s.measured, s.tracks, {}, opt);
+      const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
+      for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+        if (s.tracks[i].observations.size() < 2 || !std::isfinite(crlb[i]))
+          continue;
+        if (!r.points[i].ok()) {
+          ++st.failed;
+          continue;
+        }
+        const double err = r.points[i].c_P.z() - truePoint(s, rig, i).z();
+        st.add(err, crlb[i], r.points[i].sigmaZ());
+        pooled.add(err, crlb[i], r.points[i].sigmaZ());
+      }
+    }
+    std::printf("refine MC arm %d: RMSE/CRLB %.3f, 2-sigma coverage %.3f, failed %d of %d\n", static_cast<int>(path),
+                st.ratio(), st.coverage(), st.failed, st.n + st.failed);
+    CHECK(st.ratio() <= 1.25);
+    CHECK(st.coverage() >= 0.85);
+  }
+  std::printf("refine MC arm pooled: RMSE/CRLB %.3f, 2-sigma coverage %.3f over %d depths\n", pooled.ratio(),
+              pooled.coverage(), pooled.n);
+  CHECK(pooled.ratio() <= kMaxRmseOverCrlb);
+  CHECK(pooled.coverage() >= kMinCoverage2Sigma);
+  CHECK(pooled.coverage() <= kMaxCoverage2Sigma);
+}

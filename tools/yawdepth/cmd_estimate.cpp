@@ -55,7 +55,9 @@ Runner addEstimate(CLI::App &app)
     checkTracksAgainstMotion(tracks, motion, args->tracks);
 
     std::vector<std::vector<bool>> flags;
-    const std::vector<PointEstimate> estimates = runMethod(camera, rig, motion.samples, tracks, args->method, flags);
+    MethodArgs method = args->method;
+    method.noise = noiseForLog(args->method, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
+    const std::vector<PointEstimate> estimates = runMethod(camera, rig, motion.samples, tracks, method, flags);
     std::vector<PointRow> rows;
     rows.reserve(tracks.size());
     for (std::size_t i = 0; i < tracks.size(); ++i)

@@ -127,7 +127,9 @@ Runner addMeasure(CLI::App &app)
       writeTracksCsv(a->tracks_out, tracks);
 
     std::vector<std::vector<bool>> flags;
-    const std::vector<PointEstimate> estimates = runMethod(camera, rig, motion.samples, tracks, a->method, flags);
+    MethodArgs method = a->method;
+    method.noise = noiseForLog(a->method, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
+    const std::vector<PointEstimate> estimates = runMethod(camera, rig, motion.samples, tracks, method, flags);
     std::vector<PointRow> rows;
     std::vector<std::pair<long, PointEstimate>> pairs;
     for (std::size_t i = 0; i < tracks.size(); ++i) {

@@ -25,6 +25,8 @@ namespace {
 struct SimulateArgs {
   std::string camera, camera_name, rig, out_dir;
   SceneOptions scene;
+  std::string arm;           // --arm: a 6-DoF path (approach, orbit, random), or empty for the planar robot
+  double arm_distance = 0.6; // --arm-distance (m)
   // Board mode.
   std::string pattern;
   double board_distance = 0.62, board_tilt = 0.0, board_offset_x = 0.0, board_offset_y = 0.0;
@@ -89,6 +91,19 @@ Runner addSimulate(CLI::App &app)
       ->check(FiniteNonNegative)
       ->capture_default_str();
   sub->add_option("--sigma-yaw", s.noise.sigma_yaw, "Noise of each yaw reading (rad)")->check(FiniteNonNegative)->capture_default_str();
+  sub->add_option("--sigma-rot", s.noise.sigma_rot, "Rotation noise per increment, per axis, with --arm (rad)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  // 6-DoF mode: an arm-like camera path instead of the planar robot.
+  CLI::Option *arm = sub->add_option("--arm", a->arm,
+                                     "A 6-DoF arm-like path instead of the planar robot: approach, orbit or random "
+                                     "(motion.csv then has the 6-DoF columns tx,ty,tz,tux,tuy,tuz)")
+                         ->check(CLI::IsMember({"approach", "orbit", "random"}));
+  sub->add_option("--arm-distance", a->arm_distance, "With --arm: distance of the target the camera looks at (m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  for (const char *planar : {"--step", "--lateral-step", "--heading", "--turn-rate", "--sigma-heading"})
+    arm->excludes(planar);
   sub->add_option("--seed", s.seed, "Random seed")->capture_default_str();
   // Board mode.
   sub->add_option("--pattern", a->pattern,
@@ -153,6 +168,8 @@ Runner addSimulate(CLI::App &app)
     SceneOptions so = a->scene;
     if (board_mode)
       so.points = 0;
+    if (!a->arm.empty())
+      so.vision_poses = armTrajectory(rig, armPathFromString(a->arm), so.frames, a->arm_distance, so.seed, so.yaw);
     if (board_mode) {
       if (a->photo) {
         const RenderOptions preset = photoLikeRenderOptions(a->board_distance);

@@ -25,12 +25,16 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
   sub->add_option("--sigma-odom", args.noise.sigma_odom, "Odometry translation noise per increment, per axis (m)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
-  sub->add_option("--sigma-heading", args.noise.sigma_heading, "Heading noise per increment (rad)")
+  sub->add_option("--sigma-heading", args.noise.sigma_heading, "Heading noise per increment (rad), planar motion logs")
       ->check(FiniteNonNegative)
       ->capture_default_str();
-  sub->add_option("--sigma-yaw", args.noise.sigma_yaw, "Noise of each yaw reading (rad)")
+  sub->add_option("--sigma-rot", args.noise.sigma_rot, "Rotation noise per increment, per axis (rad), 6-DoF motion logs")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  args.sigma_yaw_option = sub->add_option("--sigma-yaw", args.noise.sigma_yaw,
+                                          "Noise of each yaw reading (rad); 0 by default for a 6-DoF log without a yaw column")
+                              ->check(FiniteNonNegative)
+                              ->capture_default_str();
   sub->add_option("--min-baseline", args.gates.min_baseline, "Camera translation below this is no_motion (m)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
@@ -44,6 +48,14 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
                   "refine: observations with a larger reprojection error are flagged as outliers (px)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+}
+
+NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
+{
+  NoiseModel n = args.noise;
+  if (six_dof && !yaw_column && (args.sigma_yaw_option == nullptr || args.sigma_yaw_option->count() == 0))
+    n.sigma_yaw = 0.0;
+  return n;
 }
 
 std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,

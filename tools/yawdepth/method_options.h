@@ -13,6 +13,7 @@ namespace yawdepth::cli {
 struct MethodArgs {
   std::string method;
   NoiseModel noise;
+  const CLI::Option *sigma_yaw_option = nullptr; // to tell whether --sigma-yaw was given
   GateOptions gates;
   double robust_px = 1.0;
   double outlier_px = 2.0;
@@ -20,6 +21,12 @@ struct MethodArgs {
 
 /*! \brief Register --method (with `default_method`), the noise, gate and refine options on `sub`. */
 void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &default_method);
+
+/*!
+  \brief The noise model for a motion log: a 6-DoF log without a `yaw` column has no pan joint,
+  so its yaw is exact (sigma_yaw 0) unless --sigma-yaw is given.
+*/
+NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column);
 
 /*! \brief The best method this build has: refine with Ceres, else fused. */
 std::string bestMethod();

@@ -203,6 +203,23 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
 
   // Iterated EKF on w: the measurement h(w) is the first two components of g(w).
   Vec11 w = mu;
+  if (inliers_ == 1) {
+    // The first update from the diffuse depth prior is the most nonlinear one (a large rotation
+    // between the frames makes it worse): start the iterations at the depth that the two
+    // observations triangulate, Z (m x R b) = -(m x t), where the MAP lies; the prior still counts.
+    const Eigen::Vector3d b(s_(0), s_(1), 1.0), mh(m->x(), m->y(), 1.0);
+    const Eigen::Vector3d a = mh.cross(inc.R * b), c = mh.cross(inc.t);
+    const double Z = -a.dot(c) / a.squaredNorm();
+    Eigen::Vector4d s_try;
+    Mat4W G_try;
+    Vec11 w_try = w;
+    w_try(2) = -std::log(Z);
+    if (Z > 0 && std::isfinite(w_try(2)) && predict(inc, w_try, s_try, &G_try)) {
+      w = w_try;
+      s_new = s_try;
+      G = G_try;
+    }
+  }
   for (int it = 0; it < o_.max_iterations; ++it) {
     const Eigen::Matrix<double, 2, kW> H = G.topRows<2>();
     Eigen::Matrix<double, kW, 2> PHt;

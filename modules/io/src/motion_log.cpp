@@ -63,6 +63,7 @@ MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw
   const fs::path folder = fs::path(path).parent_path();
 
   MotionLog log;
+  log.yaw_column = c_yaw.has_value();
   std::vector<std::size_t> lines;
   while (csv.next()) {
     MotionSample s;

@@ -62,6 +62,7 @@ struct MotionLog {
   std::vector<MotionSample> samples; //!< sorted by frame, no duplicates
   std::vector<std::string> images;   //!< same size as samples when the `image` column exists (paths
                                      //!< resolved against the CSV's folder), else empty
+  bool yaw_column = true;            //!< whether the yaws were read from a `yaw` column (else fixed)
   /*! \brief The sample of `frame`, or nullptr when the log has no such frame. */
   const MotionSample *find(long frame) const;
   /*! \brief Index of `frame` in samples, or -1. */
