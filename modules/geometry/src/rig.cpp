@@ -41,6 +41,7 @@ YawRig::YawRig(const vpHomogeneousMatrix &vMc0)
     throw Error("camera pose: not a finite pose");
   if (!(((v_R0_.transpose() * v_R0_) - Eigen::Matrix3d::Identity()).norm() < 1e-6) || !(v_R0_.determinant() > 0))
     throw Error("camera pose: the rotation is not a rotation matrix");
+  axis_aligned_ = v_R0_ == Eigen::Matrix3d::Identity();
 }
 
 vpHomogeneousMatrix YawRig::vMc(double yaw) const

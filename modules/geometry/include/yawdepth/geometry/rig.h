@@ -120,6 +120,8 @@ public:
   const Eigen::Vector3d &cameraOffset() const { return v_t0_; }
   /*! \brief Orientation \f$ R_0 \f$ of the camera in the vision frame at yaw 0 (identity for `camera_offset`). */
   const Eigen::Matrix3d &cameraRotation() const { return v_R0_; }
+  /*! \brief Whether the camera's axes are those of the vision frame at yaw 0 (\f$ R_0 = I \f$, the paper's rig). */
+  bool axisAligned() const { return axis_aligned_; }
 
   /*!
     \brief Pose of the camera in the vision frame, eq. (1) (with \f$ R_0 = I \f$ in the paper):
@@ -164,6 +166,7 @@ public:
 private:
   Eigen::Vector3d v_t0_;
   Eigen::Matrix3d v_R0_ = Eigen::Matrix3d::Identity();
+  bool axis_aligned_ = true;
 };
 
 /*! \brief Pose of the vision frame in the world: \f$ {}^wT_v = [R_y(h) \;|\; (x, y, z)] \f$, or the 6-DoF pose. */
@@ -199,7 +202,10 @@ template <typename T> struct IncrementPerturbation {
   \f[ R = R_0^T R_y(\theta_c)^T \Delta R^T R_y(\theta_p) R_0,\quad
       t = R_0^T \left(R_y(\theta_c)^T \Delta R^T (R_y(\theta_p) t_0 - d) - t_0\right) \f]
   which for a planar log and \f$ R_0 = I \f$ is \f$ R = R_y(\theta_p - \Delta h - \theta_c) \f$,
-  \f$ t = R_y(\theta_c)^T R_y(\Delta h)^T (R_y(\theta_p) t_0 - d) - t_0 \f$.
+  \f$ t = R_y(\theta_c)^T R_y(\Delta h)^T (R_y(\theta_p) t_0 - d) - t_0 \f$, computed so (every
+  rotation about +Y) when both rows are planar and the rig is axis-aligned: a planar log's rotation
+  noise is its heading, `p.d_rotation.y()`; the other two components are not part of its model and
+  are ignored there.
 */
 template <typename T>
 void relativeMotion(const YawRig &rig, const MotionSample &prev, const MotionSample &cur,
@@ -212,6 +218,12 @@ void relativeMotion(const YawRig &rig, const MotionSample &prev, const MotionSam
   const T yc = T(cur.yaw) + p.d_yaw_cur;
   const Eigen::Vector3d &v_t0 = rig.cameraOffset();
   const Eigen::Matrix<T, 3, 1> t0(T(v_t0.x()), T(v_t0.y()), T(v_t0.z()));
+  if (!prev.six_dof && !cur.six_dof && rig.axisAligned()) { // the paper's planar chain, cheaper
+    const T dh = T(cur.heading - prev.heading) + p.d_rotation(1);
+    R = rotY<T>(yp - dh - yc);
+    t = rotY<T>(yc).transpose() * (rotY<T>(dh).transpose() * (rotY<T>(yp) * t0 - d)) - t0;
+    return;
+  }
   const Eigen::Matrix3d dR0 = Rp.transpose() * cur.rotation();
   const Eigen::Matrix<T, 3, 3> dR = dR0.cast<T>() * expSO3<T>(p.d_rotation);
   const Eigen::Matrix<T, 3, 3> R0 = rig.cameraRotation().cast<T>();
