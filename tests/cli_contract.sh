@@ -249,6 +249,18 @@ if [ "$(rc_of "$W/franka")" -eq 0 ] && [ "$res" = OK ]; then pass; else
 grep -q "^Distortion model: k1" "$W/franka.out" && grep -q "on views left out" "$W/franka.out" && \
   grep -q "^Projection uncertainty" "$W/franka.out" && pass || fail "calibrate-camera: model choice or uncertainty not printed"
 [ "$(ls "$W/franka_debug" | wc -l)" -eq 8 ] && pass || fail "calibrate-camera --debug-dir: $(ls "$W/franka_debug" | wc -l) pictures for 8 images"
+# Hand-eye calibration from the arm's poses (motion.csv: rMe per photo): ViSP's published eMc
+# (0.0577148, -0.0339261, -0.0422745) within 5 mm, and the rig file it writes is a camera_pose.
+run "$W/handeye" calibrate-rig --hand-eye eye-in-hand --camera "$W/franka_cam.yaml" --motion "$FR/motion.csv" \
+    --pattern chessboard:9x6:0.0236 --out "$W/eMc.yaml"
+res=$(awk -F'[][, ]+' '/^camera_pose:/ { dx = $2 - 0.0577148; dy = $3 + 0.0339261; dz = $4 + 0.0422745;
+        d = sqrt(dx * dx + dy * dy + dz * dz); if (d < 0.005) print "OK"; else print "distance " d }' "$W/eMc.yaml")
+if [ "$(rc_of "$W/handeye")" -eq 0 ] && [ "$res" = OK ]; then pass; else
+  fail "calibrate-rig --hand-eye on the franka photos: exit $(rc_of "$W/handeye"): $res $(first "$W/handeye.err")"; fi
+run "$W/handeye_planar" calibrate-rig --hand-eye eye-in-hand --camera "$W/franka_cam.yaml" --motion "$W/sim_xml_front/motion.csv" \
+    --pattern chessboard:9x6:0.0236 --out "$W/eMc2.yaml"
+[ "$(rc_of "$W/handeye_planar")" -ne 0 ] && grep -q "image\|6-DoF" "$W/handeye_planar.err" && [ ! -e "$W/eMc2.yaml" ] && pass ||
+  fail "calibrate-rig --hand-eye with a planar log: exit $(rc_of "$W/handeye_planar"): $(first "$W/handeye_planar.err")"
 run "$W/franka_load" simulate --camera "$W/franka_cam.yaml" --rig "$RIG" --out-dir "$W/franka_sim" --frames 2
 [ "$(rc_of "$W/franka_load")" -eq 0 ] && pass || fail "the calibrated franka camera does not load: $(first "$W/franka_load.err")"
 

@@ -15,6 +15,7 @@
 #include <unistd.h>
 #include <opencv2/calib3d.hpp>
 #include <yawdepth/calibration/camera_calibration.h>
+#include <yawdepth/calibration/hand_eye.h>
 #include <yawdepth/calibration/rig_calibration.h>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
@@ -583,4 +584,168 @@ TEST_CASE("write rendered calibration images for the command line", "[.dump]")
     std::snprintf(row, sizeof row, "%zu,0,0,0,0,%.17g,%s\n", i, readings[i], name);
     csv << row;
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hand-eye calibration.
+
+namespace {
+
+constexpr double kHandEyePx = 0.3; // corner noise of the synthetic views (px)
+
+/* Synthetic hand-eye views: the hand at poses around the board, corners projected with noise. */
+std::vector<HandEyeView> handEyeViews(const CameraModel &camera, const BoardLayout &board, HandEyeSetup setup,
+                                      const Eigen::Isometry3d &X, const Eigen::Isometry3d &Y, int n,
+                                      std::uint64_t seed, bool single_axis = false)
+{
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::normal_distribution<double> g(0.0, kHandEyePx);
+  std::vector<HandEyeView> views;
+  for (int i = 0; i < n; ++i) {
+    // The camera looks at the board centre from 0.5 m, from directions within 30 degrees.
+    const Eigen::Vector3d o_centre(0.1, 0.06, 0.0);
+    const Eigen::Vector3d dir =
+        (Eigen::Vector3d(0, 0, -1) + (single_axis ? Eigen::Vector3d(0.5 * U(rng), 0, 0)
+                                                  : Eigen::Vector3d(0.5 * U(rng), 0.5 * U(rng), 0)))
+            .normalized();
+    const Eigen::Vector3d c = o_centre + 0.5 * dir;
+    const Eigen::Vector3d z = (o_centre - c).normalized();
+    Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+    const Eigen::Vector3d y = z.cross(x);
+    Eigen::Isometry3d oMc = Eigen::Isometry3d::Identity();
+    oMc.linear() << x, y, z;
+    oMc.linear() = oMc.linear() * Eigen::AngleAxisd(single_axis ? 0.0 : 0.4 * U(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    oMc.translation() = c;
+    const Eigen::Isometry3d cMo = oMc.inverse();
+    // cMo = X^-1 A Y: A = X cMo Y^-1 is eMr (eye-in-hand) or rMe (eye-to-hand).
+    const Eigen::Isometry3d A = X * cMo * Y.inverse();
+    const Eigen::Isometry3d rMe = setup == HandEyeSetup::EyeInHand ? A.inverse() : A;
+    // The kinematics report the hand pose with errors: 1 mm and 0.1 deg per axis (HandEyeOptions).
+    std::normal_distribution<double> kin(0.0, 1.0);
+    Eigen::Isometry3d err = Eigen::Isometry3d::Identity();
+    err.linear() = expSO3<double>(Eigen::Vector3d(kin(rng), kin(rng), kin(rng)) * (0.1 * M_PI / 180));
+    err.translation() = 1e-3 * Eigen::Vector3d(kin(rng), kin(rng), kin(rng));
+    const Eigen::Isometry3d rMe_measured = rMe * err;
+    HandEyeView v;
+    v.rMe = toVisp(rMe_measured.linear(), rMe_measured.translation());
+    v.name = "view " + std::to_string(i);
+    for (const auto &f : board.features()) {
+      const Eigen::Vector3d P = cMo * f.second;
+      const Eigen::Vector2d uv = camera.project(P.head<2>() / P.z());
+      v.features.push_back({f.first, uv.x() + g(rng), uv.y() + g(rng)});
+    }
+    views.push_back(v);
+  }
+  return views;
+}
+
+Eigen::Isometry3d isoOf(const vpHomogeneousMatrix &M) { return toIsometry(M); }
+
+} // namespace
+
+TEST_CASE("hand-eye: eye-in-hand and eye-to-hand recover the camera pose within its honest sigma", "[calibration][handeye]")
+{
+  const CameraModel camera =
+      CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
+  const BoardLayout board = chessboard(9, 6, 0.0236);
+  for (HandEyeSetup setup : {HandEyeSetup::EyeInHand, HandEyeSetup::EyeToHand}) {
+    // X: eMc like the franka's (eye-in-hand), or a camera 1.2 m from the base (eye-to-hand).
+    const Eigen::Isometry3d X = isoOf(setup == HandEyeSetup::EyeInHand
+                                          ? vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818)
+                                          : vpHomogeneousMatrix(1.2, 0.1, 0.5, 1.9, 0.1, -0.4));
+    const Eigen::Isometry3d Y = isoOf(setup == HandEyeSetup::EyeInHand
+                                          ? vpHomogeneousMatrix(0.536, 0.124, 0.0916, 2.226, -2.214, 0.0207)
+                                          : vpHomogeneousMatrix(0.02, -0.01, 0.12, 0.1, 3.0, 0.2));
+    double z2 = 0; // normalised squared errors of the camera pose's translation over the seeds
+    int count = 0;
+    for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+      const std::vector<HandEyeView> views = handEyeViews(camera, board, setup, X, Y, 10, seed);
+      HandEyeOptions opt;
+      opt.setup = setup;
+      const HandEyeCalibration cal = calibrateHandEye(camera, board, views, opt);
+      CHECK(cal.views == 10);
+      CHECK(cal.points == 540);
+      CHECK(cal.rms_px < 1.2 * kHandEyePx); // corner noise; the hand poses take up a little of it
+      CHECK(cal.rms_px <= cal.initial_rms_px + 1e-9);
+      const Eigen::Isometry3d E = isoOf(cal.camera_pose).inverse() * X;
+      const double dt = (isoOf(cal.camera_pose).translation() - X.translation()).norm();
+      const double dr = Eigen::AngleAxisd(E.linear()).angle();
+      CHECK(dt < 4e-3);          // metres
+      CHECK(dr < 0.4 * M_PI / 180); // radians
+      for (int k = 0; k < 3; ++k) {
+        const double e = isoOf(cal.camera_pose).translation()(k) - X.translation()(k);
+        REQUIRE(cal.camera_pose_sigma(k) > 0);
+        z2 += (e / cal.camera_pose_sigma(k)) * (e / cal.camera_pose_sigma(k));
+        ++count;
+      }
+      // The board pose too.
+      CHECK((isoOf(cal.target_pose).translation() - Y.translation()).norm() < 6e-3);
+      // The rig file: camera_pose reads back as X (the vision frame is the hand / the base).
+      const std::string yaml = handEyeRigYaml(cal);
+      CHECK(yaml.find("camera_pose: [") != std::string::npos);
+      CHECK(yaml.find("camera_pose_sigma: [") != std::string::npos);
+    }
+    // Honest sigma: the RMS of error / sigma over 15 coordinates is near 1 (loose: 15 samples).
+    const double ratio = std::sqrt(z2 / count);
+    INFO("setup " << static_cast<int>(setup) << ": RMS(error / sigma) " << ratio);
+    CHECK(ratio > 0.4);
+    CHECK(ratio < 2.0);
+  }
+}
+
+TEST_CASE("hand-eye: refuses too few views, single-axis rotations and poses that do not fit", "[calibration][handeye]")
+{
+  const CameraModel camera = CameraModel::brown(600, 600, 320, 240, {0, 0, 0, 0}, 640, 480);
+  const BoardLayout board = chessboard(9, 6, 0.0236);
+  const Eigen::Isometry3d X = isoOf(vpHomogeneousMatrix(0.05, -0.03, -0.04, 0.0, 0.0, 1.57));
+  const Eigen::Isometry3d Y = isoOf(vpHomogeneousMatrix(0.5, 0.1, 0.1, 2.2, -2.2, 0.0));
+  const auto views = handEyeViews(camera, board, HandEyeSetup::EyeInHand, X, Y, 8, 3);
+  const std::vector<HandEyeView> two(views.begin(), views.begin() + 2);
+  CHECK_THROWS_WITH(calibrateHandEye(camera, board, two), Catch::Contains("too few views"));
+  const auto flat = handEyeViews(camera, board, HandEyeSetup::EyeInHand, X, Y, 8, 3, true);
+  CHECK_THROWS_WITH(calibrateHandEye(camera, board, flat), Catch::Contains("single axis"));
+  // The robot poses of another run: shuffled between the images.
+  std::vector<HandEyeView> shuffled = views;
+  for (std::size_t i = 0; i < shuffled.size(); ++i)
+    shuffled[i].rMe = views[(i + 3) % views.size()].rMe;
+  CHECK_THROWS_WITH(calibrateHandEye(camera, board, shuffled), Catch::Contains("failed"));
+  CHECK_THROWS_AS(handEyeSetupFromString("eye-on-hand"), Error);
+}
+
+TEST_CASE("hand-eye on the real franka photos: ViSP's published eMc within millimetres", "[calibration][handeye][real]")
+{
+  // 8 real photos from a Panda arm and its forward kinematics (tests/data/franka-eye-in-hand);
+  // the camera calibrated by yawdepth on the same photos (k1 k2 p1 p2, as calibrate-camera chooses).
+  const std::string dir = std::string(YAWDEPTH_TEST_DATA_DIR) + "/franka-eye-in-hand/";
+  const BoardLayout board = chessboard(9, 6, 0.0236);
+  const CameraModel camera =
+      CameraModel::brown(601.67, 602.05, 324.41, 239.61, {0.04600, 0.11010, -0.003922, 0.000321}, 640, 480);
+  const MotionLog motion = readMotionCsv(dir + "motion.csv");
+  REQUIRE(motion.samples.size() == 8);
+  std::vector<HandEyeView> views;
+  PatternDetector det(board.pattern);
+  det.setCamera(camera);
+  for (std::size_t i = 0; i < motion.samples.size(); ++i) {
+    const FrameDetection d = det.detect(readGrayImage(motion.images[i]), motion.samples[i].frame);
+    REQUIRE(d.found);
+    views.push_back({wMv(motion.samples[i]), d.features, motion.images[i]});
+  }
+  const HandEyeCalibration cal = calibrateHandEye(camera, board, views);
+  const vpHomogeneousMatrix visp(0.0577148, -0.0339261, -0.0422745, 0.00178253, 0.00917657, 1.58178);
+  const Eigen::Isometry3d E = isoOf(cal.camera_pose).inverse() * isoOf(visp);
+  const double dt = (isoOf(cal.camera_pose).translation() - isoOf(visp).translation()).norm();
+  const double dr = Eigen::AngleAxisd(E.linear()).angle() * 180 / M_PI;
+  const Eigen::Isometry3d E0 = isoOf(cal.initial_camera_pose).inverse() * isoOf(visp);
+  std::printf("franka hand-eye: eMc %.2f mm and %.3f deg from ViSP's published eMc (start: %.2f mm, %.3f deg); RMS %.3f px "
+              "(start %.3f)\n",
+              1e3 * dt, dr, 1e3 * (isoOf(cal.initial_camera_pose).translation() - isoOf(visp).translation()).norm(),
+              Eigen::AngleAxisd(E0.linear()).angle() * 180 / M_PI, cal.rms_px, cal.initial_rms_px);
+  std::printf("  largest hand-pose correction %.2f mm, %.3f deg\n", cal.pose_correction_mm, cal.pose_correction_deg);
+  CHECK(cal.views == 8);
+  CHECK(dt < 5e-3);
+  CHECK(dr < 0.5);
+  // ViSP's published board pose rMo within a few millimetres too.
+  const vpHomogeneousMatrix rMo(0.5364858483, 0.123945742, 0.09155742609, 2.22636085, -2.213916548, 0.02071766945);
+  CHECK((isoOf(cal.target_pose).translation() - isoOf(rMo).translation()).norm() < 5e-3);
 }

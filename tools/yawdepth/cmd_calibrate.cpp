@@ -12,7 +12,9 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <visp3/core/vpPoseVector.h>
 #include <yawdepth/calibration/camera_calibration.h>
+#include <yawdepth/calibration/hand_eye.h>
 #include <yawdepth/calibration/rig_calibration.h>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
@@ -72,6 +74,8 @@ struct CameraArgs {
 
 struct RigArgs {
   std::string camera, camera_name, motion, pattern, out, tags = "1x1";
+  std::string hand_eye; // --hand-eye eye-in-hand|eye-to-hand, or empty for the yaw rig
+  const CLI::Option *max_rms_option = nullptr;
   std::vector<double> initial_offset;
   double initial_yaw_offset = 0, min_yaw_span_deg = 20, tag_gap = -1, max_rms_px = RigCalibrationOptions().max_rms_px;
   int first_tag_id = 0;
@@ -245,18 +249,67 @@ Runner addCalibrateCamera(CLI::App &app)
   };
 }
 
+namespace {
+
+/* calibrate-rig --hand-eye: the fit, the rig file, the report. */
+int runHandEye(const RigArgs &a, const CameraModel &camera, const BoardLayout &board,
+               const std::vector<HandEyeView> &views)
+{
+  HandEyeOptions opt;
+  opt.setup = handEyeSetupFromString(a.hand_eye);
+  if (a.max_rms_option != nullptr && a.max_rms_option->count() > 0)
+    opt.max_rms_px = a.max_rms_px;
+  const HandEyeCalibration cal = calibrateHandEye(camera, board, views, opt);
+  writeFileAtomically(a.out, handEyeRigYaml(cal));
+  const bool in_hand = opt.setup == HandEyeSetup::EyeInHand;
+  const vpPoseVector X(cal.camera_pose), X0(cal.initial_camera_pose), Y(cal.target_pose);
+  const Eigen::Matrix<double, 6, 1> &sx = cal.camera_pose_sigma;
+  auto pose = [](const vpPoseVector &p) {
+    std::ostringstream s;
+    s << "t = (" << fixed(1000 * p[0], 2) << ", " << fixed(1000 * p[1], 2) << ", " << fixed(1000 * p[2], 2)
+      << ") mm, theta-u = (" << fixed(p[3], 5) << ", " << fixed(p[4], 5) << ", " << fixed(p[5], 5) << ") rad";
+    return s.str();
+  };
+  std::cout << "calibrate-rig --hand-eye " << a.hand_eye << ": " << cal.views << " views, " << cal.points
+            << " corners\n";
+  for (const std::string &skip : cal.skipped)
+    std::cerr << "calibrate-rig: " << skip << " (view left out)\n";
+  std::cout << (in_hand ? "eMc" : "rMc") << " (camera pose, 1-sigma): " << pose(X) << "\n";
+  std::cout << "  +- (" << fixed(1000 * sx(0), 2) << ", " << fixed(1000 * sx(1), 2) << ", " << fixed(1000 * sx(2), 2)
+            << ") mm, (" << fixed(sx(3) / kDeg, 3) << ", " << fixed(sx(4) / kDeg, 3) << ", " << fixed(sx(5) / kDeg, 3)
+            << ") deg\n";
+  std::cout << "vpHandEyeCalibration start: " << pose(X0) << "\n";
+  std::cout << (in_hand ? "rMo" : "eMo") << " (board pose): " << pose(Y) << "\n";
+  std::cout << "RMS reprojection error: " << fixed(cal.rms_px, 4) << " px (" << fixed(cal.initial_rms_px, 4)
+            << " px at the start); per view:";
+  for (double r : cal.view_rms_px)
+    std::cout << " " << fixed(r, 2);
+  std::cout << "\nwrote " << a.out << "\n";
+  return 0;
+}
+
+} // namespace
+
 Runner addCalibrateRig(CLI::App &app)
 {
   auto a = std::make_shared<RigArgs>();
   CLI::App *sub = app.add_subcommand(
       "calibrate-rig",
       "Calibrate the yaw rig from images of a static board at several yaw readings: camera offset from the yaw "
-      "axis (Lb), yaw axis direction, zero of the yaw reading, with uncertainties; writes the rig file.");
+      "axis (Lb), yaw axis direction, zero of the yaw reading, with uncertainties; writes the rig file. With "
+      "--hand-eye: the camera's pose on a robot arm (eMc, or rMc for eye-to-hand) from a 6-DoF motion log of the "
+      "hand's poses, written as the rig file's camera_pose.");
   sub->add_option("--camera", a->camera, "Calibrated camera file: ViSP XML or OpenCV YAML/XML")->required();
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
   sub->add_option("--motion", a->motion,
-                  "Motion log CSV with the yaw readings and an image column (frame,x,y,z,heading,yaw,image)")
+                  "Motion log CSV with the yaw readings and an image column (frame,x,y,z,heading,yaw,image); with "
+                  "--hand-eye, the hand's pose in the robot base per image (frame,tx,ty,tz,tux,tuy,tuz,image)")
       ->required();
+  CLI::Option *hand_eye =
+      sub->add_option("--hand-eye", a->hand_eye,
+                      "Hand-eye calibration instead of the yaw rig: eye-in-hand (camera on the hand, board fixed) "
+                      "or eye-to-hand (camera fixed, board on the hand)")
+          ->check(CLI::IsMember({"eye-in-hand", "eye-to-hand"}));
   sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE or apriltag:FAMILY:SIZE (metres)")->required();
   sub->add_option("--out", a->out, "Output rig file (YAML)")->required();
   sub->add_option("--initial-offset", a->initial_offset,
@@ -274,13 +327,16 @@ Runner addCalibrateRig(CLI::App &app)
   sub->add_option("--min-yaw-span", a->min_yaw_span_deg, "Smallest accepted span of the yaw readings (degrees)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
-  sub->add_option("--max-rms-px", a->max_rms_px,
-                  "A fit with a larger reprojection RMS failed and writes nothing (px)")
-      ->check(CLI::PositiveNumber & Finite)
-      ->capture_default_str();
+  a->max_rms_option = sub->add_option("--max-rms-px", a->max_rms_px,
+                                      "A fit with a larger reprojection RMS failed and writes nothing (px; with "
+                                      "--hand-eye the default is 20: arm kinematics err by millimetres)")
+                           ->check(CLI::PositiveNumber & Finite)
+                           ->capture_default_str();
   sub->add_flag("--quiet", a->quiet, "No per-frame detection messages");
   addInputOptions(sub, a->input);
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
+  for (const char *rig_only : {"--initial-offset", "--initial-yaw-offset", "--board-square", "--fixed-axis", "--min-yaw-span"})
+    hand_eye->excludes(rig_only);
 
   return [a]() {
     const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
@@ -288,6 +344,9 @@ Runner addCalibrateRig(CLI::App &app)
     const MotionLog motion = readMotionCsv(a->motion, std::nullopt, a->input.limits());
     if (motion.images.empty())
       throw Error(a->motion + ": no 'image' column: calibrate-rig needs the image of each frame");
+    if (!a->hand_eye.empty() && !motion.samples.front().six_dof)
+      throw Error(a->motion + ": --hand-eye needs the hand's 6-DoF poses (columns tx,ty,tz,tux,tuy,tuz), not a planar "
+                  "log");
     {
       std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};
       for (const std::string &image : motion.images)
@@ -298,6 +357,7 @@ Runner addCalibrateRig(CLI::App &app)
     PatternDetector detector(board.pattern);
     detector.setCamera(camera);
     std::vector<RigView> views;
+    std::vector<HandEyeView> hand_eye_views;
     std::vector<std::string> failures;
     for (std::size_t i = 0; i < motion.samples.size(); ++i) {
       const long frame = motion.samples[i].frame;
@@ -316,6 +376,7 @@ Runner addCalibrateRig(CLI::App &app)
         continue;
       }
       views.push_back({motion.samples[i], d.features});
+      hand_eye_views.push_back({wMv(motion.samples[i]), d.features, motion.images[i]});
     }
     if (views.empty())
       throw Error("the pattern " + board.pattern.toString() + " was not found in any of the " +
@@ -324,6 +385,9 @@ Runner addCalibrateRig(CLI::App &app)
     if (!a->quiet)
       for (const std::string &f : failures)
         std::cerr << "calibrate-rig: " << f << " (frame skipped)\n";
+
+    if (!a->hand_eye.empty())
+      return runHandEye(*a, camera, board, hand_eye_views);
 
     RigCalibrationOptions opt;
     if (!a->initial_offset.empty()) {

@@ -51,8 +51,8 @@ Eigen::Matrix3d rotZ(double a)
 Eigen::Isometry3d isoWMV(const MotionSample &s)
 {
   Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
-  M.linear() = rotY(s.heading);
-  M.translation() = Eigen::Vector3d(s.x, s.y, s.z);
+  M.linear() = s.rotation(); // planar (heading) or 6-DoF rows alike
+  M.translation() = s.position();
   return M;
 }
 

@@ -121,7 +121,7 @@ void DepthProvider::refresh(long id)
 void DepthProvider::update(const MotionSample &odometry, const std::vector<std::pair<long, vpImagePoint>> &points)
 {
   if (!std::isfinite(odometry.x) || !std::isfinite(odometry.y) || !std::isfinite(odometry.z) ||
-      !std::isfinite(odometry.heading) || !std::isfinite(odometry.yaw))
+      !std::isfinite(odometry.heading) || !std::isfinite(odometry.yaw) || !odometry.theta_u.allFinite())
     throw Error("depth provider: odometry must be finite");
   std::set<long> seen;
   for (const auto &p : points)
@@ -157,6 +157,18 @@ void DepthProvider::update(const MotionSample &odometry, const std::vector<std::
   for (auto &kv : state_)
     if (!seen.count(kv.first))
       refresh(kv.first);
+}
+
+void DepthProvider::update(const vpHomogeneousMatrix &wMv, const std::vector<std::pair<long, vpImagePoint>> &points,
+                           double yaw)
+{
+  for (unsigned i = 0; i < 3; ++i)
+    for (unsigned j = 0; j < 4; ++j)
+      if (!std::isfinite(wMv[i][j]))
+        throw Error("depth provider: the pose must be finite");
+  if (!wMv.isAnHomogeneousMatrix(1e-6))
+    throw Error("depth provider: the pose's rotation is not a rotation matrix");
+  update(MotionSample::fromPose(0, wMv, yaw), points);
 }
 
 FeatureDepth DepthProvider::info(long id) const

@@ -18,8 +18,9 @@ namespace detail {
 */
 class QuietVisp {
 public:
-  /*! \brief Take the lock, then silence the standard streams. */
-  QuietVisp();
+  /*! \brief Take the lock, then silence the standard streams; with `c_stdout`, also C's standard
+      output (file descriptor 1: vpHandEyeCalibration prints with printf). */
+  explicit QuietVisp(bool c_stdout = false);
   /*! \brief Restore the standard streams, then release the lock. */
   ~QuietVisp();
   QuietVisp(const QuietVisp &) = delete;
@@ -28,6 +29,7 @@ public:
 private:
   std::unique_lock<std::mutex> lock_;
   std::streambuf *cout_, *cerr_, *clog_;
+  int saved_stdout_ = -1;
 };
 
 } // namespace detail

@@ -109,13 +109,25 @@ public:
 
   /*!
     \brief One control period: the odometry and the observed pixels of the tracked points.
-    \param odometry Pose of the vision frame in the odometry's world frame (x, y, z, heading) and
-           the camera's yaw reading; `odometry.frame` is ignored (the provider counts periods).
+    \param odometry Pose of the vision frame in the odometry's world frame (x, y, z, heading, or
+           a 6-DoF MotionSample) and the camera's yaw reading; `odometry.frame` is ignored (the
+           provider counts periods).
     \param points (id, observed pixel) of each tracked point, at most one per id. Points may come
            and go; a point not seen for `max_missing_frames` estimator frames is forgotten.
     Throws yawdepth::Error for a non-finite odometry or a repeated id.
   */
   void update(const MotionSample &odometry, const std::vector<std::pair<long, vpImagePoint>> &points);
+
+  /*!
+    \brief One control period of any robot: the pose of the vision frame in a fixed world frame as
+    ViSP gives it (an arm's end-effector in its base, e.g. from vpRobot::getPosition(), or the
+    camera itself with an identity `camera_pose`, e.g. vpSimulatorCamera::getPosition()), a 6-DoF
+    sample with the rig's noise model `sigma_odom` and `sigma_rot` per update.
+    \param wMv Pose of the vision frame in the world. \param points as above.
+    \param yaw Pan reading when the vision frame carries a pan joint (rad), else 0.
+  */
+  void update(const vpHomogeneousMatrix &wMv, const std::vector<std::pair<long, vpImagePoint>> &points,
+              double yaw = 0.0);
 
   /*! \brief Depth to use for feature `id` (m): see the file. Always in [min_depth, max_depth]. */
   double depth(long id) const;
