@@ -150,6 +150,51 @@ TEST_CASE("depth provider: converges to the true depth on a side-view sequence",
   CHECK(converged >= 6);
 }
 
+TEST_CASE("depth provider: a 6-DoF camera (vpHomogeneousMatrix poses, an arm orbiting its target)", "[servo][6dof]")
+{
+  const CameraModel camera = testCamera();
+  const YawRig rig(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818)); // a hand-eye mount
+  SceneOptions so;
+  so.frames = 30;
+  so.points = 12;
+  so.min_depth = 0.5;
+  so.max_depth = 0.7;
+  so.vision_poses = armTrajectory(rig, ArmPath::Orbit, so.frames, 0.6, 7);
+  so.noise = NoiseModel{0.2, 0.0003, 0.0, 0.0, 0.0003};
+  so.seed = 7;
+  const Scene scene = simulateScene(camera, rig, so);
+  REQUIRE(scene.measured.front().six_dof);
+  DepthProviderOptions o;
+  o.noise = NoiseModel{0.2, 0.0005, 0.0, 0.0, 0.0005};
+  DepthProvider p(camera, rig, o);
+  const auto frames = framesOf(scene);
+  for (std::size_t r = 0; r < scene.measured.size(); ++r) {
+    const auto it = frames.find(scene.measured[r].frame);
+    // The pose as ViSP gives it (vpRobot::getPosition): a homogeneous matrix, no pan joint.
+    p.update(wMv(scene.measured[r]),
+             it == frames.end() ? std::vector<std::pair<long, vpImagePoint>>{} : it->second);
+  }
+  const std::size_t last = scene.truth.size() - 1;
+  int converged = 0;
+  for (const Track &t : scene.tracks) {
+    if (t.observations.back().frame != scene.truth[last].frame)
+      continue;
+    const double Z_true = scene.cameraPoint(rig, t.id, last).z();
+    const FeatureDepth f = p.info(t.id);
+    INFO("feature " << t.id << " true " << Z_true << " depth " << f.depth << " sigma " << f.sigma);
+    if (!f.converged)
+      continue;
+    CHECK(std::abs(f.depth - Z_true) < 3 * f.sigma + 1e-6);
+    CHECK(std::abs(f.depth - Z_true) / Z_true < 0.03);
+    ++converged;
+  }
+  CHECK(converged >= 6);
+  // A pose that is not a rigid motion is refused.
+  vpHomogeneousMatrix bad;
+  bad[0][0] = 2.0;
+  CHECK_THROWS_AS(p.update(bad, {}), Error);
+}
+
 TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion", "[servo]")
 {
   const CameraModel camera = testCamera();

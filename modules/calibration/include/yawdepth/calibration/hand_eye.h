@@ -90,6 +90,7 @@ struct HandEyeCalibration {
   \param camera The calibrated camera (its distortion is used). \param board The board.
   \param views At least 3 views with the board, from robot poses whose rotations differ about at
          least two axes (otherwise X is not determined: an error says so).
+  \param options The setup, the noise model and the refusal thresholds.
   Throws yawdepth::Error when too few views are usable, when the rotations are degenerate, or when
   the fit fails (RMS above `max_rms_px`).
 */

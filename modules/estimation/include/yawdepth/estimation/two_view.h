@@ -108,6 +108,8 @@ constexpr int kTwoViewInputs = 12;
   \brief The diagonal input covariance used by the two-view estimators, in the order
   (u_prev, v_prev, u_cur, v_cur, d_x, d_y, d_z, rot_x, rot_y, rot_z, yaw_prev, yaw_cur) (the
   increment's perturbations of yawdepth::IncrementPerturbation; rot_y is a planar log's heading).
+  \param noise The noise model. \param increments Motion-log rows between the two frames (the
+  odometry's variances grow with it).
   \param six_dof whether the increment comes from a 6-DoF log (see incrementRotationSigma()).
 */
 Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel &noise, int increments,

@@ -72,7 +72,11 @@ ArmPath armPathFromString(const std::string &word);
   \brief An arm-like 6-DoF trajectory: the camera always looks at a target `distance` metres ahead
   of its first pose (within a few degrees), the world frame being the first camera frame. Returns
   the vision frame's poses wMv for SceneOptions::vision_poses, through the rig's mount at `yaw`.
+  \param rig The camera mount (the camera's path is turned into the vision frame's through it).
+  \param path The kind of path. \param frames Number of poses. \param distance Distance of the
+  target from the first camera pose (m).
   \param seed Random perturbations (Random path, and a small look-at jitter on every path).
+  \param yaw The pan joint's angle (rad) at which the mount is taken.
 */
 std::vector<vpHomogeneousMatrix> armTrajectory(const YawRig &rig, ArmPath path, int frames, double distance,
                                                std::uint64_t seed, double yaw = 0.0);
