@@ -5,13 +5,14 @@
 */
 #include <yawdepth/calibration/hand_eye.h>
 
+#include "board_pose.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <sstream>
 #include <Eigen/Dense>
-#include <opencv2/calib3d.hpp>
 #include <visp3/core/vpPoseVector.h>
 #include <visp3/vision/vpHandEyeCalibration.h>
 #include <yawdepth/camera/quiet_visp.h>
@@ -176,11 +177,7 @@ HandEyeSetup handEyeSetupFromString(const std::string &word)
 HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout &board,
                                     const std::vector<HandEyeView> &views, const HandEyeOptions &options)
 {
-  std::map<long, Eigen::Vector3d> pts;
-  const bool tags = board.pattern.kind == PatternSpec::Kind::AprilTag;
-  for (const auto &f : board.features())
-    if (!tags || f.first % 5 != 0) // a tag's four corners, not its centre
-      pts[f.first] = f.second;
+  const std::map<long, Eigen::Vector3d> pts = calibration_detail::boardPoints(board);
 
   HandEyeCalibration out;
   out.setup = options.setup;
@@ -195,38 +192,12 @@ HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout
           throw Error(v.name + ": the robot pose is not finite");
     if (!v.rMe.isAnHomogeneousMatrix(1e-6))
       throw Error(v.name + ": the robot pose's rotation is not a rotation matrix");
-    std::vector<cv::Point3d> obj;
-    std::vector<cv::Point2d> norm;
     std::vector<Eigen::Vector3d> P;
     std::vector<Eigen::Vector2d> uv;
-    for (const auto &f : v.features) {
-      const auto it = pts.find(f.id);
-      Eigen::Vector2d m;
-      if (it == pts.end() || !camera.undistort(Eigen::Vector2d(f.u, f.v), m))
-        continue;
-      obj.emplace_back(it->second.x(), it->second.y(), it->second.z());
-      norm.emplace_back(m.x(), m.y());
-      P.push_back(it->second);
-      uv.emplace_back(f.u, f.v);
-    }
-    if (static_cast<int>(obj.size()) < std::max(4, options.min_points_per_view)) {
-      out.skipped.push_back(v.name + ": " + std::to_string(obj.size()) + " usable features");
+    Iso M;
+    if (!calibration_detail::boardPoseByPnP(camera, pts, v.features, options.min_points_per_view, M, P, uv)) {
+      out.skipped.push_back(v.name + ": " + std::to_string(P.size()) + " usable features, or no board pose");
       continue;
-    }
-    cv::Mat rvec, tvec;
-    const cv::Mat K = cv::Mat::eye(3, 3, CV_64F);
-    if (!cv::solvePnP(obj, norm, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_IPPE)) {
-      out.skipped.push_back(v.name + ": no board pose");
-      continue;
-    }
-    cv::solvePnP(obj, norm, K, cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
-    cv::Mat R;
-    cv::Rodrigues(rvec, R);
-    Iso M = Iso::Identity();
-    for (int a = 0; a < 3; ++a) {
-      for (int b = 0; b < 3; ++b)
-        M.linear()(a, b) = R.at<double>(a, b);
-      M.translation()(a) = tvec.at<double>(a);
     }
     const Iso rMe = toIso(v.rMe);
     // cMo_i = X^-1 A_i Y; ViSP's solver takes B_i X cMo_i = const with B_i = A_i^-1.

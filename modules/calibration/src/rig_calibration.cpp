@@ -5,6 +5,8 @@
 */
 #include <yawdepth/calibration/rig_calibration.h>
 
+#include "board_pose.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -146,48 +148,18 @@ void setBoard(Eigen::VectorXd &p, const Eigen::Isometry3d &M)
 RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board, const std::vector<RigView> &views,
                             const RigCalibrationOptions &options)
 {
-  std::map<long, Eigen::Vector3d> pts;
-  const bool tags = board.pattern.kind == PatternSpec::Kind::AprilTag;
-  for (const auto &f : board.features())
-    if (!tags || f.first % 5 != 0)
-      pts[f.first] = f.second;
+  const std::map<long, Eigen::Vector3d> pts = calibration_detail::boardPoints(board);
 
   Problem pb;
   pb.camera = &camera;
   std::vector<Eigen::Isometry3d> cMb0; // per view, from its own pose estimate
   std::vector<MotionSample> samples;
   for (const RigView &v : views) {
-    std::vector<cv::Point3d> obj;
-    std::vector<cv::Point2d> norm;
     std::vector<Eigen::Vector3d> P;
     std::vector<Eigen::Vector2d> uv;
-    for (const auto &f : v.features) {
-      auto it = pts.find(f.id);
-      if (it == pts.end())
-        continue;
-      Eigen::Vector2d m;
-      if (!camera.undistort(Eigen::Vector2d(f.u, f.v), m))
-        continue;
-      obj.emplace_back(it->second.x(), it->second.y(), it->second.z());
-      norm.emplace_back(m.x(), m.y());
-      P.push_back(it->second);
-      uv.emplace_back(f.u, f.v);
-    }
-    if (static_cast<int>(obj.size()) < std::max(4, options.min_points_per_view))
+    Eigen::Isometry3d M;
+    if (!calibration_detail::boardPoseByPnP(camera, pts, v.features, options.min_points_per_view, M, P, uv))
       continue;
-    cv::Mat rvec, tvec;
-    const cv::Mat K = cv::Mat::eye(3, 3, CV_64F);
-    if (!cv::solvePnP(obj, norm, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_IPPE))
-      continue;
-    cv::solvePnP(obj, norm, K, cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
-    cv::Mat R;
-    cv::Rodrigues(rvec, R);
-    Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
-    for (int a = 0; a < 3; ++a) {
-      for (int b = 0; b < 3; ++b)
-        M.linear()(a, b) = R.at<double>(a, b);
-      M.translation()(a) = tvec.at<double>(a);
-    }
     cMb0.push_back(M);
     samples.push_back(v.sample);
     pb.points.push_back(std::move(P));
