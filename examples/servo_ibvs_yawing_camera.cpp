@@ -167,7 +167,6 @@ int main(int argc, char **argv)
   }
   // The estimator's noise model: what the simulated robot's sensors have.
   o.provider.noise.sigma_px = std::max(o.sigma_px, 0.05);
-  o.provider.noise.sigma_odom = 0.0005;
   o.provider.noise.sigma_yaw = std::max(o.sigma_pan, 1e-4);
 
   // Optional ViSP display of the image plane.

@@ -6,9 +6,19 @@ build=$1 src=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 cmake --install "$build" --prefix "$tmp/prefix" >/dev/null
-cmake -S "$src/tests/consumer" -B "$tmp/build" -DCMAKE_PREFIX_PATH="$tmp/prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake -S "$src/tests/consumer" -B "$tmp/build" -DCMAKE_PREFIX_PATH="$tmp/prefix" -DCMAKE_BUILD_TYPE=Release \
+  -DYAWDEPTH_EXAMPLES_DIR="$src/examples" >/dev/null
 cmake --build "$tmp/build" >/dev/null
 "$tmp/build/consumer"
 test -x "$tmp/prefix/bin/yawdepth"
 "$tmp/prefix/bin/yawdepth" --help >/dev/null
-echo "1 passed, 0 failed"
+# The servo in a ViSP user's program, default options: estimated depth converges in at most 1.05x
+# the iterations of true depth, from the tutorial's start and from a random one.
+iterations() { "$tmp/build/servo_ibvs_4pts" --quiet "$@" | tail -1 | sed -n 's/^converged iterations=\([0-9]*\).*/\1/p'; }
+for pose in 0 5; do
+  t=$(iterations --depth true --pose "$pose")
+  e=$(iterations --depth estimated --pose "$pose")
+  [ -n "$t" ] && [ -n "$e" ] || { echo "servo_ibvs_4pts pose $pose: did not converge (true: '$t', estimated: '$e')" >&2; exit 1; }
+  [ $((100 * e)) -le $((105 * t)) ] || { echo "servo_ibvs_4pts pose $pose: $e iterations against $t with true depth" >&2; exit 1; }
+done
+echo "2 passed, 0 failed"

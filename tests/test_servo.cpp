@@ -2,6 +2,7 @@
 // Jacobian and a short simulated servo run. Every random input is seeded.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
@@ -299,4 +300,53 @@ TEST_CASE("servo: a short run converges with estimated depth, front and side", "
   t.max_iterations = 400;
   CHECK(runServoSimulation(t).converged);
   CHECK_THROWS_AS(servoDepthModeFromString("sensor"), Error);
+}
+
+TEST_CASE("depth provider: default noise model, the same accuracy whatever the control period", "[servo][6dof]")
+{
+  const CameraModel camera = testCamera();
+  const YawRig rig(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818));
+  constexpr double kPixelSigma = 0.3;
+  std::map<int, std::vector<double>> sigmas; // per frame count: each converged feature's relative sigma
+  for (int frames : {30, 120}) {
+    INFO(frames << " control periods over the same orbit");
+    SceneOptions so;
+    so.frames = frames;
+    so.points = 12;
+    so.min_depth = 0.5;
+    so.max_depth = 0.7;
+    so.vision_poses = armTrajectory(rig, ArmPath::Orbit, so.frames, 0.6, 11);
+    so.noise = servoNoiseModel(); // the simulated odometry drifts as the provider's default assumes
+    so.noise.sigma_px = kPixelSigma;
+    so.seed = 11;
+    const Scene scene = simulateScene(camera, rig, so);
+    DepthProvider p(camera, rig); // default options
+    const auto frames_of = framesOf(scene);
+    for (std::size_t r = 0; r < scene.measured.size(); ++r) {
+      const auto it = frames_of.find(scene.measured[r].frame);
+      p.update(wMv(scene.measured[r]), it == frames_of.end() ? std::vector<std::pair<long, vpImagePoint>>{} : it->second);
+    }
+    const std::size_t last = scene.truth.size() - 1;
+    for (const Track &t : scene.tracks) {
+      if (t.observations.back().frame != scene.truth[last].frame)
+        continue;
+      const double Z_true = scene.cameraPoint(rig, t.id, last).z();
+      const FeatureDepth f = p.info(t.id);
+      INFO("feature " << t.id << " true " << Z_true << " depth " << f.depth << " sigma " << f.sigma);
+      REQUIRE(f.converged);
+      CHECK(std::abs(f.depth - Z_true) < 4 * f.sigma);
+      sigmas[frames].push_back(f.sigma / f.depth);
+    }
+  }
+  REQUIRE(sigmas[30].size() >= 8);
+  REQUIRE(sigmas[120].size() >= 8);
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  // Four times as many periods over the same path: more pixels, the same odometry drift. With a
+  // per-period odometry noise the dense run would be twice as uncertain (sqrt(4) x the increments' noise).
+  INFO("median relative sigma: 30 periods " << median(sigmas[30]) << ", 120 periods " << median(sigmas[120]));
+  CHECK(median(sigmas[120]) <= 1.1 * median(sigmas[30]));
+  CHECK(median(sigmas[30]) < 0.05);
 }

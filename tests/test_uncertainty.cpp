@@ -2,6 +2,8 @@
 // and Monte Carlo agreement with the empirical spread in front, oblique and side views.
 #include <catch2/catch.hpp>
 
+#include <Eigen/Geometry>
+#include <limits>
 #include <random>
 #include <yawdepth/estimation/two_view.h>
 
@@ -159,4 +161,50 @@ TEST_CASE("predicted sigma_zc matches the Monte Carlo spread within 10 %", "[unc
       CHECK(std::abs(e0.sigmaZ() / spread - 1.0) < kMonteCarloRelTol);
     }
   }
+}
+
+TEST_CASE("odometry noise per metre and per radian: the same as per-increment noise of that size", "[uncertainty]")
+{
+  constexpr double kRoundOff = 1e-12;
+  for (const Case &c : kCases) {
+    INFO(c.name);
+    const Setup s = makeSetup(c);
+    const double distance = (s.cur.position() - s.prev.position()).norm();
+    const double angle = Eigen::AngleAxisd(s.prev.rotation().transpose() * s.cur.rotation()).angle();
+    // Distance-scaled terms only ...
+    TwoViewOptions scaled;
+    scaled.noise.sigma_odom = 0.0;
+    scaled.noise.sigma_heading = 0.0;
+    scaled.noise.sigma_rot = 0.0;
+    scaled.noise.odom_per_metre = 0.03;
+    scaled.noise.rot_per_radian = 0.05;
+    scaled.noise.rot_per_metre = 0.02;
+    // ... against per-increment sigmas of the same size.
+    TwoViewOptions fixed = scaled;
+    fixed.noise.odom_per_metre = fixed.noise.rot_per_radian = fixed.noise.rot_per_metre = 0.0;
+    fixed.noise.sigma_odom = 0.03 * distance;
+    const double rot = std::hypot(0.05 * angle, 0.02 * distance);
+    fixed.noise.sigma_heading = fixed.noise.sigma_rot = rot;
+    REQUIRE(distance > 0.01);
+    const PointEstimate a = estimateExact(s.camera, s.rig, s.prev, s.cur, s.uv_prev, s.uv_cur, scaled);
+    const PointEstimate b = estimateExact(s.camera, s.rig, s.prev, s.cur, s.uv_prev, s.uv_cur, fixed);
+    REQUIRE(a.ok());
+    REQUIRE(b.ok());
+    CHECK((a.c_cov - b.c_cov).norm() <= kRoundOff * b.c_cov.norm());
+    CHECK(a.sigmaZ() > 0);
+    // Two increments sharing the motion: n sigma^2 + (k d)^2 / n.
+    scaled.increments = 2;
+    const auto v2 = twoViewInputVariances(scaled.noise, 2, c.six_dof, distance, angle);
+    CHECK(v2(4) == Approx(0.03 * 0.03 * distance * distance / 2).epsilon(kRoundOff));
+    CHECK(v2(8) == Approx(rot * rot / 2).epsilon(kRoundOff));
+  }
+  NoiseModel bad;
+  bad.odom_per_metre = -0.01;
+  CHECK_THROWS(bad.validate());
+  bad = NoiseModel();
+  bad.rot_per_radian = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS(bad.validate());
+  bad = NoiseModel();
+  bad.rot_per_metre = -1;
+  CHECK_THROWS(bad.validate());
 }

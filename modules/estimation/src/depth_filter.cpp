@@ -1,6 +1,7 @@
 #include <yawdepth/estimation/depth_filter.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <cmath>
 #include <limits>
@@ -98,6 +99,8 @@ IncrementModel IncrementModel::between(const YawRig &rig, const MotionSample &pr
   inc.frame_cur = cur.frame;
   inc.yaw_cur = cur.yaw;
   inc.six_dof = prev.six_dof || cur.six_dof;
+  inc.distance = (cur.position() - prev.position()).norm();
+  inc.angle = Eigen::AngleAxisd(prev.rotation().transpose() * cur.rotation()).angle();
   return inc;
 }
 
@@ -135,11 +138,12 @@ void DepthFilter::initialize(long frame, double yaw, const Eigen::Vector2d &m, c
   baseline_ = 0;
 }
 
-IncrementPrior DepthFilter::defaultPrior(bool six_dof) const
+IncrementPrior DepthFilter::defaultPrior(bool six_dof, double distance, double angle) const
 {
   IncrementPrior p;
-  const double so2 = o_.noise.sigma_odom * o_.noise.sigma_odom;
-  const Eigen::Vector3d rot = incrementRotationSigma(o_.noise, six_dof);
+  const double st = incrementTranslationSigma(o_.noise, distance);
+  const double so2 = st * st;
+  const Eigen::Vector3d rot = incrementRotationSigma(o_.noise, six_dof, distance, angle);
   p.mean.setZero();
   p.cov.setZero();
   p.cov.diagonal() << so2, so2, so2, rot.cwiseAbs2(), o_.noise.sigma_yaw * o_.noise.sigma_yaw;
@@ -165,7 +169,7 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
   // Prior of the joint variable w = (state, increment noise): block diagonal, the state block is
   // P_ and the noise block Q (the noise model, or what other features told about this increment).
   // Products with it are done by blocks.
-  const IncrementPrior np = prior ? *prior : defaultPrior(inc.six_dof);
+  const IncrementPrior np = prior ? *prior : defaultPrior(inc.six_dof, inc.distance, inc.angle);
   if (!np.mean.allFinite() || !np.cov.allFinite())
     throw Error("depth filter: non-finite increment prior");
   Vec11 mu;

@@ -66,6 +66,9 @@ void NoiseModel::validate() const
   checkSigma(sigma_heading, "sigma-heading");
   checkSigma(sigma_rot, "sigma-rot");
   checkSigma(sigma_yaw, "sigma-yaw");
+  checkSigma(odom_per_metre, "odom-per-metre");
+  checkSigma(rot_per_radian, "rot-per-radian");
+  checkSigma(rot_per_metre, "rot-per-metre");
 }
 
 void GateOptions::validate() const

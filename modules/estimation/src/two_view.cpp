@@ -48,15 +48,26 @@ double parallaxPx(const CameraModel &camera, const Eigen::Vector3d &r, const Eig
   return std::hypot(camera.kx() * (m_cur.x() - r.x() / r.z()), camera.ky() * (m_cur.y() - r.y() / r.z()));
 }
 
+// The vision frame's travel (m) and rotation (rad) between two motion-log rows.
+double travel(const MotionSample &prev, const MotionSample &cur) { return (cur.position() - prev.position()).norm(); }
+
+double turn(const MotionSample &prev, const MotionSample &cur)
+{
+  return Eigen::AngleAxisd(prev.rotation().transpose() * cur.rotation()).angle();
+}
+
 } // namespace
 
-Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel &noise, int increments, bool six_dof)
+Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel &noise, int increments, bool six_dof,
+                                                              double distance, double angle)
 {
   const double n = std::max(1, increments);
   VecIn var;
   const double px2 = noise.sigma_px * noise.sigma_px;
-  const double od2 = n * noise.sigma_odom * noise.sigma_odom;
-  const Eigen::Vector3d rot2 = n * incrementRotationSigma(noise, six_dof).cwiseAbs2();
+  // n increments of equal length: n (sigma^2 + (k d / n)^2) = n sigma^2 + (k d)^2 / n.
+  const double st = incrementTranslationSigma(noise, distance / n);
+  const double od2 = n * st * st;
+  const Eigen::Vector3d rot2 = n * incrementRotationSigma(noise, six_dof, distance / n, angle / n).cwiseAbs2();
   var << px2, px2, px2, px2, od2, od2, od2, rot2, noise.sigma_yaw * noise.sigma_yaw, noise.sigma_yaw * noise.sigma_yaw;
   return var;
 }
@@ -142,7 +153,7 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
   Db.row(0) = b_u.derivatives().transpose();
   Db.row(1) = b_v.derivatives().transpose();
   const bool six_dof = prev.six_dof || cur.six_dof;
-  const VecIn var = twoViewInputVariances(options.noise, options.increments, six_dof);
+  const VecIn var = twoViewInputVariances(options.noise, options.increments, six_dof, travel(prev, cur), turn(prev, cur));
 
   // Start from pixel-scaled least squares, then generalised least squares with the residual
   // covariance Sigma_e = (Z Da - Db) Sigma (Z Da - Db)^T evaluated at the current estimate.
@@ -269,7 +280,10 @@ PointEstimate estimatePaper(const CameraModel &camera, const YawRig &rig, const 
       }
       J.col(i) = (plus.c_P - minus.c_P) / (2 * steps[i]);
     }
-    e.c_cov = J * twoViewInputVariances(options.noise, options.increments, prev.six_dof || cur.six_dof).asDiagonal() *
+    e.c_cov = J *
+              twoViewInputVariances(options.noise, options.increments, prev.six_dof || cur.six_dof, travel(prev, cur),
+                                    turn(prev, cur))
+                  .asDiagonal() *
               J.transpose();
   }
   return e;

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
 #include <limits>
@@ -121,10 +122,10 @@ void setModelMotion(Model &m, const YawRig &rig, const std::vector<MotionSample>
   m.mount.R0 = rig.cameraRotation();
   m.mount.t0 = t0;
   const bool six_dof = std::any_of(measured.begin(), measured.end(), [](const MotionSample &s) { return s.six_dof; });
-  const Eigen::Vector3d sr = incrementRotationSigma(noise, six_dof);
+  const Eigen::Vector3d sr = incrementRotationSigma(noise, six_dof, 1.0, 1.0);
   for (int i = 0; i < 3; ++i)
     m.rotation_free[i] = six_dof || i == 1;
-  m.poses_free = noise.sigma_odom > 0 || sr.maxCoeff() > 0;
+  m.poses_free = incrementTranslationSigma(noise, 1.0) > 0 || sr.maxCoeff() > 0;
   m.yaws_free = noise.sigma_yaw > 0;
   m.inv_sigma_yaw = m.yaws_free ? 1.0 / noise.sigma_yaw : 0.0;
   m.Rref.clear();
@@ -149,8 +150,9 @@ OdometryMeasurementGeneral measuredIncrementGeneral(const MotionSample &prev, co
   const Eigen::Vector3d d = o.Rref_prev.transpose() * (cur.position() - prev.position());
   std::copy(d.data(), d.data() + 3, o.d);
   o.dR = o.Rref_prev.transpose() * o.Rref_cur;
-  o.inv_sigma_t = 1.0 / std::max(noise.sigma_odom, kMinSigmaLength);
-  const Eigen::Vector3d sr = incrementRotationSigma(noise, prev.six_dof || cur.six_dof);
+  const double distance = d.norm(), angle = Eigen::AngleAxisd(o.dR).angle();
+  o.inv_sigma_t = 1.0 / std::max(incrementTranslationSigma(noise, distance), kMinSigmaLength);
+  const Eigen::Vector3d sr = incrementRotationSigma(noise, prev.six_dof || cur.six_dof, distance, angle);
   for (int i = 0; i < 3; ++i)
     o.inv_sigma_r[i] = 1.0 / std::max(sr(i), kMinSigmaAngle);
   return o;
@@ -186,8 +188,9 @@ OdometryMeasurement measuredIncrement(const MotionSample &prev, const MotionSamp
   o.d[1] = d.y();
   o.d[2] = d.z();
   o.dh = cur.heading - prev.heading;
-  o.inv_sigma_t = 1.0 / std::max(noise.sigma_odom, kMinSigmaLength);
-  o.inv_sigma_h = 1.0 / std::max(noise.sigma_heading, kMinSigmaAngle);
+  const double distance = d.norm();
+  o.inv_sigma_t = 1.0 / std::max(incrementTranslationSigma(noise, distance), kMinSigmaLength);
+  o.inv_sigma_h = 1.0 / std::max(incrementRotationSigma(noise, false, distance, std::fabs(o.dh)).y(), kMinSigmaAngle);
   return o;
 }
 

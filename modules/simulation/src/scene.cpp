@@ -1,5 +1,6 @@
 #include <yawdepth/simulation/scene.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
 #include <yawdepth/error.h>
@@ -67,10 +68,13 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
   for (int k = 1; six_dof && k < o.frames; ++k) {
     const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
     const Eigen::Matrix3d Ra = a.rotation();
+    const Eigen::Vector3d d = Ra.transpose() * (b.position() - a.position());
+    const double angle = Eigen::AngleAxisd(Ra.transpose() * b.rotation()).angle();
     const Eigen::Vector3d d_noisy =
-        Ra.transpose() * (b.position() - a.position()) + o.noise.sigma_odom * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+        d + incrementTranslationSigma(o.noise, d.norm()) * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
     const Eigen::Vector3d n(gauss(rng), gauss(rng), gauss(rng));
-    const Eigen::Matrix3d dR_noisy = Ra.transpose() * b.rotation() * expSO3<double>(o.noise.sigma_rot * n);
+    const Eigen::Matrix3d dR_noisy =
+        Ra.transpose() * b.rotation() * expSO3<double>(incrementRotationSigma(o.noise, true, d.norm(), angle).cwiseProduct(n));
     MotionSample &pm = scene.measured[k - 1], &m = scene.measured[k];
     const Eigen::Matrix3d Rpm = pm.rotation();
     const Eigen::Vector3d p = pm.position() + Rpm * d_noisy;
@@ -83,8 +87,9 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
     const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
     const Eigen::Vector3d d = rotY(a.heading).transpose() * Eigen::Vector3d(b.x - a.x, b.y - a.y, b.z - a.z);
     const Eigen::Vector3d d_noisy =
-        d + o.noise.sigma_odom * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
-    const double dh = b.heading - a.heading + o.noise.sigma_heading * gauss(rng);
+        d + incrementTranslationSigma(o.noise, d.norm()) * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+    const double dh = b.heading - a.heading +
+                      incrementRotationSigma(o.noise, false, d.norm(), std::fabs(b.heading - a.heading)).y() * gauss(rng);
     MotionSample &pm = scene.measured[k - 1], &m = scene.measured[k];
     const Eigen::Vector3d w_d = rotY(pm.heading) * d_noisy;
     m.x = pm.x + w_d.x();

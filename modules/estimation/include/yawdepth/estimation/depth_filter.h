@@ -52,6 +52,8 @@ struct IncrementModel {
   /*! frame number of the earlier row */
   long frame_prev = 0, frame_cur = 0; //!< frame number of the later row
   double yaw_cur = 0; //!< yaw reading of the later frame (rad)
+  double distance = 0; //!< the vision frame's measured travel over the increment (m)
+  double angle = 0;    //!< the vision frame's measured rotation over the increment (rad)
   /*! \brief The increment between two motion-log rows (prev before cur). */
   static IncrementModel between(const YawRig &rig, const MotionSample &prev, const MotionSample &cur);
 };
@@ -115,8 +117,12 @@ public:
   Update step(const IncrementModel &inc, const Eigen::Vector2d *m = nullptr, const Eigen::Matrix2d *m_cov = nullptr,
               const IncrementPrior *prior = nullptr);
 
-  /*! \brief The noise model's prior on an increment (zero mean); \param six_dof from a 6-DoF log. */
-  IncrementPrior defaultPrior(bool six_dof = false) const;
+  /*!
+    \brief The noise model's prior on an increment (zero mean).
+    \param six_dof from a 6-DoF log. \param distance the vision frame's travel over the increment (m)
+    \param angle its rotation (rad): they scale the noise model's per-metre and per-radian terms.
+  */
+  IncrementPrior defaultPrior(bool six_dof = false, double distance = 0.0, double angle = 0.0) const;
 
   /*! \brief The point at the filter's current frame, with status (see the class description). */
   PointEstimate estimate(const YawRig &rig) const;

@@ -111,8 +111,11 @@ constexpr int kTwoViewInputs = 12;
   \param noise The noise model. \param increments Motion-log rows between the two frames (the
   odometry's variances grow with it).
   \param six_dof whether the increment comes from a 6-DoF log (see incrementRotationSigma()).
+  \param distance, angle the vision frame's travel (m) and rotation (rad) between the two frames,
+  shared equally by the increments, for the noise model's per-metre and per-radian terms.
 */
 Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel &noise, int increments,
-                                                              bool six_dof = false);
+                                                              bool six_dof = false, double distance = 0.0,
+                                                              double angle = 0.0);
 
 } // namespace yawdepth

@@ -81,18 +81,39 @@ struct NoiseModel {
   double sigma_heading = 0.05 * M_PI / 180.0; //!< Heading noise per increment (rad), planar logs; 0.05 degree.
   double sigma_yaw = 0.05 * M_PI / 180.0;     //!< Noise of each yaw reading (rad); 0.05 degree.
   double sigma_rot = 0.05 * M_PI / 180.0;     //!< Rotation noise per increment per axis (rad), 6-DoF logs; 0.05 degree.
+  /*! Translation noise per metre travelled, per axis (m/m): odometry's drift, whatever the step.
+      Adds \f$ (\text{odom\_per\_metre}\, d)^2 \f$ to the variance of an increment of length d. */
+  double odom_per_metre = 0.0;
+  /*! Rotation noise per radian turned (rad/rad), on the noisy axes (the heading of a planar log, every
+      axis of a 6-DoF log). Adds \f$ (\text{rot\_per\_radian}\, \theta)^2 \f$ for an increment turning by theta. */
+  double rot_per_radian = 0.0;
+  /*! Rotation noise per metre travelled (rad/m), on the noisy axes (wheel slip turns the heading). */
+  double rot_per_metre = 0.0;
   /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative. */
   void validate() const;
 };
 
 /*!
+  \brief 1-sigma of one increment's translation noise per axis (m): the per-increment term and the
+  per-metre term of an increment of length `distance` (m), added in variance.
+*/
+inline double incrementTranslationSigma(const NoiseModel &noise, double distance = 0.0)
+{
+  return std::hypot(noise.sigma_odom, noise.odom_per_metre * distance);
+}
+
+/*!
   \brief 1-sigma of the rotation perturbation of one increment (IncrementPerturbation::d_rotation),
   per axis of the later vision frame: \f$ (0, \sigma_h, 0) \f$ for a planar log (only the heading
-  is noisy), \f$ (\sigma_r, \sigma_r, \sigma_r) \f$ for a 6-DoF log.
+  is noisy), \f$ (\sigma_r, \sigma_r, \sigma_r) \f$ for a 6-DoF log; with the per-radian and per-metre
+  terms of an increment that turns by `angle` (rad) over `distance` (m) added in variance.
 */
-inline Eigen::Vector3d incrementRotationSigma(const NoiseModel &noise, bool six_dof)
+inline Eigen::Vector3d incrementRotationSigma(const NoiseModel &noise, bool six_dof, double distance = 0.0,
+                                              double angle = 0.0)
 {
-  return six_dof ? Eigen::Vector3d::Constant(noise.sigma_rot) : Eigen::Vector3d(0.0, noise.sigma_heading, 0.0);
+  const double grow = std::hypot(noise.rot_per_radian * angle, noise.rot_per_metre * distance);
+  return six_dof ? Eigen::Vector3d::Constant(std::hypot(noise.sigma_rot, grow))
+                 : Eigen::Vector3d(0.0, std::hypot(noise.sigma_heading, grow), 0.0);
 }
 
 /*!

@@ -31,8 +31,9 @@
   (i = v, j = u)); the provider undistorts them with its camera model. vpFeaturePoint works on
   undistorted normalised coordinates: build them with buildFrom(), which undistorts the same way.
 
-  Standing still must not count as motion: the noise model's odometry noise is per estimator
-  increment, so the provider feeds the estimator a new frame only once the camera has translated
+  Standing still must not count as motion: the noise model's odometry noise has a per-increment
+  floor (and a log's noise model may be per increment only), so the provider feeds the estimator a
+  new frame only once the camera has translated
   at least `min_translation` since the last frame it used (or after `max_skipped_periods`
   periods). In the periods in between, the estimates are carried to the current camera frame
   through the odometry, so depth(id) is always the depth at the latest update().
@@ -66,6 +67,26 @@
 
 namespace yawdepth {
 
+/*!
+  \brief The provider's default noise model: 0.3 px; odometry that drifts by 2 % of the distance
+  travelled (per axis) and 2 % of the angle turned, plus 0.01 rad per metre (wheel slip), as wheel
+  odometry and arm kinematics do over a control period, with a floor of 10 micrometres and 1e-5 rad per
+  estimator increment; 0.05 degree per pan reading. Unlike the command line's per-increment
+  defaults (for logs with a fixed frame spacing), it does not depend on how far the camera moves
+  between two updates.
+*/
+inline NoiseModel servoNoiseModel()
+{
+  NoiseModel n;
+  n.sigma_odom = 1e-5;
+  n.sigma_heading = 1e-5;
+  n.sigma_rot = 1e-5;
+  n.odom_per_metre = 0.02;
+  n.rot_per_radian = 0.02;
+  n.rot_per_metre = 0.01;
+  return n;
+}
+
 /*! \brief Options of DepthProvider. Lengths in m, angles in rad. */
 struct DepthProviderOptions {
   double prior_depth = 1.0;              //!< Depth used until a feature's estimate converges (ViSP's default Z = 1 m).
@@ -74,9 +95,12 @@ struct DepthProviderOptions {
   double release_factor = 2.0;           //!< Keep a converged estimate while sigma(Z)/Z < release_factor x the threshold.
   double min_depth = 0.05;               //!< depth() never returns less (m); must be > 0.
   double max_depth = 100.0;              //!< depth() never returns more (m).
-  double min_translation = 0.005;        //!< Feed the estimator once the camera moved this far (m).
+  double min_translation = 0.002;        //!< Feed the estimator once the camera moved this far (m).
   int max_skipped_periods = 50;          //!< ... or after this many periods (> 0), whatever the motion.
-  NoiseModel noise;                      //!< Pixel, odometry (per estimator increment), heading and yaw noise.
+  /*! Pixel, odometry, heading and yaw noise; see servoNoiseModel(): the default odometry noise
+      grows with the distance travelled and the angle turned, so it holds whatever the control
+      period and min_translation. */
+  NoiseModel noise = servoNoiseModel();
   double initial_depth = 0.0;            //!< Filter's initial median depth (m); 0 = prior_depth.
   int max_missing_frames = 30;           //!< Forget a feature unseen for this many estimator frames.
   /*! \brief Throws yawdepth::Error for an invalid option. */
