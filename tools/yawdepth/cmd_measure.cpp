@@ -129,7 +129,9 @@ Runner addMeasure(CLI::App &app)
     std::vector<std::vector<bool>> flags;
     MethodArgs method = a->method;
     method.noise = noiseForLog(a->method, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
-    const std::vector<PointEstimate> estimates = runMethod(camera, rig, motion.samples, tracks, method, flags);
+    std::vector<MotionSample> motion_estimate;
+    const std::vector<PointEstimate> estimates =
+        runMethod(camera, rig, motion.samples, tracks, method, flags, &motion_estimate);
     std::vector<PointRow> rows;
     std::vector<std::pair<long, PointEstimate>> pairs;
     for (std::size_t i = 0; i < tracks.size(); ++i) {
@@ -184,7 +186,8 @@ Runner addMeasure(CLI::App &app)
       }
     }
     if (!a->report.empty()) {
-      const BoardMetrics m = boardMetrics(pattern, rig, motion.samples, pairs);
+      // In the world of the motion log, through the motion as the method estimated it.
+      const BoardMetrics m = boardMetrics(pattern, rig, motion_estimate, pairs);
       const std::string title = "yawdepth measure: " + pattern.toString() + ", method " + a->method.method + ", " +
                                 std::to_string(found) + " of " + std::to_string(n) + " frames";
       writeBoardReport(a->report, m, title);

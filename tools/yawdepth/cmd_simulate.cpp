@@ -94,6 +94,12 @@ Runner addSimulate(CLI::App &app)
   sub->add_option("--sigma-rot", s.noise.sigma_rot, "Rotation noise per increment, per axis, with --arm (rad)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option_function<std::string>(
+         "--motion-noise", [&s](const std::string &w) { s.noise.motion_noise = motionNoiseFromString(w); },
+         "How the written motion log errs: increment (dead reckoning, the errors accumulate) or absolute (each pose "
+         "errs by --sigma-odom and --sigma-rot/--sigma-heading about the truth, as forward kinematics)")
+      ->check(CLI::IsMember({"increment", "absolute"}))
+      ->default_str("increment");
   // 6-DoF mode: an arm-like camera path instead of the planar robot.
   CLI::Option *arm = sub->add_option("--arm", a->arm,
                                      "A 6-DoF arm-like path instead of the planar robot: approach, orbit or random "

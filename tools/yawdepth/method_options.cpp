@@ -31,6 +31,12 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
   sub->add_option("--sigma-rot", args.noise.sigma_rot, "Rotation noise per increment, per axis (rad), 6-DoF motion logs")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option_function<std::string>(
+         "--motion-noise", [&args](const std::string &w) { args.noise.motion_noise = motionNoiseFromString(w); },
+         "How the motion log errs: increment (odometry, VIO: --sigma-odom/--sigma-heading/--sigma-rot per increment, "
+         "the errors accumulate) or absolute (forward kinematics, motion capture: the same sigmas per pose)")
+      ->check(CLI::IsMember({"increment", "absolute"}))
+      ->default_str("increment");
   args.sigma_yaw_option = sub->add_option("--sigma-yaw", args.noise.sigma_yaw,
                                           "Noise of each yaw reading (rad); 0 by default for a 6-DoF log without a yaw column")
                               ->check(FiniteNonNegative)
@@ -60,7 +66,7 @@ NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
 
 std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                                      const std::vector<Track> &tracks, const MethodArgs &args,
-                                     std::vector<std::vector<bool>> &outliers)
+                                     std::vector<std::vector<bool>> &outliers, std::vector<MotionSample> *motion_estimate)
 {
   args.noise.validate();
   args.gates.validate();
@@ -89,6 +95,10 @@ std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &ri
     RefineResult r = refineWindow(camera, rig, motion, tracks, estimates, ro);
     estimates = std::move(r.points);
     outliers = std::move(r.outliers);
+    if (motion_estimate)
+      *motion_estimate = std::move(r.motion);
+  } else if (motion_estimate) {
+    *motion_estimate = motion;
   }
   return estimates;
 }

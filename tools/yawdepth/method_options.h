@@ -34,10 +34,13 @@ std::string bestMethod();
 /*!
   \brief Run the chosen method on every track (same order).
   \param outliers Receives, per track and observation, whether it was rejected as an outlier.
+  \param motion_estimate When given, receives the motion log as the method estimated it (refine's
+  refined rows; the measured rows for the other methods): where each point's frame is in the world.
 */
 std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                                      const std::vector<Track> &tracks, const MethodArgs &args,
-                                     std::vector<std::vector<bool>> &outliers);
+                                     std::vector<std::vector<bool>> &outliers,
+                                     std::vector<MotionSample> *motion_estimate = nullptr);
 
 /*! \brief The observations flagged in `outliers`, as tracks (for --outliers). */
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers);

@@ -69,6 +69,21 @@ void NoiseModel::validate() const
   checkSigma(odom_per_metre, "odom-per-metre");
   checkSigma(rot_per_radian, "rot-per-radian");
   checkSigma(rot_per_metre, "rot-per-metre");
+  if (motion_noise != MotionNoise::Increment && motion_noise != MotionNoise::Absolute)
+    throw Error("invalid motion noise model");
+  if (motion_noise == MotionNoise::Absolute && (odom_per_metre > 0 || rot_per_radian > 0 || rot_per_metre > 0))
+    throw Error("absolute (per pose) motion noise has no per-metre or per-radian terms: they describe increments");
+}
+
+const char *toString(MotionNoise m) { return m == MotionNoise::Absolute ? "absolute" : "increment"; }
+
+MotionNoise motionNoiseFromString(const std::string &word)
+{
+  if (word == "increment")
+    return MotionNoise::Increment;
+  if (word == "absolute")
+    return MotionNoise::Absolute;
+  throw Error("motion noise must be increment or absolute, not '" + word + "'");
 }
 
 void GateOptions::validate() const

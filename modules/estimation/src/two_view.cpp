@@ -61,7 +61,8 @@ double turn(const MotionSample &prev, const MotionSample &cur)
 Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel &noise, int increments, bool six_dof,
                                                               double distance, double angle)
 {
-  const double n = std::max(1, increments);
+  // Per-pose noise: the two rows' errors, however many rows lie between them.
+  const double n = noise.motion_noise == MotionNoise::Absolute ? 1 : std::max(1, increments);
   VecIn var;
   const double px2 = noise.sigma_px * noise.sigma_px;
   // n increments of equal length: n (sigma^2 + (k d / n)^2) = n sigma^2 + (k d)^2 / n.

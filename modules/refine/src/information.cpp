@@ -81,22 +81,22 @@ int Model::freePoseComponents() const
 
 int Model::poseIndex(int row, int j) const
 {
-  if (!poses_free || row <= 0 || !componentFree(j))
+  if (!poses_free || row < firstFreeRow() || !componentFree(j))
     return -1;
   int k = 0;
   for (int i = 0; i < j; ++i)
     k += componentFree(i) ? 1 : 0;
-  return freePoseComponents() * (row - 1) + k;
+  return freePoseComponents() * (row - firstFreeRow()) + k;
 }
 
 int Model::yawIndex(int row) const
 {
-  return yaws_free ? (poses_free ? freePoseComponents() * (rows() - 1) : 0) + row : -1;
+  return yaws_free ? (poses_free ? freePoseComponents() * (rows() - firstFreeRow()) : 0) + row : -1;
 }
 
 int Model::motionParameters() const
 {
-  return (poses_free ? freePoseComponents() * (rows() - 1) : 0) + (yaws_free ? rows() : 0);
+  return (poses_free ? freePoseComponents() * (rows() - firstFreeRow()) : 0) + (yaws_free ? rows() : 0);
 }
 
 bool needsGeneralChain(const YawRig &rig, const std::vector<MotionSample> &motion)
@@ -131,8 +131,31 @@ void setModelMotion(Model &m, const YawRig &rig, const std::vector<MotionSample>
   m.Rref.clear();
   m.odometry.clear();
   m.odometry_general.clear();
+  m.pose_priors.clear();
+  m.absolute = noise.motion_noise == MotionNoise::Absolute;
   for (const MotionSample &s : measured)
     m.Rref.push_back(s.rotation());
+  if (m.absolute) {
+    const double inv_t = 1.0 / std::max(noise.sigma_odom, kMinSigmaLength);
+    const Eigen::Vector3d sr = poseRotationSigma(noise, six_dof);
+    for (const MotionSample &s : measured) {
+      PosePrior p;
+      p.value[0] = s.x;
+      p.value[1] = s.y;
+      p.value[2] = s.z;
+      for (int i = 0; i < 3; ++i)
+        p.inv_sigma[i] = inv_t;
+      if (m.general) // the offset from the reference (measured) orientation, per axis
+        for (int i = 0; i < 3; ++i)
+          p.inv_sigma[3 + i] = 1.0 / std::max(sr(i), kMinSigmaAngle);
+      else {
+        p.value[3] = s.heading;
+        p.inv_sigma[3] = 1.0 / std::max(sr(1), kMinSigmaAngle);
+      }
+      m.pose_priors.push_back(p);
+    }
+    return;
+  }
   for (std::size_t r = 1; r < measured.size(); ++r) {
     if (m.general)
       m.odometry_general.push_back(measuredIncrementGeneral(measured[r - 1], measured[r], noise));
@@ -210,7 +233,14 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
 
   // Motion-only information: the odometry and yaw priors.
   Eigen::MatrixXd Hprior = Eigen::MatrixXd::Zero(nl, nl);
-  if (m.poses_free) {
+  if (m.poses_free && m.absolute) {
+    for (int row = 0; row < m.rows(); ++row)
+      for (int j = 0; j < PD; ++j) {
+        const int i = m.poseIndex(row, j);
+        if (i >= 0)
+          Hprior(i, i) += m.pose_priors[row].inv_sigma[j] * m.pose_priors[row].inv_sigma[j];
+      }
+  } else if (m.poses_free) {
     for (int row = 1; row < m.rows(); ++row) {
       ADPrior x[2 * PD];
       for (int j = 0; j < PD; ++j) {

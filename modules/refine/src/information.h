@@ -25,7 +25,8 @@ struct ModelObservation {
 
 /*!
   The refine model at one value of its parameters (the solution, or the truth for the bound).
-  Frame 0's pose is known (the gauge). Poses are free when odometry noise is modelled
+  Frame 0's pose is known (the gauge) for increment noise; with per-pose noise (absolute) every
+  pose has its own prior and none is the gauge. Poses are free when odometry noise is modelled
   (sigma_odom > 0, or the rotation's sigma > 0), yaws when sigma_yaw > 0; otherwise they are known.
   Two chains (refine_model.h): planar (pose = x, y, z, heading; mount t0 only) and general (pose =
   x, y, z, d(3) about the row's reference orientation; any mount), where a planar log frees only
@@ -43,18 +44,22 @@ struct Model {
   std::vector<ModelObservation> observations;
   std::vector<OdometryMeasurement> odometry; //!< planar: per row >= 1 (index row - 1); only sigmas used here
   std::vector<OdometryMeasurementGeneral> odometry_general; //!< general: the same
+  bool absolute = false;                    //!< per-pose motion noise: pose_priors instead of odometry, no gauge row
+  std::vector<PosePrior> pose_priors;       //!< per row, when absolute
   double inv_sigma_yaw = 0;
   bool poses_free = false, yaws_free = false;
   bool rotation_free[3] = {false, true, false}; //!< general chain: which components of d are estimated
 
   int rows() const { return static_cast<int>(poses.size()); }
+  /*! The first row whose pose is estimated: 1 (row 0 is the gauge) for increment noise, 0 for per-pose noise. */
+  int firstFreeRow() const { return absolute ? 0 : 1; }
   int poseDim() const { return general ? 6 : 4; }
   /*! Index of component j of a row's pose among the motion parameters, or -1 when known. */
   int poseIndex(int row, int j) const;
   /*! Index of a row's yaw among the motion parameters, or -1 when known. */
   int yawIndex(int row) const;
   int motionParameters() const;
-  /*! Estimated components per pose (row >= 1). */
+  /*! Estimated components per pose (rows >= firstFreeRow()). */
   int freePoseComponents() const;
   /*! Whether component j of a pose is estimated (for rows >= 1, when poses are free). */
   bool componentFree(int j) const { return j < 3 || !general || rotation_free[j - 3]; }

@@ -136,6 +136,23 @@ struct OdometryCostGeneral {
   OdometryMeasurementGeneral o_;
 };
 
+/* Per-pose prior (MotionNoise::Absolute). Parameter block: frame[B] (B = 5 planar, 7 general, as
+   above; the yaw, last, unused). Residual[PD]: (estimated - measured) pose over its sigma, PD = 4
+   planar (x, y, z [m], heading [rad]), 6 general (x, y, z [m], rotation offset d [rad]). */
+template <int PD, int B> struct PosePriorCost {
+  explicit PosePriorCost(const PosePrior &o) : o_(o) {}
+  template <typename T> bool operator()(const T *frame, T *r) const
+  {
+    posePriorResidual<PD>(frame, o_, r);
+    return true;
+  }
+  static ceres::CostFunction *Create(const PosePrior &o)
+  {
+    return new ceres::AutoDiffCostFunction<PosePriorCost, PD, B>(new PosePriorCost(o));
+  }
+  PosePrior o_;
+};
+
 // ---------------------------------------------------------------------------------------------
 
 struct TrackData {
@@ -457,11 +474,11 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
     double *f = state_.frames[r].data();
     problem.AddParameterBlock(f, block);
     ordering->AddElementToGroup(f, 1);
-    // Known parts: frame 0's pose (the gauge), every pose or yaw whose noise is not modelled (and
-    // for a planar log in the general chain, the rotation off the heading axis).
+    // Known parts: frame 0's pose (the gauge, for increment noise), every pose or yaw whose noise is
+    // not modelled (and for a planar log in the general chain, the rotation off the heading axis).
     std::vector<int> known;
     for (int j = 0; j < pose_dim; ++j)
-      if (r == 0 || !poses_free_ || !model_.componentFree(j))
+      if (r < model_.firstFreeRow() || !poses_free_ || !model_.componentFree(j))
         known.push_back(j);
     if (!yaws_free_)
       known.push_back(pose_dim);
@@ -470,7 +487,12 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
     else if (!known.empty())
       problem.SetManifold(f, new ceres::SubsetManifold(block, known));
   }
-  if (poses_free_)
+  if (poses_free_ && model_.absolute)
+    for (int r = 0; r < rows; ++r)
+      problem.AddResidualBlock(model_.general ? PosePriorCost<6, 7>::Create(model_.pose_priors[r])
+                                              : PosePriorCost<4, 5>::Create(model_.pose_priors[r]),
+                               nullptr, state_.frames[r].data());
+  else if (poses_free_)
     for (int r = 1; r < rows; ++r)
       problem.AddResidualBlock(model_.general ? OdometryCostGeneral::Create(model_.odometry_general[r - 1])
                                               : OdometryCost::Create(model_.odometry[r - 1]),

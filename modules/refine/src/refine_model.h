@@ -231,5 +231,22 @@ void odometryResidualGeneral(const T *frame_prev, const T *frame_cur, const Odom
   r[5] = T(0.5) * (E(1, 0) - E(0, 1)) * o.inv_sigma_r[2];
 }
 
+/*!
+  A measured pose, for per-pose motion noise (MotionNoise::Absolute): the prior on one row's pose
+  block. Planar chain: value = (x, y, z, heading) of the row; general chain: value = (x, y, z, 0,
+  0, 0), the rotation being the block's offset d from the row's reference (measured) orientation.
+*/
+struct PosePrior {
+  double value[6] = {0, 0, 0, 0, 0, 0};
+  double inv_sigma[6] = {1, 1, 1, 1, 1, 1};
+};
+
+/*! Residual[PD]: (estimated - measured) pose, whitened (PD = 4 planar, 6 general). */
+template <int PD, typename T> void posePriorResidual(const T *pose, const PosePrior &o, T *r)
+{
+  for (int i = 0; i < PD; ++i)
+    r[i] = (pose[i] - o.value[i]) * o.inv_sigma[i];
+}
+
 } // namespace refine_detail
 } // namespace yawdepth

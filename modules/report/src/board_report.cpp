@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -135,7 +136,53 @@ BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const s
     m.min_depth = std::min(m.min_depth, p.c_P.z());
     m.max_depth = std::max(m.max_depth, p.c_P.z());
   }
+
+  // Chessboard: the nominal board fitted to the measured corners.
+  if (pattern.kind == PatternSpec::Kind::Chessboard && pattern.cols > 0 && m.points.size() >= 3) {
+    Eigen::Matrix3Xd nominal(3, m.points.size()), measured(3, m.points.size());
+    for (std::size_t i = 0; i < m.points.size(); ++i) {
+      const long id = m.points[i].id;
+      const long col = id % pattern.cols, row = id / pattern.cols; // the board's own grid (id = row * COLS + col)
+      nominal.col(static_cast<Eigen::Index>(i)) = Eigen::Vector3d(static_cast<double>(col) * pattern.square,
+                                                                  static_cast<double>(row) * pattern.square, 0.0);
+      measured.col(static_cast<Eigen::Index>(i)) = m.points[i].w_P;
+    }
+    const Eigen::Matrix4d T = Eigen::umeyama(nominal, measured, false);
+    const Eigen::Matrix4d S = Eigen::umeyama(nominal, measured, true);
+    m.w_R_o = T.topLeftCorner<3, 3>();
+    m.w_t_o = T.topRightCorner<3, 1>();
+    m.board_scale = S.topLeftCorner<3, 3>().col(0).norm();
+    const Eigen::Matrix3Xd fitted = (m.w_R_o * nominal).colwise() + m.w_t_o;
+    m.board_fit_rms = std::sqrt((fitted - measured).colwise().squaredNorm().mean());
+    m.has_board_pose = m.w_R_o.allFinite() && m.w_t_o.allFinite() && std::isfinite(m.board_scale);
+  }
   return m;
+}
+
+double BoardMetrics::quantile(double q) const
+{
+  std::vector<double> v;
+  for (const auto *set : {&horizontal, &vertical})
+    for (const BlockLength &b : *set)
+      v.push_back(b.length);
+  if (v.empty())
+    return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  const double x = std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(std::floor(x));
+  const std::size_t j = std::min(i + 1, v.size() - 1);
+  return v[i] + (x - static_cast<double>(i)) * (v[j] - v[i]);
+}
+
+double BoardMetrics::fractionWithin(double tolerance) const
+{
+  std::size_t n = 0, in = 0;
+  for (const auto *set : {&horizontal, &vertical})
+    for (const BlockLength &b : *set) {
+      ++n;
+      in += std::abs(b.length - nominal) <= tolerance ? 1 : 0;
+    }
+  return n ? static_cast<double>(in) / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
 }
 
 std::string formatBoardMetrics(const BoardMetrics &m)
@@ -160,6 +207,23 @@ std::string formatBoardMetrics(const BoardMetrics &m)
     << " mm, worst error " << mm(worst(m.vertical)) << " mm (" << m.vertical.size() << " blocks)\n";
   o << "distance to fitted plane:   largest " << mm(m.max_plane_distance) << " mm, RMS " << mm(rms) << " mm\n";
   o << "depth zc:                   " << mm(m.min_depth, 1) << " .. " << mm(m.max_depth, 1) << " mm\n";
+  if (!m.horizontal.empty() || !m.vertical.empty()) {
+    char line[200];
+    std::snprintf(line, sizeof line, "all block lengths:          median %.3f mm, 5..95 %% %.3f .. %.3f mm, %.0f %% within 0.3 mm\n",
+                  1e3 * m.quantile(0.5), 1e3 * m.quantile(0.05), 1e3 * m.quantile(0.95), 100.0 * m.fractionWithin(3e-4));
+    o << line;
+  }
+  if (m.has_board_pose) {
+    const Eigen::AngleAxisd aa(m.w_R_o);
+    const Eigen::Vector3d tu = aa.angle() * aa.axis();
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "board pose in the world:    t = (%.2f, %.2f, %.2f) mm, theta-u = (%.5f, %.5f, %.5f) rad (wMo: origin at "
+                  "corner 0, x along a row), fit RMS %.3f mm, scale %.5f\n",
+                  1e3 * m.w_t_o.x(), 1e3 * m.w_t_o.y(), 1e3 * m.w_t_o.z(), tu.x(), tu.y(), tu.z(), 1e3 * m.board_fit_rms,
+                  m.board_scale);
+    o << line;
+  }
   return o.str();
 }
 

@@ -63,9 +63,24 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
     scene.truth.push_back(s);
   }
   // Dead reckoning: each increment (in the earlier vision frame) and heading change is perturbed
-  // and accumulated; each yaw reading is perturbed independently.
+  // and accumulated (or, for per-pose noise, each pose); each yaw reading is perturbed independently.
   scene.measured = scene.truth;
-  for (int k = 1; six_dof && k < o.frames; ++k) {
+  const bool absolute = o.noise.motion_noise == MotionNoise::Absolute;
+  // Per-pose noise (kinematics, motion capture): each row errs independently about the truth.
+  for (int k = 0; absolute && k < o.frames; ++k) {
+    MotionSample &m = scene.measured[k];
+    const Eigen::Vector3d p = m.position() + o.noise.sigma_odom * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+    m.x = p.x();
+    m.y = p.y();
+    m.z = p.z();
+    if (six_dof) {
+      const Eigen::Vector3d n(gauss(rng), gauss(rng), gauss(rng));
+      m.theta_u = logSO3(m.rotation() * expSO3<double>(o.noise.sigma_rot * n));
+    } else {
+      m.heading += o.noise.sigma_heading * gauss(rng);
+    }
+  }
+  for (int k = 1; !absolute && six_dof && k < o.frames; ++k) {
     const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
     const Eigen::Matrix3d Ra = a.rotation();
     const Eigen::Vector3d d = Ra.transpose() * (b.position() - a.position());
@@ -83,7 +98,7 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
     m.z = p.z();
     m.theta_u = logSO3(Rpm * dR_noisy);
   }
-  for (int k = 1; !six_dof && k < o.frames; ++k) {
+  for (int k = 1; !absolute && !six_dof && k < o.frames; ++k) {
     const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
     const Eigen::Vector3d d = rotY(a.heading).transpose() * Eigen::Vector3d(b.x - a.x, b.y - a.y, b.z - a.z);
     const Eigen::Vector3d d_noisy =

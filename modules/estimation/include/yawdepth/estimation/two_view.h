@@ -109,7 +109,7 @@ constexpr int kTwoViewInputs = 12;
   (u_prev, v_prev, u_cur, v_cur, d_x, d_y, d_z, rot_x, rot_y, rot_z, yaw_prev, yaw_cur) (the
   increment's perturbations of yawdepth::IncrementPerturbation; rot_y is a planar log's heading).
   \param noise The noise model. \param increments Motion-log rows between the two frames (the
-  odometry's variances grow with it).
+  odometry's variances grow with it, unless the noise is per pose: MotionNoise::Absolute).
   \param six_dof whether the increment comes from a 6-DoF log (see incrementRotationSigma()).
   \param distance, angle the vision frame's travel (m) and rotation (rad) between the two frames,
   shared equally by the increments, for the noise model's per-metre and per-radian terms.

@@ -73,6 +73,24 @@ struct PointEstimate {
 };
 
 /*!
+  \brief How the motion log's poses err (NoiseModel::motion_noise).
+*/
+enum class MotionNoise {
+  /*! Odometry, visual-inertial odometry: each frame-to-frame increment errs independently, so the
+      poses' errors accumulate (dead reckoning). `sigma_odom`, `sigma_heading`, `sigma_rot` are per increment. */
+  Increment,
+  /*! Forward kinematics, motion capture: each row's pose errs independently about the truth, and the
+      errors do not accumulate. `sigma_odom` and `sigma_rot` (`sigma_heading` for a planar log) are
+      per pose; the per-metre and per-radian terms must be 0. */
+  Absolute
+};
+
+/*! \brief "increment" or "absolute". */
+const char *toString(MotionNoise m);
+/*! \brief Parse "increment" or "absolute"; throws yawdepth::Error otherwise. */
+MotionNoise motionNoiseFromString(const std::string &word);
+
+/*!
   \brief Noise model of the inputs (1-sigma), used for uncertainty and for weighting.
 */
 struct NoiseModel {
@@ -89,17 +107,33 @@ struct NoiseModel {
   double rot_per_radian = 0.0;
   /*! Rotation noise per metre travelled (rad/m), on the noisy axes (wheel slip turns the heading). */
   double rot_per_metre = 0.0;
-  /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative. */
+  /*! How the motion log's poses err: per increment (odometry, the default) or per pose (kinematics). */
+  MotionNoise motion_noise = MotionNoise::Increment;
+  /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative (and the per-metre
+      and per-radian terms are 0 for MotionNoise::Absolute). */
   void validate() const;
 };
 
 /*!
   \brief 1-sigma of one increment's translation noise per axis (m): the per-increment term and the
-  per-metre term of an increment of length `distance` (m), added in variance.
+  per-metre term of an increment of length `distance` (m), added in variance; for
+  MotionNoise::Absolute, sqrt(2) sigma_odom (two independent pose errors; consecutive increments
+  then share one and are correlated, which an estimator that treats them as independent ignores).
 */
 inline double incrementTranslationSigma(const NoiseModel &noise, double distance = 0.0)
 {
+  if (noise.motion_noise == MotionNoise::Absolute) // the difference of two independent pose errors
+    return std::sqrt(2.0) * noise.sigma_odom;
   return std::hypot(noise.sigma_odom, noise.odom_per_metre * distance);
+}
+
+/*!
+  \brief 1-sigma of one pose's rotation error per axis for MotionNoise::Absolute (rad): \f$ (0, \sigma_h, 0) \f$
+  for a planar log, \f$ (\sigma_r, \sigma_r, \sigma_r) \f$ for a 6-DoF log.
+*/
+inline Eigen::Vector3d poseRotationSigma(const NoiseModel &noise, bool six_dof)
+{
+  return six_dof ? Eigen::Vector3d::Constant(noise.sigma_rot) : Eigen::Vector3d(0.0, noise.sigma_heading, 0.0);
 }
 
 /*!
@@ -111,6 +145,8 @@ inline double incrementTranslationSigma(const NoiseModel &noise, double distance
 inline Eigen::Vector3d incrementRotationSigma(const NoiseModel &noise, bool six_dof, double distance = 0.0,
                                               double angle = 0.0)
 {
+  if (noise.motion_noise == MotionNoise::Absolute)
+    return std::sqrt(2.0) * poseRotationSigma(noise, six_dof);
   const double grow = std::hypot(noise.rot_per_radian * angle, noise.rot_per_metre * distance);
   return six_dof ? Eigen::Vector3d::Constant(std::hypot(noise.sigma_rot, grow))
                  : Eigen::Vector3d(0.0, std::hypot(noise.sigma_heading, grow), 0.0);

@@ -15,7 +15,11 @@
     the pixel noise mapped through the undistortion Jacobian (so it is in units of sigma_px);
     with a robust loss whose threshold is `robust_threshold_px`;
   - every increment: measured minus estimated increment (translation in the earlier vision frame,
-    `sigma_odom` per axis; heading change, `sigma_heading`);
+    `sigma_odom` per axis; heading change, `sigma_heading`; with the per-metre and per-radian terms
+    of the noise model); or, for per-pose noise (NoiseModel::motion_noise = MotionNoise::Absolute:
+    forward kinematics, motion capture), every pose: measured minus estimated pose (`sigma_odom`
+    per axis, rotation `sigma_rot` per axis or the heading `sigma_heading`), and then frame 0 is
+    estimated too (the log's world is kept by the priors, not by a gauge row);
   - every frame: measured minus estimated yaw (`sigma_yaw`).
   After the robust solve, observations whose reprojection error exceeds `outlier_threshold_px`
   are flagged and the problem is solved again without them and without the robust loss, so that
@@ -97,7 +101,8 @@ RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const st
   \brief Cramér–Rao lower bound of each point's depth zc at its track's last frame.
 
   The Fisher information of the same model as refineWindow() (pixels of every observation in
-  `tracks`, priors on every increment and yaw reading; frame 0's pose known), evaluated at the
+  `tracks`, priors on every increment (or pose) and yaw reading; for increment noise frame 0's pose
+  known), evaluated at the
   truth, inverted, and projected on the depth. Only the frames of the observations are used, not
   their pixel values. Returns the 1-sigma bound per track (NaN for tracks with < 2 observations).
   \param camera Camera model. \param rig Yaw rig.

@@ -40,8 +40,20 @@ struct BoardMetrics {
   double max_plane_distance = 0;         //!< largest |distance|
   /*! smallest camera-frame depth of the points */
   double min_depth = 0, max_depth = 0;   //!< largest camera-frame depth of the points
+  /*! Chessboard: the board's pose in the world (wMo) by a rigid least-squares fit (Umeyama) of the
+      nominal corners, corner id r*COLS+c at (c SQUARE, r SQUARE, 0), to the measured ones: ViSP's and
+      OpenCV's chessboard frame (origin at corner 0, x along a row). Only when `has_board_pose`. */
+  bool has_board_pose = false;
+  Eigen::Matrix3d w_R_o = Eigen::Matrix3d::Identity(); //!< rotation of the board frame in the world
+  Eigen::Vector3d w_t_o = Eigen::Vector3d::Zero();     //!< the board origin (corner 0's nominal place) in the world (m)
+  double board_fit_rms = 0;                           //!< RMS distance of the measured corners to the fitted nominal board (m)
+  double board_scale = 1;                             //!< measured / nominal size (a similarity fit's scale)
   /*! \brief min, max, mean of a set of block lengths. */
   static Eigen::Vector3d stats(const std::vector<BlockLength> &v);
+  /*! \brief The q-quantile (0..1, linear interpolation) of every block length, horizontal and vertical. */
+  double quantile(double q) const;
+  /*! \brief The fraction of all block lengths within `tolerance` of the nominal (m). */
+  double fractionWithin(double tolerance) const;
 };
 
 /*!
