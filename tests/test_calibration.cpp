@@ -156,7 +156,7 @@ const CameraSet &cameraSet()
 
 } // namespace
 
-TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard views", "[calibration]")
+TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard views", "[calibration][slow]")
 {
   const CameraSet &set = cameraSet();
   const CalibrationDetections det = detectCalibrationViews(set.board, set.names, set.images);

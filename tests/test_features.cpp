@@ -323,7 +323,7 @@ double maxIdError(PatternDetector &det, const cv::Mat &img, const std::map<long,
 
 } // namespace
 
-TEST_CASE("chessboard ids follow the board's own grid under rotation", "[features]") {
+TEST_CASE("chessboard ids follow the board's own grid under rotation", "[features][slow]") {
   const CameraModel cam = paperCamera();
   const YawRig rig = paperRig();
   MotionSample s;
@@ -361,7 +361,7 @@ TEST_CASE("chessboard ids follow the board's own grid under rotation", "[feature
   }
 }
 
-TEST_CASE("chessboard corner accuracy on rendered images", "[features]") {
+TEST_CASE("chessboard corner accuracy on rendered images", "[features][slow]") {
   // Seeded random poses (tilt up to 40 degrees, any roll, two cameras incl. strong distortion),
   // blur 0.7 px, noise 2 gray levels; boards whose orientation the colours fix.
   std::mt19937_64 rng(11);
