@@ -582,7 +582,8 @@ NoiseModel armNoise()
   return n;
 }
 
-Scene armScene(ArmPath path, std::uint64_t seed, bool noisy, int frames = 10, int points = 30)
+Scene armScene(ArmPath path, std::uint64_t seed, bool noisy, int frames = 10, int points = 30,
+               const NoiseModel &noise = armNoise())
 {
   SceneOptions o;
   o.frames = frames;
@@ -592,8 +593,30 @@ Scene armScene(ArmPath path, std::uint64_t seed, bool noisy, int frames = 10, in
   o.vision_poses = armTrajectory(armRig(), path, frames, 0.6, seed);
   o.seed = seed;
   if (noisy)
-    o.noise = armNoise();
+    o.noise = noise;
   return simulateScene(armCamera(), armRig(), o);
+}
+
+/* One Monte Carlo trial on an arm scene: refine with `noise`, each depth's error against the joint
+   bound into `st` (and `also`, when given); a track refine could not estimate counts as failed. */
+void armTrial(const Scene &s, const NoiseModel &noise, Stats &st, Stats *also = nullptr)
+{
+  RefineOptions opt;
+  opt.noise = noise;
+  const RefineResult r = refineWindow(armCamera(), armRig(), s.measured, s.tracks, {}, opt);
+  const std::vector<double> crlb = depthCramerRao(armCamera(), armRig(), s.truth, s.tracks, s.w_points, noise, true);
+  for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+    if (s.tracks[i].observations.size() < 2 || !std::isfinite(crlb[i]))
+      continue;
+    for (Stats *x : {&st, also}) {
+      if (!x)
+        continue;
+      if (!r.points[i].ok())
+        ++x->failed;
+      else
+        x->add(r.points[i].c_P.z() - truePoint(s, armRig(), i).z(), crlb[i], r.points[i].sigmaZ());
+    }
+  }
 }
 
 const ArmPath kArmPaths[] = {ArmPath::Approach, ArmPath::Orbit, ArmPath::Random};
@@ -923,8 +946,6 @@ TEST_CASE("refine with per-pose motion noise is efficient and honest (Monte Carl
 {
   if (unavailableChecked())
     return;
-  const CameraModel camera = armCamera();
-  const YawRig rig = armRig();
   NoiseModel noise = armNoise();
   noise.motion_noise = MotionNoise::Absolute;
   noise.sigma_odom = 2e-3;
@@ -932,30 +953,8 @@ TEST_CASE("refine with per-pose motion noise is efficient and honest (Monte Carl
   constexpr int kTrials = 15;
   Stats pooled;
   for (ArmPath path : kArmPaths) {
-    for (int trial = 0; trial < kTrials; ++trial) {
-      SceneOptions o;
-      o.frames = 10;
-      o.points = 30;
-      o.min_depth = 0.4;
-      o.max_depth = 0.8;
-      o.vision_poses = armTrajectory(rig, path, o.frames, 0.6, 3000 + trial);
-      o.seed = 3000 + trial;
-      o.noise = noise; // each pose errs about the truth
-      const Scene s = simulateScene(camera, rig, o);
-      RefineOptions opt;
-      opt.noise = noise;
-      const RefineResult r = refineWindow(camera, rig, s.measured, s.tracks, {}, opt);
-      const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
-      for (std::size_t i = 0; i < s.tracks.size(); ++i) {
-        if (s.tracks[i].observations.size() < 2 || !std::isfinite(crlb[i]))
-          continue;
-        if (!r.points[i].ok()) {
-          ++pooled.failed;
-          continue;
-        }
-        pooled.add(r.points[i].c_P.z() - truePoint(s, rig, i).z(), crlb[i], r.points[i].sigmaZ());
-      }
-    }
+    for (int trial = 0; trial < kTrials; ++trial) // each pose errs about the truth
+      armTrial(armScene(path, 3000 + trial, true, 10, 30, noise), noise, pooled);
   }
   std::printf("refine MC arm, per-pose noise, pooled: RMSE/CRLB %.3f, 2-sigma coverage %.3f over %d depths, %d failed\n",
               pooled.ratio(), pooled.coverage(), pooled.n, pooled.failed);
@@ -969,31 +968,13 @@ TEST_CASE("refine on arm scenes is efficient and honest (Monte Carlo against the
 {
   if (unavailableChecked())
     return;
-  const CameraModel camera = armCamera();
-  const YawRig rig = armRig();
   const NoiseModel noise = armNoise();
   constexpr int kTrials = 20;
   Stats pooled;
   for (ArmPath path : kArmPaths) {
     Stats st;
-    for (int trial = 0; trial < kTrials; ++trial) {
-      const Scene s = armScene(path, 2000 + trial, true);
-      RefineOptions opt;
-      opt.noise = noise;
-      const RefineResult r = refineWindow(camera, rig, s.measured, s.tracks, {}, opt);
-      const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
-      for (std::size_t i = 0; i < s.tracks.size(); ++i) {
-        if (s.tracks[i].observations.size() < 2 || !std::isfinite(crlb[i]))
-          continue;
-        if (!r.points[i].ok()) {
-          ++st.failed;
-          continue;
-        }
-        const double err = r.points[i].c_P.z() - truePoint(s, rig, i).z();
-        st.add(err, crlb[i], r.points[i].sigmaZ());
-        pooled.add(err, crlb[i], r.points[i].sigmaZ());
-      }
-    }
+    for (int trial = 0; trial < kTrials; ++trial)
+      armTrial(armScene(path, 2000 + trial, true), noise, st, &pooled);
     std::printf("refine MC arm %d: RMSE/CRLB %.3f, 2-sigma coverage %.3f, failed %d of %d\n", static_cast<int>(path),
                 st.ratio(), st.coverage(), st.failed, st.n + st.failed);
     CHECK(st.ratio() <= 1.25);

@@ -29,6 +29,17 @@ std::map<long, std::vector<std::pair<long, vpImagePoint>>> framesOf(const Scene 
   return frames;
 }
 
+// Every row of a 6-DoF scene's motion log given to the provider as ViSP gives a pose
+// (vpRobot::getPosition: a homogeneous matrix, no pan joint), with that frame's observations.
+void feedPoses(DepthProvider &p, const Scene &scene)
+{
+  const auto frames = framesOf(scene);
+  for (const MotionSample &row : scene.measured) {
+    const auto it = frames.find(row.frame);
+    p.update(wMv(row), it == frames.end() ? std::vector<std::pair<long, vpImagePoint>>{} : it->second);
+  }
+}
+
 } // namespace
 
 TEST_CASE("depth provider: the prior before convergence, never a non-positive Z", "[servo]")
@@ -168,13 +179,7 @@ TEST_CASE("depth provider: a 6-DoF camera (vpHomogeneousMatrix poses, an arm orb
   DepthProviderOptions o;
   o.noise = NoiseModel{0.2, 0.0005, 0.0, 0.0, 0.0005};
   DepthProvider p(camera, rig, o);
-  const auto frames = framesOf(scene);
-  for (std::size_t r = 0; r < scene.measured.size(); ++r) {
-    const auto it = frames.find(scene.measured[r].frame);
-    // The pose as ViSP gives it (vpRobot::getPosition): a homogeneous matrix, no pan joint.
-    p.update(wMv(scene.measured[r]),
-             it == frames.end() ? std::vector<std::pair<long, vpImagePoint>>{} : it->second);
-  }
+  feedPoses(p, scene);
   const std::size_t last = scene.truth.size() - 1;
   int converged = 0;
   for (const Track &t : scene.tracks) {
@@ -321,11 +326,7 @@ TEST_CASE("depth provider: default noise model, the same accuracy whatever the c
     so.seed = 11;
     const Scene scene = simulateScene(camera, rig, so);
     DepthProvider p(camera, rig); // default options
-    const auto frames_of = framesOf(scene);
-    for (std::size_t r = 0; r < scene.measured.size(); ++r) {
-      const auto it = frames_of.find(scene.measured[r].frame);
-      p.update(wMv(scene.measured[r]), it == frames_of.end() ? std::vector<std::pair<long, vpImagePoint>>{} : it->second);
-    }
+    feedPoses(p, scene);
     const std::size_t last = scene.truth.size() - 1;
     for (const Track &t : scene.tracks) {
       if (t.observations.back().frame != scene.truth[last].frame)

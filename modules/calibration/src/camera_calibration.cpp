@@ -2,6 +2,8 @@
   \file camera_calibration.cpp
   \brief Camera calibration: OpenCV's Brown model, ViSP's two models, diagnostics.
 */
+#include "board_pose.h"
+
 #include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/camera/quiet_visp.h>
@@ -55,17 +57,6 @@ std::string oneLine(std::string s)
   while (!s.empty() && s.back() == ' ')
     s.pop_back();
   return s;
-}
-
-/*! Board points by feature id (AprilTag: the tag corners only, not the centres). */
-std::map<long, Eigen::Vector3d> boardPoints(const BoardLayout &board)
-{
-  std::map<long, Eigen::Vector3d> pts;
-  const bool tags = board.pattern.kind == PatternSpec::Kind::AprilTag;
-  for (const auto &f : board.features())
-    if (!tags || f.first % 5 != 0)
-      pts[f.first] = f.second;
-  return pts;
 }
 
 /*! Tries a chessboard of another size on a few images: the usual mistake is counting squares. */
@@ -249,7 +240,7 @@ CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std
   if (names.size() != images.size())
     throw Error("detectCalibrationViews: " + std::to_string(names.size()) + " names for " +
                 std::to_string(images.size()) + " images");
-  const std::map<long, Eigen::Vector3d> pts = boardPoints(board);
+  const std::map<long, Eigen::Vector3d> pts = calibration_detail::boardPoints(board);
   PatternDetector detector(board.pattern, options);
   CalibrationDetections out;
   for (std::size_t i = 0; i < images.size(); ++i) {
@@ -318,7 +309,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
 {
   if (width <= 0 || height <= 0)
     throw Error("calibrateCamera: unknown image size");
-  const std::map<long, Eigen::Vector3d> pts = boardPoints(board);
+  const std::map<long, Eigen::Vector3d> pts = calibration_detail::boardPoints(board);
 
   CameraCalibration result;
   result.views.resize(views.size());

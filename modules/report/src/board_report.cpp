@@ -137,24 +137,33 @@ BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const s
     m.max_depth = std::max(m.max_depth, p.c_P.z());
   }
 
-  // Chessboard: the nominal board fitted to the measured corners.
-  if (pattern.kind == PatternSpec::Kind::Chessboard && pattern.cols > 0 && m.points.size() >= 3) {
+  // Chessboard: the nominal board (the layout's corners by id) fitted to the measured corners.
+  if (pattern.kind == PatternSpec::Kind::Chessboard && m.points.size() >= 3) {
+    BoardLayout layout;
+    layout.pattern = pattern;
+    const auto features = layout.features();
+    const std::map<long, Eigen::Vector3d> board(features.begin(), features.end());
     Eigen::Matrix3Xd nominal(3, m.points.size()), measured(3, m.points.size());
-    for (std::size_t i = 0; i < m.points.size(); ++i) {
-      const long id = m.points[i].id;
-      const long col = id % pattern.cols, row = id / pattern.cols; // the board's own grid (id = row * COLS + col)
-      nominal.col(static_cast<Eigen::Index>(i)) = Eigen::Vector3d(static_cast<double>(col) * pattern.square,
-                                                                  static_cast<double>(row) * pattern.square, 0.0);
-      measured.col(static_cast<Eigen::Index>(i)) = m.points[i].w_P;
+    Eigen::Index n = 0;
+    for (const BoardPoint &q : m.points) {
+      const auto it = board.find(q.id);
+      if (it == board.end())
+        continue;
+      nominal.col(n) = it->second;
+      measured.col(n++) = q.w_P;
     }
-    const Eigen::Matrix4d T = Eigen::umeyama(nominal, measured, false);
-    const Eigen::Matrix4d S = Eigen::umeyama(nominal, measured, true);
-    m.w_R_o = T.topLeftCorner<3, 3>();
-    m.w_t_o = T.topRightCorner<3, 1>();
-    m.board_scale = S.topLeftCorner<3, 3>().col(0).norm();
-    const Eigen::Matrix3Xd fitted = (m.w_R_o * nominal).colwise() + m.w_t_o;
-    m.board_fit_rms = std::sqrt((fitted - measured).colwise().squaredNorm().mean());
-    m.has_board_pose = m.w_R_o.allFinite() && m.w_t_o.allFinite() && std::isfinite(m.board_scale);
+    nominal.conservativeResize(3, n);
+    measured.conservativeResize(3, n);
+    if (n >= 3) {
+      const Eigen::Matrix4d T = Eigen::umeyama(nominal, measured, false);
+      const Eigen::Matrix4d S = Eigen::umeyama(nominal, measured, true);
+      m.w_R_o = T.topLeftCorner<3, 3>();
+      m.w_t_o = T.topRightCorner<3, 1>();
+      m.board_scale = S.topLeftCorner<3, 3>().col(0).norm();
+      const Eigen::Matrix3Xd fitted = (m.w_R_o * nominal).colwise() + m.w_t_o;
+      m.board_fit_rms = std::sqrt((fitted - measured).colwise().squaredNorm().mean());
+      m.has_board_pose = m.w_R_o.allFinite() && m.w_t_o.allFinite() && std::isfinite(m.board_scale);
+    }
   }
   return m;
 }
