@@ -3,16 +3,18 @@
   against OpenCV's two-view triangulation, on seeded synthetic scenes with the paper's camera.
 
   A plain program that prints plain-text tables (paste them into a README as they are):
-    bench_accuracy [--trials N] [--seed S] [--quick]
+    bench_accuracy [--trials N] [--seed S] [--quick] [--frames F]
   --trials N  trials per scene (default 200); every trial draws new points and new noise.
   --seed S    base seed (default 1); trial t of scene s uses seed S + 100000 s + t.
   --quick     40 trials.
+  --frames F  frames per scene (default 10, the paper's; with more, `window` marginalises the older
+              frames: its 10-frame window is then smaller than the scene).
 
   What it measures (see the printed header for the details):
   1. Depth zc of every point at its last observed frame, by paper / exact / fused / refine and by
      cv::triangulatePoints on the first and last observation with the measured motion; RMSE,
      RMSE normalised by the joint and by the per-point Cramer-Rao bound, and 2-sigma coverage.
-  2. The same scenes with 5 % gross outliers: refine's and fused's RMSE against the bound of the
+  2. The same scenes with 5 % gross outliers: refine's, window's and fused's RMSE against the bound of the
      clean tracks, and their outlier recall and precision.
   3. Speed of refineWindow (30 points x 10 frames) and of fused per feature update.
 */
@@ -40,6 +42,7 @@
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
 #include <yawdepth/refine/refine.h>
+#include <yawdepth/refine/window_estimator.h>
 #include <yawdepth/simulation/scene.h>
 
 using namespace yawdepth;
@@ -55,8 +58,8 @@ double msSince(Clock::time_point t0)
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-enum MethodIndex { kPaper = 0, kExact, kFused, kRefine, kOpenCV, kMethods };
-const char *const kMethodNames[kMethods] = {"paper", "exact", "fused", "refine", "opencv"};
+enum MethodIndex { kPaper = 0, kExact, kFused, kWindow, kRefine, kOpenCV, kMethods };
+const char *const kMethodNames[kMethods] = {"paper", "exact", "fused", "window", "refine", "opencv"};
 
 struct SceneSpec {
   double yaw_deg;
@@ -157,14 +160,14 @@ struct CleanStats {
 /*! Outlier-scene statistics (fused and refine). */
 struct OutlierStats {
   long points = 0, used = 0, corrupted = 0;
-  std::array<Acc, 2> acc;                  // 0 fused, 1 refine
-  std::array<long, 2> tp{{0, 0}}, fp{{0, 0}}; // flagged and corrupted / flagged and clean
+  std::array<Acc, 3> acc;                        // 0 fused, 1 refine, 2 window
+  std::array<long, 3> tp{{0, 0, 0}}, fp{{0, 0, 0}}; // flagged and corrupted / flagged and clean
   void merge(const OutlierStats &o)
   {
     points += o.points;
     used += o.used;
     corrupted += o.corrupted;
-    for (int m = 0; m < 2; ++m) {
+    for (int m = 0; m < 3; ++m) {
       acc[m].merge(o.acc[m]);
       tp[m] += o.tp[m];
       fp[m] += o.fp[m];
@@ -308,7 +311,7 @@ void printCleanTable(const std::string &title, const CleanStats &s, long trials,
 
 void usage(const char *argv0)
 {
-  std::fprintf(stderr, "usage: %s [--trials N] [--seed S] [--quick]\n", argv0);
+  std::fprintf(stderr, "usage: %s [--trials N] [--seed S] [--quick] [--frames F]\n", argv0);
 }
 
 } // namespace
@@ -318,12 +321,15 @@ int main(int argc, char **argv)
   long trials = 200;
   std::uint64_t seed = 1;
   bool quick = false;
+  int frames = 10;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--trials" && i + 1 < argc) {
       trials = std::strtol(argv[++i], nullptr, 10);
     } else if (a == "--seed" && i + 1 < argc) {
       seed = std::strtoull(argv[++i], nullptr, 10);
+    } else if (a == "--frames" && i + 1 < argc) {
+      frames = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
     } else if (a == "--quick") {
       quick = true;
     } else if (a == "--help" || a == "-h") {
@@ -338,6 +344,10 @@ int main(int argc, char **argv)
     trials = 40;
   if (trials < 1) {
     std::fprintf(stderr, "bench_accuracy: --trials must be >= 1\n");
+    return 2;
+  }
+  if (frames < 2 || frames > 1000) {
+    std::fprintf(stderr, "bench_accuracy: --frames must be between 2 and 1000\n");
     return 2;
   }
 
@@ -361,11 +371,13 @@ int main(int argc, char **argv)
   std::printf("yawdepth accuracy benchmark: depth zc of each point at its last observed frame\n");
   std::printf("================================================================================\n");
   std::printf("Methods: paper (eq. 5, last increment), exact (two-view, last increment), fused (per-feature\n"
-              "  filter over all frames), refine (joint MAP of points + motion, initialised with fused),\n"
-              "  opencv (cv::triangulatePoints on the first and last observation, measured motion).\n");
+              "  filter over all frames), window (sliding-window smoother of points + motion, 10 frames, older ones\n"
+              "  marginalised; frame by frame, each point read when its last frame leaves the window), refine (joint\n"
+              "  MAP of points + motion over all frames, initialised with fused), opencv (cv::triangulatePoints on\n"
+              "  the first and last observation, measured motion).\n");
   std::printf("Scenes: paper's camera (fx 1734.1, fy 1734.5, u0 319.2, v0 241.4, Brown distortion, 640x480),\n"
               "  rig offset (-0.1503, 0, 0) m; yaw 0/45/90 deg x straight / turning 1 deg per frame;\n"
-              "  10 frames, 0.02 m forward per frame; 30 points, depth 0.5 to 3 m in the first frame.\n");
+              "  %d frames, 0.02 m forward per frame; 30 points, depth 0.5 to 3 m in the first frame.\n", frames);
   std::printf("Noise (simulation = estimators' model): pixels 0.3 px, odometry 1 mm per axis per increment,\n"
               "  heading 0.05 deg per increment, yaw reading 0.05 deg.\n");
   std::printf("Arm scenes (6-DoF motion log): camera fx 601.7, fy 602.1, u0 324.4, v0 239.6, Brown distortion,\n"
@@ -381,20 +393,22 @@ int main(int argc, char **argv)
               "  (s = 0..5 in the order of the tables) uses seed %llu + 100000 s + t.\n",
               trials, static_cast<unsigned long long>(seed));
   std::printf("Reproduce: cmake -S . -B build-acc -DYAWDEPTH_BUILD_TESTS=OFF -DYAWDEPTH_BUILD_EXAMPLES=OFF &&\n"
-              "  cmake --build build-acc --target bench_accuracy && build-acc/benchmarks/bench_accuracy --trials %ld --seed %llu\n",
-              trials, static_cast<unsigned long long>(seed));
+              "  cmake --build build-acc --target bench_accuracy && build-acc/benchmarks/bench_accuracy --trials %ld --seed %llu"
+              " --frames %d\n",
+              trials, static_cast<unsigned long long>(seed), frames);
   std::printf("refine: %s\n", refine_ok ? "available (Ceres)" : "unavailable (built without Ceres)");
   std::fflush(stdout);
 
   TrackEstimatorOptions opt;
   RefineOptions ropt;
+  WindowOptions wopt;
 
   const auto t_start = Clock::now();
   std::vector<CleanStats> clean(specs.size());
   std::vector<OutlierStats> dirty(specs.size());
   std::vector<double> refine_ms, refine_arm_ms;
-  double fused_ms = 0;
-  long fused_obs = 0;
+  double fused_ms = 0, window_ms = 0;
+  long fused_obs = 0, window_frames = 0;
   long refine_errors = 0;
 
   for (std::size_t si = 0; si < specs.size(); ++si) {
@@ -405,8 +419,9 @@ int main(int argc, char **argv)
     opt.two_view.noise = noise;
     opt.filter.noise = noise;
     ropt.noise = noise;
+    wopt.noise = noise;
     SceneOptions so;
-    so.frames = 10;
+    so.frames = frames;
     so.step = 0.02;
     so.yaw = specs[si].yaw_deg * kDeg;
     so.turn_rate = specs[si].turn_deg * kDeg;
@@ -462,6 +477,10 @@ int main(int argc, char **argv)
       for (const Track &tr : scene.tracks)
         fused_obs += static_cast<long>(tr.observations.size());
       take(kFused, fused);
+      t0 = Clock::now();
+      take(kWindow, windowTracks(camera, rig, scene.measured, scene.tracks, wopt));
+      window_ms += msSince(t0);
+      window_frames += static_cast<long>(scene.measured.size());
       if (refine_ok) {
         try {
           t0 = Clock::now();
@@ -515,6 +534,9 @@ int main(int argc, char **argv)
       std::vector<std::vector<bool>> fused_flags;
       const std::vector<PointEstimate> fused_o = estimateTracks(camera, rig, scene.measured, tracks, opt, &fused_flags);
       countFlags(fused_flags, corrupted, os.tp[0], os.fp[0]);
+      std::vector<std::vector<bool>> window_flags;
+      const std::vector<PointEstimate> window_o = windowTracks(camera, rig, scene.measured, tracks, wopt, &window_flags);
+      countFlags(window_flags, corrupted, os.tp[2], os.fp[2]);
       std::vector<PointEstimate> refine_o(n);
       if (refine_ok) {
         try {
@@ -530,12 +552,14 @@ int main(int argc, char **argv)
         ++os.points;
         if (tracks[i].observations.size() < 2)
           continue;
-        const bool f_ok = fused_o[i].ok(), r_ok = !refine_ok || refine_o[i].ok();
+        const bool f_ok = fused_o[i].ok(), r_ok = !refine_ok || refine_o[i].ok(), w_ok = window_o[i].ok();
         if (!f_ok)
           ++os.acc[0].not_ok;
         if (!r_ok)
           ++os.acc[1].not_ok;
-        if (!f_ok || !r_ok)
+        if (!w_ok)
+          ++os.acc[2].not_ok;
+        if (!f_ok || !r_ok || !w_ok)
           continue;
         if (!(std::isfinite(crlb_joint[i]) && crlb_joint[i] > 0 && std::isfinite(crlb_pp[i]) && crlb_pp[i] > 0))
           continue;
@@ -543,6 +567,7 @@ int main(int argc, char **argv)
         os.acc[0].add(fused_o[i].c_P.z() - z_true[i], crlb_joint[i], crlb_pp[i], fused_o[i].sigmaZ());
         if (refine_ok)
           os.acc[1].add(refine_o[i].c_P.z() - z_true[i], crlb_joint[i], crlb_pp[i], refine_o[i].sigmaZ());
+        os.acc[2].add(window_o[i].c_P.z() - z_true[i], crlb_joint[i], crlb_pp[i], window_o[i].sigmaZ());
       }
     }
   }
@@ -609,8 +634,8 @@ int main(int argc, char **argv)
                 "per-point", "(pts)", "coverage", "recall", "precision");
     printRule(W);
     auto rows = [&](const std::string &name, const OutlierStats &s) {
-      for (int m = 0; m < 2; ++m) {
-        const char *mname = m == 0 ? "fused" : "refine";
+      for (int m : {0, 2, 1}) {
+        const char *mname = m == 0 ? "fused" : m == 1 ? "refine" : "window";
         if (m == 1 && !refine_ok) {
           std::printf("%-16s %-7s %s\n", "", mname, "refine: unavailable");
           continue;
@@ -631,7 +656,7 @@ int main(int argc, char **argv)
     rows("pooled planar", op);
     rows("pooled arm", op_arm);
     printRule(W);
-    std::printf("  pooled planar: %ld points, %ld used (fused and refine ok, >= 2 observations), %ld corrupted observations.\n",
+    std::printf("  pooled planar: %ld points, %ld used (fused, window and refine ok, >= 2 observations), %ld corrupted observations.\n",
                 op.points, op.used, op.corrupted);
   }
 
@@ -656,6 +681,8 @@ int main(int argc, char **argv)
     }
     std::printf("  fused (estimateTracks, Method::Fused): %.2f us per feature update (%ld observations)\n",
                 fused_obs ? 1e3 * fused_ms / fused_obs : NAN, fused_obs);
+    std::printf("  window (windowTracks, 30 points): %.3f ms per frame (%ld frames; see bench_window for the cost table)\n",
+                window_frames ? window_ms / window_frames : NAN, window_frames);
     if (refine_errors)
       std::printf("  refineWindow threw %ld times (counted as not ok)\n", refine_errors);
     std::printf("\nTotal run time: %.1f s (%ld trials x %zu scenes, clean and with outliers)\n", total_s, trials,

@@ -16,6 +16,9 @@ void SceneOptions::validate() const
     throw Error("simulate: frames must be between 1 and 1000000");
   if (points < 0 || points > 10000000)
     throw Error("simulate: points must be between 0 and 10000000");
+  for (const Eigen::Vector3d &p : world_points)
+    if (!p.allFinite())
+      throw Error("simulate: a world point is not finite");
   if (!(min_depth > 0) || !(max_depth >= min_depth))
     throw Error("simulate: depths must satisfy 0 < min-depth <= max-depth");
   if (margin_px < 0)
@@ -119,7 +122,7 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
   fromVisp(wMc(rig, scene.truth.front()), R0, t0);
-  for (int i = 0; i < o.points; ++i) {
+  for (int i = 0; o.world_points.empty() && i < o.points; ++i) {
     const double u = o.margin_px + uni(rng) * std::max(0.0, width - 2 * o.margin_px);
     const double v = o.margin_px + uni(rng) * std::max(0.0, height - 2 * o.margin_px);
     const double Z = o.min_depth + uni(rng) * (o.max_depth - o.min_depth);
@@ -128,12 +131,15 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
       throw Error("simulate: the camera's distortion model cannot be inverted inside the image");
     scene.w_points.emplace_back(R0 * (Z * Eigen::Vector3d(m.x(), m.y(), 1.0)) + t0);
   }
+  if (!o.world_points.empty())
+    scene.w_points = o.world_points;
   // Observations.
-  scene.tracks.resize(static_cast<std::size_t>(o.points));
-  for (int i = 0; i < o.points; ++i)
+  const int points = static_cast<int>(scene.w_points.size());
+  scene.tracks.resize(static_cast<std::size_t>(points));
+  for (int i = 0; i < points; ++i)
     scene.tracks[i].id = i;
   for (std::size_t k = 0; k < scene.truth.size(); ++k) {
-    for (int i = 0; i < o.points; ++i) {
+    for (int i = 0; i < points; ++i) {
       const Eigen::Vector3d c_P = scene.cameraPoint(rig, i, k);
       if (!(c_P.z() > 1e-6))
         continue;

@@ -35,6 +35,10 @@ struct SceneOptions {
       empty it replaces the planar one (step, lateral_step, heading, turn_rate), `frames` is its
       length, and the motion logs are 6-DoF (MotionSample::six_dof). See armTrajectory(). */
   std::vector<vpHomogeneousMatrix> vision_poses;
+  /*! Points given in the world frame (m), ids = index: when not empty they replace the drawn ones
+      (`points`, `min_depth`, `max_depth`, `margin_px` are then unused). For long sequences where
+      features appear and vanish (a robot driving past a wall of points). */
+  std::vector<Eigen::Vector3d> world_points;
   NoiseModel noise{0.0, 0.0, 0.0, 0.0, 0.0}; //!< Noise added to pixels and to the motion log (default: none).
   std::uint64_t seed = 1;     //!< Random seed.
   /*! \brief Throws yawdepth::Error for invalid options. */

@@ -1,0 +1,508 @@
+// `window`: the sliding-window smoother (WindowEstimator). Jacobians against finite differences,
+// noise-free exactness with marginalisation, Monte Carlo against the joint bound, gross outliers,
+// features that appear and vanish, frames without motion or features, per-pose motion noise, a
+// long sequence without drift, and bad input.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <yawdepth/error.h>
+#include <yawdepth/refine/refine.h>
+#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/simulation/scene.h>
+
+// The estimator's model with its analytic Jacobians (private to the module, header-only).
+#include "../modules/refine/src/window_model.h"
+
+using namespace yawdepth;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+// Round-off of the exact maths (relative), and of central differences with step 1e-6.
+constexpr double kExact = 1e-6;
+constexpr double kFiniteDifference = 1e-5;
+// Noise-scaled acceptance of the Monte Carlo tests (fewer trials than the benchmark's, so a little
+// looser than the pooled 1.2 and coverage 0.90 to 0.98).
+constexpr double kMaxRatio = 1.3;
+constexpr double kMinCoverage = 0.86, kMaxCoverage = 0.995;
+
+CameraModel paperCamera()
+{
+  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
+}
+YawRig paperRig() { return YawRig(Eigen::Vector3d(-0.1503, 0.0, 0.0)); }
+NoiseModel paperNoise() { return NoiseModel{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg}; }
+
+SceneOptions scene(double yaw, double turn, int frames, std::uint64_t seed, bool noisy = true)
+{
+  SceneOptions o;
+  o.frames = frames;
+  o.step = 0.02;
+  o.yaw = yaw;
+  o.turn_rate = turn;
+  o.points = 30;
+  o.seed = seed;
+  if (noisy)
+    o.noise = paperNoise();
+  return o;
+}
+
+std::size_t rowOf(const Scene &s, long frame)
+{
+  for (std::size_t r = 0; r < s.truth.size(); ++r)
+    if (s.truth[r].frame == frame)
+      return r;
+  FAIL("frame not in the scene");
+  return 0;
+}
+
+Eigen::Vector3d truthAtLast(const Scene &s, const YawRig &rig, const Track &t)
+{
+  return s.cameraPoint(rig, t.id, rowOf(s, t.observations.back().frame));
+}
+
+struct Stats {
+  double sum = 0;
+  int n = 0, covered = 0;
+  void add(double e, double crlb, double sigma)
+  {
+    sum += (e / crlb) * (e / crlb);
+    covered += std::abs(e) <= 2 * sigma ? 1 : 0;
+    ++n;
+  }
+  double ratio() const { return std::sqrt(sum / std::max(n, 1)); }
+  double coverage() const { return double(covered) / std::max(n, 1); }
+};
+
+/* Every frame's observations, for feeding a WindowEstimator by hand. */
+std::vector<std::vector<FrameObservation>> byFrame(const Scene &s, const std::vector<Track> &tracks)
+{
+  std::vector<std::vector<FrameObservation>> out(s.measured.size());
+  for (const Track &t : tracks)
+    for (const Observation &ob : t.observations)
+      out[rowOf(s, ob.frame)].push_back(FrameObservation{t.id, ob.u, ob.v});
+  return out;
+}
+
+} // namespace
+
+TEST_CASE("window: camera, reprojection and increment Jacobians match central finite differences", "[window]")
+{
+  using namespace window_detail;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double h = 1e-6;
+  for (int trial = 0; trial < 20; ++trial) {
+    Mount mount;
+    mount.R0 = expSO3<double>(Eigen::Vector3d(0.3 * u(rng), 0.3 * u(rng), 1.5 + 0.1 * u(rng)));
+    mount.t0 = Eigen::Vector3d(0.1 * u(rng), 0.05 * u(rng), 0.05 * u(rng));
+    const Eigen::Matrix3d Rref = expSO3<double>(Eigen::Vector3d(0.2 * u(rng), u(rng), 0.2 * u(rng)));
+    double x[kFrameDim] = {u(rng), 0.1 * u(rng), u(rng), 0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng), u(rng)};
+    CameraPose cam;
+    cameraPose(x, Rref, mount, cam);
+    // Camera derivatives.
+    for (int j = 0; j < kFrameDim; ++j) {
+      double xp[kFrameDim], xm[kFrameDim];
+      std::copy(x, x + kFrameDim, xp);
+      std::copy(x, x + kFrameDim, xm);
+      xp[j] += h;
+      xm[j] -= h;
+      CameraPose cp, cm;
+      cameraPose(xp, Rref, mount, cp);
+      cameraPose(xm, Rref, mount, cm);
+      CHECK(((cp.R - cm.R) / (2 * h) - cam.dR[j]).norm() < kFiniteDifference);
+      CHECK(((cp.c - cm.c) / (2 * h) - cam.dc[j]).norm() < kFiniteDifference);
+      if (j >= 3 && j < 6)
+        CHECK(((cp.Rv - cm.Rv) / (2 * h) - cam.dRv[j - 3]).norm() < kFiniteDifference);
+    }
+    // Reprojection: a point 1 to 3 m in front of the camera, anchored in another camera.
+    const Eigen::Vector3d P = cam.c + cam.R * Eigen::Vector3d(0.3 * u(rng), 0.2 * u(rng), 2.0 + u(rng));
+    const Eigen::Matrix3d Ra = cam.R * expSO3<double>(Eigen::Vector3d(0.05 * u(rng), 0.05 * u(rng), 0.05 * u(rng)));
+    const Eigen::Vector3d ca = cam.c + Eigen::Vector3d(0.2 * u(rng), 0.05 * u(rng), 0.2 * u(rng));
+    const Eigen::Vector3d qa = Ra.transpose() * (P - ca);
+    double p[3] = {qa.x() / qa.z(), qa.y() / qa.z(), 1.0 / qa.z()};
+    WhitenedObservation w;
+    w.m[0] = 0.01;
+    w.m[1] = -0.02;
+    w.s00 = 3000;
+    w.s01 = 40;
+    w.s11 = 2900;
+    Eigen::Vector2d r;
+    Eigen::Matrix<double, 2, 10> J;
+    REQUIRE(observationResidual(Ra, ca, p, cam, w, r, &J));
+    for (int j = 0; j < 10; ++j) {
+      Eigen::Vector2d rp, rm;
+      if (j < kFrameDim) {
+        double xp[kFrameDim], xm[kFrameDim];
+        std::copy(x, x + kFrameDim, xp);
+        std::copy(x, x + kFrameDim, xm);
+        xp[j] += h;
+        xm[j] -= h;
+        CameraPose cp, cm;
+        cameraPose(xp, Rref, mount, cp);
+        cameraPose(xm, Rref, mount, cm);
+        observationResidual(Ra, ca, p, cp, w, rp, nullptr);
+        observationResidual(Ra, ca, p, cm, w, rm, nullptr);
+      } else {
+        double pp[3] = {p[0], p[1], p[2]}, pm[3] = {p[0], p[1], p[2]};
+        pp[j - 7] += h;
+        pm[j - 7] -= h;
+        observationResidual(Ra, ca, pp, cam, w, rp, nullptr);
+        observationResidual(Ra, ca, pm, cam, w, rm, nullptr);
+      }
+      const Eigen::Vector2d fd = (rp - rm) / (2 * h);
+      CHECK((fd - J.col(j)).norm() <= kFiniteDifference * (1.0 + fd.norm()));
+    }
+    // Increment: a second frame near the first, the measurement near the truth.
+    double y[kFrameDim];
+    for (int j = 0; j < kFrameDim; ++j)
+      y[j] = x[j] + 0.02 * u(rng);
+    const Eigen::Matrix3d Rref2 = Rref * expSO3<double>(Eigen::Vector3d(0.01 * u(rng), 0.1 * u(rng), 0.01 * u(rng)));
+    CameraPose cam2;
+    cameraPose(y, Rref2, mount, cam2);
+    OdometryMeasurementGeneral o;
+    o.d[0] = 0.01;
+    o.d[1] = -0.003;
+    o.d[2] = 0.02;
+    o.dR = expSO3<double>(Eigen::Vector3d(0.001, 0.02, -0.002));
+    o.inv_sigma_t = 1000;
+    o.inv_sigma_r[0] = 2000;
+    o.inv_sigma_r[1] = 1500;
+    o.inv_sigma_r[2] = 1800;
+    Eigen::Matrix<double, 6, 1> ro;
+    Eigen::Matrix<double, 6, 14> Jo;
+    odometryResidual(x, cam, y, cam2, o, ro, &Jo);
+    // Against the residual refine uses (refine_model.h), with Rref folded into the blocks' frames.
+    o.Rref_prev = Rref;
+    o.Rref_cur = Rref2;
+    double rr[6];
+    refine_detail::odometryResidualGeneral(x, y, o, rr);
+    for (int k = 0; k < 6; ++k)
+      CHECK(ro(k) == Approx(rr[k]).margin(kExact));
+    for (int j = 0; j < 14; ++j) {
+      double xp[kFrameDim], xm[kFrameDim], yp[kFrameDim], ym[kFrameDim];
+      std::copy(x, x + kFrameDim, xp);
+      std::copy(x, x + kFrameDim, xm);
+      std::copy(y, y + kFrameDim, yp);
+      std::copy(y, y + kFrameDim, ym);
+      (j < kFrameDim ? xp[j] : yp[j - kFrameDim]) += h;
+      (j < kFrameDim ? xm[j] : ym[j - kFrameDim]) -= h;
+      CameraPose a, b, c, d;
+      cameraPose(xp, Rref, mount, a);
+      cameraPose(yp, Rref2, mount, b);
+      cameraPose(xm, Rref, mount, c);
+      cameraPose(ym, Rref2, mount, d);
+      Eigen::Matrix<double, 6, 1> rp, rm;
+      odometryResidual(xp, a, yp, b, o, rp, nullptr);
+      odometryResidual(xm, c, ym, d, o, rm, nullptr);
+      const Eigen::Matrix<double, 6, 1> fd = (rp - rm) / (2 * h);
+      CHECK((fd - Jo.col(j)).norm() <= kFiniteDifference * (1.0 + fd.norm()));
+    }
+  }
+}
+
+TEST_CASE("window returns the truth on noise-free scenes, with and without marginalisation", "[window]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  for (int frames : {10, 25}) {
+    for (double yaw : {0.0, 90 * kDeg}) {
+      const Scene s = simulateScene(camera, rig, scene(yaw, 1 * kDeg, frames, 3, false));
+      WindowOptions o;
+      o.noise = paperNoise(); // the model of noisy data; these happen to be exact
+      o.window = 8;
+      o.convergence = 1e-12; // to round-off
+      o.max_iterations = 30;
+      o.prior_sigma_inverse_depth = 1e4; // the weak prior pulls by (sigma_rho / its sigma)^2: here nothing
+      const std::vector<PointEstimate> est = windowTracks(camera, rig, s.measured, s.tracks, o);
+      REQUIRE(est.size() == s.tracks.size());
+      int ok = 0;
+      for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+        if (!est[i].ok())
+          continue;
+        ++ok;
+        const Eigen::Vector3d truth = truthAtLast(s, rig, s.tracks[i]);
+        CHECK((est[i].c_P - truth).norm() / truth.norm() < kExact);
+        CHECK(est[i].frame == s.tracks[i].observations.back().frame);
+        CHECK(est[i].c_cov.allFinite());
+        CHECK(est[i].sigmaZ() > 0);
+      }
+      CHECK(ok >= 20);
+    }
+  }
+}
+
+TEST_CASE("window is efficient and honest with marginalisation (Monte Carlo against the joint bound)",
+          "[window][montecarlo]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  const NoiseModel noise = paperNoise();
+  Stats pooled;
+  for (double yaw : {0.0, 45 * kDeg, 90 * kDeg}) {
+    Stats st;
+    for (int t = 0; t < 25; ++t) {
+      const Scene s = simulateScene(camera, rig, scene(yaw, 0.5 * kDeg, 20, 100 + static_cast<std::uint64_t>(t)));
+      const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
+      WindowOptions o;
+      o.noise = noise;
+      o.window = 8; // 12 of the 20 frames are marginalised
+      const std::vector<PointEstimate> est = windowTracks(camera, rig, s.measured, s.tracks, o);
+      for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+        if (!est[i].ok() || !(crlb[i] > 0) || !std::isfinite(crlb[i]))
+          continue;
+        const double e = est[i].c_P.z() - truthAtLast(s, rig, s.tracks[i]).z();
+        st.add(e, crlb[i], est[i].sigmaZ());
+        pooled.add(e, crlb[i], est[i].sigmaZ());
+      }
+    }
+    INFO("yaw " << yaw / kDeg << " deg: RMSE/CRLB " << st.ratio() << ", coverage " << st.coverage() << ", n " << st.n);
+    CHECK(st.n > 500);
+    CHECK(st.ratio() < 1.5);
+  }
+  INFO("pooled: RMSE/CRLB " << pooled.ratio() << ", coverage " << pooled.coverage());
+  CHECK(pooled.ratio() < kMaxRatio);
+  CHECK(pooled.coverage() > kMinCoverage);
+  CHECK(pooled.coverage() < kMaxCoverage);
+}
+
+TEST_CASE("window flags gross outliers and stays near the clean bound", "[window][outliers]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  const NoiseModel noise = paperNoise();
+  long corrupted = 0, tp = 0, fp = 0;
+  Stats st;
+  for (int t = 0; t < 12; ++t) {
+    const Scene s = simulateScene(camera, rig, scene(45 * kDeg, 0.5 * kDeg, 20, 300 + static_cast<std::uint64_t>(t)));
+    std::vector<Track> tracks = s.tracks;
+    std::vector<std::vector<bool>> truth(tracks.size());
+    std::mt19937_64 rng(900 + static_cast<std::uint64_t>(t));
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (std::size_t i = 0; i < tracks.size(); ++i)
+      for (Observation &ob : tracks[i].observations) {
+        const bool bad = u(rng) < 0.05;
+        truth[i].push_back(bad);
+        if (bad) {
+          const double a = 2 * M_PI * u(rng), r = 10 + 40 * u(rng);
+          ob.u = std::clamp(ob.u + r * std::cos(a), 0.0, 639.0);
+          ob.v = std::clamp(ob.v + r * std::sin(a), 0.0, 479.0);
+          ++corrupted;
+        }
+      }
+    const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
+    WindowOptions o;
+    o.noise = noise;
+    o.window = 8;
+    std::vector<std::vector<bool>> flags;
+    const std::vector<PointEstimate> est = windowTracks(camera, rig, s.measured, tracks, o, &flags);
+    REQUIRE(flags.size() == tracks.size());
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      REQUIRE(flags[i].size() == tracks[i].observations.size());
+      for (std::size_t k = 0; k < flags[i].size(); ++k)
+        if (flags[i][k])
+          (truth[i][k] ? tp : fp) += 1;
+      if (est[i].ok() && crlb[i] > 0 && std::isfinite(crlb[i]))
+        st.add(est[i].c_P.z() - truthAtLast(s, rig, s.tracks[i]).z(), crlb[i], est[i].sigmaZ());
+    }
+  }
+  REQUIRE(corrupted > 100);
+  const double recall = double(tp) / corrupted, precision = double(tp) / std::max(tp + fp, 1L);
+  INFO("recall " << recall << ", precision " << precision << ", RMSE/CRLB " << st.ratio());
+  CHECK(recall >= 0.95);
+  CHECK(precision >= 0.95);
+  CHECK(st.ratio() < 1.6);
+}
+
+TEST_CASE("window: features appear and vanish, frames without motion or without features", "[window]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  Scene s = simulateScene(camera, rig, scene(60 * kDeg, 0.0, 30, 21));
+  // Features 0..9 only from frame 12 on (appearing), 10..19 only up to frame 15 (vanishing).
+  std::vector<Track> tracks = s.tracks;
+  for (Track &t : tracks) {
+    auto &ob = t.observations;
+    if (t.id < 10)
+      ob.erase(std::remove_if(ob.begin(), ob.end(), [](const Observation &o) { return o.frame < 12; }), ob.end());
+    else if (t.id < 20)
+      ob.erase(std::remove_if(ob.begin(), ob.end(), [](const Observation &o) { return o.frame > 15; }), ob.end());
+  }
+  const auto frames = byFrame(s, tracks);
+  WindowOptions o;
+  o.noise = paperNoise();
+  o.window = 6;
+  WindowEstimator est(camera, rig, o);
+  for (std::size_t k = 0; k < s.measured.size(); ++k) {
+    // Frame 8 carries no feature; frame 20 repeats frame 19's row (the robot stood still).
+    std::vector<FrameObservation> obs = k == 8 ? std::vector<FrameObservation>() : frames[k];
+    MotionSample row = s.measured[k];
+    if (k == 20) {
+      const long f = row.frame;
+      row = s.measured[19];
+      row.frame = f;
+      obs = frames[19];
+    }
+    const auto res = est.addFrame(row, obs);
+    CHECK(res.size() == obs.size());
+    CHECK(est.windowFrames() <= o.window);
+  }
+  int ok = 0;
+  for (const Track &t : tracks) {
+    if (t.observations.size() < 2)
+      continue;
+    const PointEstimate e = est.estimate(t.id);
+    if (!e.ok())
+      continue;
+    ++ok;
+    const long fed_last = t.observations.back().frame == s.measured[19].frame ? s.measured[20].frame
+                                                                                : t.observations.back().frame;
+    CHECK(e.frame == fed_last);
+    CHECK(e.c_cov.allFinite());
+    // Frame 20's observations were frame 19's: its points are off by one step there; the others are
+    // measured to within 10 sigma of their own uncertainty.
+    if (e.frame != s.measured[20].frame && e.frame == t.observations.back().frame) {
+      const double err = std::abs(e.c_P.z() - truthAtLast(s, rig, t).z());
+      CHECK(err < 10 * e.sigmaZ() + 1e-3);
+    }
+  }
+  CHECK(ok >= 20);
+  // Unknown ids, and a feature seen once.
+  CHECK(est.estimate(123456).status == Status::TooFewFrames);
+  MotionSample next = s.measured.back();
+  next.frame += 1;
+  est.addFrame(next, {FrameObservation{777, 320, 240}});
+  CHECK(est.estimate(777).status == Status::TooFewFrames);
+  est.forget(20);
+  CHECK(est.estimate(20).status == Status::TooFewFrames);
+}
+
+TEST_CASE("window: a camera that does not move gives no_motion, not a depth", "[window]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  Scene s = simulateScene(camera, rig, scene(0.0, 0.0, 6, 5, false));
+  for (MotionSample &m : s.measured)
+    m = MotionSample{m.frame, 0, 0, 0, 0, 0};
+  // Every observation at its first frame's pixel: a still camera.
+  for (Track &t : s.tracks)
+    for (Observation &ob : t.observations)
+      ob = Observation{ob.frame, t.observations.front().u, t.observations.front().v};
+  WindowOptions o;
+  o.noise = paperNoise();
+  const std::vector<PointEstimate> est = windowTracks(camera, rig, s.measured, s.tracks, o);
+  for (const PointEstimate &e : est) {
+    CHECK_FALSE(e.ok());
+    CHECK((e.status == Status::NoMotion || e.status == Status::Degenerate));
+  }
+}
+
+TEST_CASE("window with per-pose motion noise on arm scenes is near the joint bound", "[window][6dof][montecarlo]")
+{
+  const CameraModel camera = CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
+  const YawRig rig(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818));
+  NoiseModel noise = paperNoise();
+  noise.sigma_yaw = 0;
+  noise.motion_noise = MotionNoise::Absolute;
+  Stats st;
+  for (int t = 0; t < 15; ++t) {
+    SceneOptions so = scene(0, 0, 16, 500 + static_cast<std::uint64_t>(t));
+    so.noise = noise;
+    so.min_depth = 0.4;
+    so.max_depth = 0.8;
+    so.vision_poses = armTrajectory(rig, ArmPath::Orbit, so.frames, 0.6, so.seed);
+    const Scene s = simulateScene(camera, rig, so);
+    const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
+    WindowOptions o;
+    o.noise = noise;
+    o.window = 6;
+    const std::vector<PointEstimate> est = windowTracks(camera, rig, s.measured, s.tracks, o);
+    for (std::size_t i = 0; i < s.tracks.size(); ++i)
+      if (est[i].ok() && crlb[i] > 0 && std::isfinite(crlb[i]))
+        st.add(est[i].c_P.z() - truthAtLast(s, rig, s.tracks[i]).z(), crlb[i], est[i].sigmaZ());
+  }
+  INFO("RMSE/CRLB " << st.ratio() << ", coverage " << st.coverage() << ", n " << st.n);
+  CHECK(st.n > 300);
+  CHECK(st.ratio() < 1.5);
+  CHECK(st.coverage() > kMinCoverage);
+}
+
+TEST_CASE("window does not drift over a long sequence (features appearing and vanishing)", "[window][montecarlo]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  const NoiseModel noise = paperNoise();
+  // Normalised squared errors of the first and the last third of a 300-frame drive past a wall.
+  double nees[3] = {0, 0, 0};
+  int n[3] = {0, 0, 0};
+  for (int t = 0; t < 3; ++t) {
+    std::mt19937_64 rng(40 + static_cast<std::uint64_t>(t));
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    SceneOptions so = scene(60 * kDeg, 0.0, 300, 40 + static_cast<std::uint64_t>(t));
+    for (int i = 0; i < 300; ++i)
+      so.world_points.emplace_back(1.5 + 1.5 * u(rng), -0.3 + 0.6 * u(rng), -1.0 + 10.0 * u(rng));
+    const Scene s = simulateScene(camera, rig, so);
+    WindowOptions o;
+    o.noise = noise;
+    const std::vector<PointEstimate> est = windowTracks(camera, rig, s.measured, s.tracks, o);
+    for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+      if (!est[i].ok())
+        continue;
+      const double e = est[i].c_P.z() - truthAtLast(s, rig, s.tracks[i]).z();
+      const int third = static_cast<int>(std::min<long>(2, s.tracks[i].observations.back().frame / 100));
+      nees[third] += (e / est[i].sigmaZ()) * (e / est[i].sigmaZ());
+      ++n[third];
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    INFO("third " << k << ": NEES " << nees[k] / n[k] << " over " << n[k] << " points");
+    CHECK(n[k] > 100);
+    CHECK(nees[k] / n[k] < 3.0); // without first-estimate Jacobians it grows past 10 here
+  }
+}
+
+TEST_CASE("window rejects bad input", "[window]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  WindowOptions bad;
+  bad.window = 1;
+  CHECK_THROWS_AS(WindowEstimator(camera, rig, bad), Error);
+  bad = WindowOptions();
+  bad.noise.sigma_px = 0;
+  CHECK_THROWS_AS(WindowEstimator(camera, rig, bad), Error);
+  bad = WindowOptions();
+  bad.outlier_threshold_px = std::nan("");
+  CHECK_THROWS_AS(WindowEstimator(camera, rig, bad), Error);
+
+  WindowEstimator est(camera, rig);
+  MotionSample a;
+  a.frame = 5;
+  est.addFrame(a, {});
+  CHECK_THROWS_AS(est.addFrame(a, {}), Error); // not increasing
+  MotionSample b = a;
+  b.frame = 6;
+  CHECK_THROWS_AS(est.addFrame(b, {FrameObservation{1, 10, 10}, FrameObservation{1, 20, 20}}), Error);
+  MotionSample c = MotionSample::fromPose(7, vpHomogeneousMatrix());
+  CHECK_THROWS_AS(est.addFrame(c, {}), Error); // 6-DoF after planar
+  MotionSample d = a;
+  d.frame = 8;
+  const auto res = est.addFrame(d, {FrameObservation{2, std::nan(""), 10}, FrameObservation{3, 1e9, 1e9}});
+  REQUIRE(res.size() == 2);
+  CHECK_FALSE(res[0].undistorted);
+  CHECK_FALSE(res[1].undistorted);
+  CHECK_THROWS_AS(est.motion(1), Error);
+  CHECK(est.motion(8).frame == 8);
+
+  // windowTracks: a frame missing from the log, a repeated id.
+  const Scene s = simulateScene(camera, rig, scene(0.0, 0.0, 4, 1, false));
+  std::vector<Track> tracks = s.tracks;
+  tracks[0].observations.push_back(Observation{999, 100, 100});
+  CHECK_THROWS_AS(windowTracks(camera, rig, s.measured, tracks), Error);
+  tracks = s.tracks;
+  tracks[1].id = tracks[0].id;
+  CHECK_THROWS_AS(windowTracks(camera, rig, s.measured, tracks), Error);
+}
