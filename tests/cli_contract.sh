@@ -161,7 +161,7 @@ fi
 # (not to round-off: they are statistical estimators with a diffuse prior), and on noisy data
 # they run, report ok rows and write the --outliers file.
 TINY=(--sigma-px 1e-4 --sigma-odom 1e-8 --sigma-heading 1e-9 --sigma-yaw 1e-9)
-for m in fused refine; do
+for m in fused window refine; do
   for name in side turning; do
     D="$W/sim_yaml_$name"
     [ -s "$D/tracks.csv" ] || { fail "estimate $m: no simulated $name scene"; continue; }
@@ -476,6 +476,8 @@ done
 # Numbers that would give NaN or a raw library error instead of a reason.
 bad refine_sigma_px_zero "${EST[@]}" --motion "$M" --tracks "$T" --method refine --sigma-px 0
 bad fused_sigma_px_tiny "${EST[@]}" --motion "$M" --tracks "$T" --method fused --sigma-px 1e-300
+bad window_sigma_px_zero "${EST[@]}" --motion "$M" --tracks "$T" --method window --sigma-px 0
+bad window_outlier_zero "${EST[@]}" --motion "$M" --tracks "$T" --method window --outlier-threshold-px 0
 bad refine_robust_zero "${EST[@]}" --motion "$M" --tracks "$T" --method refine --robust-threshold-px 0
 bad simulate_huge_blur --no-out simulate --camera "$YML" --rig "$RIG" --out-dir "$B/outs/blur" --frames 2 \
   --pattern chessboard:5x4:0.02 --blur 1e300
@@ -671,7 +673,7 @@ for path in approach orbit random; do
   esac
   # The arm's log has no pan joint: without a yaw column the yaw is 0 (and exact).
   cut -d, -f1-7 "$D/motion_truth.csv" >"$D/motion_noyaw.csv"
-  for m in exact fused refine; do
+  for m in exact fused window refine; do
     E="$A/est_${m}_$path"
     run "$E" estimate --method "$m" --sigma-px 1e-4 --sigma-odom 1e-8 --sigma-rot 1e-9 --camera "$YML" --rig "$A/eMc.yaml" \
       --motion "$D/motion_noyaw.csv" --tracks "$D/tracks.csv"

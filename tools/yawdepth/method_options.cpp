@@ -5,6 +5,7 @@
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/refine/refine.h>
+#include <yawdepth/refine/window_estimator.h>
 
 namespace yawdepth::cli {
 
@@ -17,9 +18,11 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
   args.outlier_px = RefineOptions().outlier_threshold_px;
   sub->add_option("--method", args.method,
                   "paper: eq. (5) on the last increment as published; exact: finite-increment two-view form (exact on "
-                  "noise-free data); fused: recursive filter over every frame; refine: joint MAP of every point with the "
-                  "motion (Ceres)")
-      ->check(CLI::IsMember({"paper", "exact", "fused", "refine"}))
+                  "noise-free data); fused: recursive filter per feature over every frame (cheapest); window: "
+                  "frame-by-frame smoother of every point with the last 10 frames' motion, older frames marginalised "
+                  "(at the joint bound, what a servo loop gets); refine: joint MAP of every point with the motion over "
+                  "all frames (Ceres)")
+      ->check(CLI::IsMember({"paper", "exact", "fused", "window", "refine"}))
       ->capture_default_str();
   sub->add_option("--sigma-px", args.noise.sigma_px, "Pixel noise (px)")->check(FiniteNonNegative)->capture_default_str();
   sub->add_option("--sigma-odom", args.noise.sigma_odom, "Odometry translation noise per increment, per axis (m)")
@@ -47,11 +50,11 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
   sub->add_option("--min-parallax-px", args.gates.min_parallax_px, "Parallax below this is degenerate (px)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
-  sub->add_option("--robust-threshold-px", args.robust_px, "refine: scale of the robust loss (px)")
+  sub->add_option("--robust-threshold-px", args.robust_px, "refine and window: scale of the robust loss (px)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
   sub->add_option("--outlier-threshold-px", args.outlier_px,
-                  "refine: observations with a larger reprojection error are flagged as outliers (px)")
+                  "refine and window: observations with a larger reprojection error are flagged as outliers (px)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
 }
@@ -70,17 +73,29 @@ std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &ri
 {
   args.noise.validate();
   args.gates.validate();
-  const bool refine = args.method == "refine";
+  const bool refine = args.method == "refine", window = args.method == "window";
   if (refine && !refineAvailable())
     throw Error("method refine is unavailable: this yawdepth was built without Ceres");
   // fused and refine weigh every observation by the pixel noise: zero (or a denormal) would give
   // infinite weights and NaN uncertainties, not an answer.
   constexpr double kMinSigmaPx = 1e-6;
-  if ((refine || args.method == "fused") && !(args.noise.sigma_px >= kMinSigmaPx))
-    throw Error("--sigma-px " + std::to_string(args.noise.sigma_px) + ": methods fused and refine need a pixel noise of "
-                "at least 1e-6 px (they weigh every observation by it)");
-  if (refine && !(args.robust_px >= kMinSigmaPx))
-    throw Error("--robust-threshold-px must be at least 1e-6 px for refine (the scale of its robust loss)");
+  if ((refine || window || args.method == "fused") && !(args.noise.sigma_px >= kMinSigmaPx))
+    throw Error("--sigma-px " + std::to_string(args.noise.sigma_px) + ": methods fused, window and refine need a pixel "
+                "noise of at least 1e-6 px (they weigh every observation by it)");
+  if ((refine || window) && !(args.robust_px >= kMinSigmaPx))
+    throw Error("--robust-threshold-px must be at least 1e-6 px for " + args.method + " (the scale of its robust loss)");
+  if (window && !(args.outlier_px >= kMinSigmaPx))
+    throw Error("--outlier-threshold-px must be at least 1e-6 px for window");
+  if (window) {
+    WindowOptions wo;
+    wo.noise = args.noise;
+    wo.gates = args.gates;
+    wo.robust_threshold_px = args.robust_px;
+    wo.outlier_threshold_px = args.outlier_px;
+    if (motion_estimate)
+      *motion_estimate = motion;
+    return windowTracks(camera, rig, motion, tracks, wo, &outliers);
+  }
   TrackEstimatorOptions options;
   options.method = refine ? Method::Fused : methodFromString(args.method);
   options.two_view.noise = args.noise;

@@ -24,6 +24,15 @@ FusedOptions fusedOptions(const DepthProviderOptions &o)
   return f;
 }
 
+WindowOptions windowOptions(const DepthProviderOptions &o)
+{
+  WindowOptions w;
+  w.noise = o.noise;
+  w.window = o.window;
+  w.prior_inverse_depth = 1.0 / (o.initial_depth > 0 ? o.initial_depth : o.prior_depth);
+  return w;
+}
+
 } // namespace
 
 void DepthProviderOptions::validate() const
@@ -46,11 +55,14 @@ void DepthProviderOptions::validate() const
     throw Error("depth provider: initial_depth must be finite and non-negative");
   if (max_missing_frames < 0)
     throw Error("depth provider: max_missing_frames must be non-negative");
+  if (window < 2)
+    throw Error("depth provider: window must be at least 2 frames");
   noise.validate();
 }
 
 DepthProvider::DepthProvider(const CameraModel &camera, const YawRig &rig, const Options &options)
-    : camera_(camera), rig_(rig), o_(options), fused_(camera, rig, fusedOptions(options))
+    : camera_(camera), rig_(rig), o_(options), fused_(camera, rig, fusedOptions(options)),
+      window_(std::make_unique<WindowEstimator>(camera, rig, windowOptions(options)))
 {
 }
 
@@ -76,13 +88,24 @@ void DepthProvider::setPrior(long id, double Z)
 
 PointEstimate DepthProvider::estimate(long id) const
 {
-  PointEstimate e = fused_.estimate(id);
+  const bool window = o_.method == DepthMethod::Window;
+  PointEstimate e = window ? window_->estimate(id) : fused_.estimate(id);
   if (!e.ok() || !have_fed_)
     return e;
-  // Carry the estimate from the last frame given to the estimator to the current period.
+  // Carry the estimate from its frame (the last one given to the estimator for fused; the feature's
+  // last observed frame for window) to the current period, through the odometry.
+  const MotionSample *from = &last_fed_;
+  if (window) {
+    const auto it = fed_rows_.find(e.frame);
+    if (it == fed_rows_.end()) { // older than the rows kept: not usable for the current frame
+      e.status = Status::TooFewFrames;
+      return e;
+    }
+    from = &it->second;
+  }
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
-  fromVisp(curMprev(rig_, last_fed_, current_), R, t);
+  fromVisp(curMprev(rig_, *from, current_), R, t);
   e.c_P = R * e.c_P + t;
   e.c_cov = R * e.c_cov * R.transpose();
   e.v_P = rig_.visionPoint(current_.yaw, e.c_P);
@@ -144,7 +167,15 @@ void DepthProvider::update(const MotionSample &odometry, const std::vector<std::
     obs.reserve(points.size());
     for (const auto &p : points)
       obs.push_back(FrameObservation{p.first, p.second.get_u(), p.second.get_v()});
-    fused_.addFrame(row, obs);
+    if (o_.method == DepthMethod::Window) {
+      window_->addFrame(row, obs);
+      fed_rows_[row.frame] = odometry;
+      // A feature's estimate is kept at its last observed frame while it is in the window.
+      while (!fed_rows_.empty() && fed_rows_.begin()->first <= row.frame - o_.window)
+        fed_rows_.erase(fed_rows_.begin());
+    } else {
+      fused_.addFrame(row, obs);
+    }
     last_fed_ = odometry;
     have_fed_ = true;
     skipped_ = 0;

@@ -6,9 +6,11 @@
 
   Each control period, give the provider the odometry (the vision frame's pose and the camera's
   yaw reading, a yawdepth::MotionSample) and the tracked points' observed pixels by id; then let it
-  set the depth of your vpFeaturePoint's with apply(). Per feature it runs the `fused` estimator
-  (yawdepth::FusedEstimator: a recursive log-inverse-depth filter with pixel, odometry and yaw
-  noise modelled) and gives:
+  set the depth of your vpFeaturePoint's with apply(). By default it runs the `window` estimator
+  (yawdepth::WindowEstimator: a sliding-window smoother of every tracked point with the recent
+  motion, at the joint Cramér–Rao bound; pixel, odometry and yaw noise modelled); with
+  `method = DepthMethod::Fused` the cheaper per-feature filter (yawdepth::FusedEstimator), which
+  cannot tell the odometry's error from a feature's depth. It gives:
 
   - depth(id): the estimated depth Zc of the feature in the CURRENT camera frame once the estimate
     has converged (relative 1-sigma below `converged_relative_sigma`), otherwise the prior
@@ -61,11 +63,19 @@
 #include <visp3/core/vpImagePoint.h>
 #include <visp3/visual_features/vpFeaturePoint.h>
 #include <yawdepth/camera/camera_model.h>
+#include <memory>
 #include <yawdepth/estimation/fused_estimator.h>
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/refine/window_estimator.h>
 
 namespace yawdepth {
+
+/*! \brief The estimator behind a DepthProvider. */
+enum class DepthMethod {
+  Window, //!< WindowEstimator: every feature and the recent motion together (the default).
+  Fused   //!< FusedEstimator: one filter per feature (cheaper, several times less accurate).
+};
 
 /*!
   \brief The provider's default noise model: 0.3 px; odometry that drifts by 2 % of the distance
@@ -102,7 +112,11 @@ struct DepthProviderOptions {
       period and min_translation. */
   NoiseModel noise = servoNoiseModel();
   double initial_depth = 0.0;            //!< Filter's initial median depth (m); 0 = prior_depth.
-  int max_missing_frames = 30;           //!< Forget a feature unseen for this many estimator frames.
+  /*! Forget a feature unseen for this many estimator frames (fused; the window estimator keeps a
+      feature while it is seen within its window, and restarts it when it comes back later). */
+  int max_missing_frames = 30;
+  DepthMethod method = DepthMethod::Window; //!< The estimator.
+  int window = 10;                       //!< Frames in the window estimator's window (>= 2).
   /*! \brief Throws yawdepth::Error for an invalid option. */
   void validate() const;
 };
@@ -189,8 +203,10 @@ public:
   const YawRig &rig() const { return rig_; }
   /*! \brief The options. */
   const Options &options() const { return o_; }
-  /*! \brief The underlying estimator (its frames are the periods fed to it). */
+  /*! \brief The fused estimator (used when options().method is DepthMethod::Fused; its frames are the periods fed to it). */
   const FusedEstimator &estimator() const { return fused_; }
+  /*! \brief The window estimator (used when options().method is DepthMethod::Window, the default). */
+  const WindowEstimator &windowEstimator() const { return *window_; }
 
 private:
   void refresh(long id);
@@ -200,6 +216,8 @@ private:
   YawRig rig_;
   Options o_;
   FusedEstimator fused_;
+  std::unique_ptr<WindowEstimator> window_;
+  std::map<long, MotionSample> fed_rows_; // the rows given to the window estimator, by its frame number
   long period_ = 0, frames_used_ = 0, skipped_ = 0;
   bool have_fed_ = false;
   MotionSample last_fed_, current_;
