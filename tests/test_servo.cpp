@@ -221,6 +221,18 @@ TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion",
   // Weights 0 (every depth converged): nothing asks for parallax, only recentring (here none needed).
   std::vector<YawHelperFeature> done{{0.0, 0.0, 1.0, 0.0}};
   CHECK(std::abs(recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d::Zero(), done, o).rate) < 0.05);
+  // ... unless a home view is set: then back toward it, as far as the horizon reaches.
+  YawHelperOptions home = o;
+  home.home_yaw = M_PI / 2;
+  const YawRecommendation back = recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d(0, 0, 0.2), done, home);
+  CHECK(back.rate == Approx(home.max_rate));
+  CHECK(back.target_yaw == Approx(home.max_rate * home.horizon));
+  CHECK(recommendYawRate(camera, paper_rig, M_PI / 2, Eigen::Vector3d(0, 0, 0.2), done, home).rate == Approx(0.0));
+  // A feature still to measure: the home view is ignored.
+  CHECK(recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, home).target_yaw !=
+        Approx(back.target_yaw));
+  home.home_yaw = 4.0; // outside the joint's range
+  CHECK_THROWS_AS(recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d::Zero(), done, home), Error);
   // Driving forward: bounded, and never a worse parallax than now.
   const YawRecommendation fwd = recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, o);
   CHECK(std::abs(fwd.rate) <= o.max_rate + 1e-12);

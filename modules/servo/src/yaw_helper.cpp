@@ -23,6 +23,8 @@ void YawHelperOptions::validate() const
     throw Error("yaw helper: margin_px must be finite and non-negative");
   if (!(std::isfinite(min_yaw) && std::isfinite(max_yaw) && min_yaw < max_yaw))
     throw Error("yaw helper: need min_yaw < max_yaw");
+  if (!std::isnan(home_yaw) && !(std::isfinite(home_yaw) && home_yaw >= min_yaw && home_yaw <= max_yaw))
+    throw Error("yaw helper: home_yaw must be NaN (none) or within [min_yaw, max_yaw]");
 }
 
 double parallaxRate(const CameraModel &camera, const Eigen::Vector3d &c_T, const std::vector<YawHelperFeature> &features)
@@ -108,6 +110,16 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
 
   const double reach = options.max_rate * options.horizon;
   const double lo = std::max(options.min_yaw, yaw - reach), hi = std::min(options.max_yaw, yaw + reach);
+  const bool measured = std::all_of(features.begin(), features.end(), [](const YawHelperFeature &f) { return f.weight == 0; });
+  if (measured && std::isfinite(options.home_yaw)) { // nothing left to learn here: back to the home view
+    YawRecommendation r;
+    r.target_yaw = std::clamp(options.home_yaw, lo, hi);
+    r.rate = std::clamp(options.gain * (r.target_yaw - yaw), -options.max_rate, options.max_rate);
+    const Candidate now = evaluate(camera, rig, yaw, 0.0, v_velocity, v_points, features, options.margin_px);
+    r.parallax_now = r.parallax_target = now.parallax;
+    r.visible_now = now.visible;
+    return r;
+  }
   std::vector<Candidate> cands;
   const Candidate now = evaluate(camera, rig, yaw, 0.0, v_velocity, v_points, features, options.margin_px);
   for (int k = 0; k < options.candidates; ++k) {

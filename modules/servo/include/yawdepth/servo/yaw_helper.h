@@ -34,7 +34,9 @@
   (and within [min_yaw, max_yaw]); the best one is the target yaw and the recommended rate is
   \f$ \dot\theta = \mathrm{clamp}(g\,(\theta^* - \theta_0),\ \pm \dot\theta_{\max}) \f$. With
   no camera offset and no robot translation the rate only recentres the features. Feature
-  weights \f$w_i\f$ (e.g. 0 for a converged feature, 1 otherwise) scale each feature's term.
+  weights \f$w_i\f$ (e.g. 0 for a converged feature, 1 otherwise) scale each feature's term. When
+  every weight is 0 and `home_yaw` is set, the target is home_yaw (as far as the horizon reaches):
+  the features are measured, the pan goes back to looking for new ones.
 
   Use it as a secondary task: the primary IBVS task usually uses every joint, so the classic
   projector I - W^+W is zero; ViSP's large projection operator (vpServo::secondaryTask(de2dt,
@@ -43,6 +45,7 @@
   is not part of the servo task.
 */
 #include <cmath>
+#include <limits>
 #include <vector>
 #include <Eigen/Core>
 #include <yawdepth/camera/camera_model.h>
@@ -68,6 +71,10 @@ struct YawHelperOptions {
   double margin_px = 40;          //!< features must stay this far inside the image (px)
   /*! the pan joint's range: lower end (rad) */
   double min_yaw = -M_PI, max_yaw = M_PI; //!< the pan joint's range: upper end (rad)
+  /*! Where to pan when no feature needs depth information any more (every weight 0): the view in
+      which new features' depth is best observed, e.g. the side view (+-pi/2) of a robot driving past
+      what it measures. NaN (the default): keep the converged features centred. */
+  double home_yaw = std::numeric_limits<double>::quiet_NaN();
   /*! \brief Throws yawdepth::Error for invalid options. */
   void validate() const;
 };
