@@ -505,41 +505,57 @@ struct WindowEstimator::Impl {
     Eigen::MatrixXd H;
     Eigen::VectorXd g;
     int factorisations = 0;
+    bool refactor = true; // false: a chord step, with the last factorisation and the new gradient
+    int chords = 0;
     double cost = linearize(l, phase, only_frame, &H, &g);
-    for (int it = 0; it < o.max_iterations; ++it) {
-      if (it > 0)
-        cost = linearize(l, phase, only_frame, &H, &g);
-      llt.compute(H);
-      ++factorisations;
-      if (llt.info() != Eigen::Success) {
-        // A direction without information (the priors should prevent it): damp it.
-        H.diagonal() += 1e-9 * H.diagonal().cwiseAbs() + Eigen::VectorXd::Constant(l.n, 1e-12);
+    for (int it = 0; it < o.max_iterations + 2; ++it) {
+      if (refactor) {
+        if (it > 0)
+          cost = linearize(l, phase, only_frame, &H, &g);
         llt.compute(H);
-        if (llt.info() != Eigen::Success)
-          return factorisations;
+        ++factorisations;
+        if (llt.info() != Eigen::Success) {
+          // A direction without information (the priors should prevent it): damp it.
+          H.diagonal() += 1e-9 * H.diagonal().cwiseAbs() + Eigen::VectorXd::Constant(l.n, 1e-12);
+          llt.compute(H);
+          if (llt.info() != Eigen::Success)
+            return factorisations;
+        }
+        llt_ok = true;
       }
-      llt_ok = true;
       const Eigen::VectorXd dx = llt.solve(-g);
       if (!dx.allFinite())
         return factorisations;
+      const double predicted = -0.5 * g.dot(dx);
       const Saved s = save();
       double scale = 1.0;
       bool accepted = false;
-      for (int h = 0; h < 6; ++h, scale *= 0.5) {
+      for (int h = 0; h < (refactor ? 6 : 1); ++h, scale *= 0.5) {
         applyStep(l, dx, scale);
         const double c = linearize(l, phase, only_frame, nullptr, nullptr);
-        if (std::isfinite(c) && c <= cost + 1e-12 * std::abs(cost)) {
+        // A chord step must deliver most of what it promised; a full step only has to descend.
+        if (std::isfinite(c) && c <= cost - (refactor ? 0.0 : 0.5 * predicted) + 1e-12 * std::abs(cost)) {
           accepted = true;
+          cost = c;
           break;
         }
         restore(s);
       }
-      if (!accepted)
-        break;
-      // What would the next iteration gain? 0.5 g^T H^-1 g with the new gradient.
+      if (!accepted) {
+        if (refactor)
+          break;
+        refactor = true; // the chord went astray: linearise afresh
+        continue;
+      }
+      // What would the next step gain? 0.5 g^T H^-1 g with the new gradient and the last factorisation.
       linearize(l, phase, only_frame, nullptr, &g);
-      if (0.5 * g.dot(llt.solve(g)) < o.convergence)
+      const double next = 0.5 * g.dot(llt.solve(g));
+      if (next < o.convergence || factorisations >= o.max_iterations)
         break;
+      // Cheap chord steps while the last factorisation still predicts fast progress (the remainder
+      // shrank at least fourfold); else a full iteration.
+      refactor = !(chords < 2 && next < 0.25 * predicted);
+      chords += refactor ? 0 : 1;
     }
     return factorisations;
   }
