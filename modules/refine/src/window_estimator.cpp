@@ -1158,6 +1158,43 @@ struct WindowEstimator::Impl {
   }
 
   /* Robust phase, re-start of young features whose observations disagree, flags, then least squares. */
+  /* Marginalise a feature out of the prior (the information the prior held on it is dropped). */
+  void dropFromPrior(long id)
+  {
+    std::vector<int> drop;
+    std::vector<PriorVar> kept;
+    int off = 0;
+    for (const PriorVar &v : prior_vars) {
+      const bool gone = !v.is_frame && v.key == id;
+      for (int j = 0; j < v.dim; ++j)
+        if (gone)
+          drop.push_back(off + j);
+      if (!gone)
+        kept.push_back(v);
+      off += v.dim;
+    }
+    schur(Hp, gp, drop);
+    prior_vars = std::move(kept);
+    cache_valid = false;
+  }
+
+  /* A feature that went wrong (most of its window observations disagree with it, e.g. after a gross
+     error at its start): it starts again from its window observations, with what the prior held
+     on it dropped (that came from the same wrong point). */
+  void restartFeature(Feature &ft)
+  {
+    dropFromPrior(ft.id);
+    for (Obs &ob : ft.obs)
+      ob.outlier = false;
+    ft.in_state = false;
+    ft.young = true;
+    ft.has_fej = false;
+    ft.has_first = false;
+    ft.old_inliers = 0;
+    ft.old_parallax = 0;
+    enterState(ft);
+  }
+
   void robustSolve()
   {
     solve(Phase::Robust);
@@ -1165,12 +1202,18 @@ struct WindowEstimator::Impl {
     bool restarted = false;
     for (auto &kv : features) {
       Feature &ft = kv.second;
-      if (!ft.in_state || !ft.young)
+      if (!ft.in_state)
         continue;
-      if (std::any_of(ft.obs.begin(), ft.obs.end(), [](const Obs &ob) { return ob.outlier; })) {
+      const long flagged = std::count_if(ft.obs.begin(), ft.obs.end(), [](const Obs &ob) { return ob.outlier; });
+      if (flagged == 0)
+        continue;
+      if (ft.young) {
         const double before[3] = {ft.p[0], ft.p[1], ft.p[2]};
         initialisePoint(ft, true);
         restarted = restarted || !std::equal(before, before + 3, ft.p);
+      } else if (flagged >= 3 && 2 * flagged > static_cast<long>(ft.obs.size()) && ft.obs.size() >= 2) {
+        restartFeature(ft);
+        restarted = true;
       }
     }
     if (restarted) {
@@ -1242,23 +1285,8 @@ void WindowEstimator::forget(long id)
   const auto it = impl_->features.find(id);
   if (it == impl_->features.end())
     return;
-  if (it->second.in_state) {
-    // Marginalise it out of the prior (its window observations are dropped).
-    std::vector<int> drop;
-    std::vector<Impl::PriorVar> kept;
-    int off = 0;
-    for (const Impl::PriorVar &v : impl_->prior_vars) {
-      const bool gone = !v.is_frame && v.key == id;
-      for (int j = 0; j < v.dim; ++j)
-        if (gone)
-          drop.push_back(off + j);
-      if (!gone)
-        kept.push_back(v);
-      off += v.dim;
-    }
-    Impl::schur(impl_->Hp, impl_->gp, drop);
-    impl_->prior_vars = std::move(kept);
-  }
+  if (it->second.in_state)
+    impl_->dropFromPrior(id); // its window observations are dropped with it
   impl_->features.erase(it);
   impl_->cache_valid = false;
 }
