@@ -80,7 +80,7 @@ struct WindowEstimator::Impl {
     bool has_fej = false;    // an observation was marginalised: Jacobians at the estimate of then
     double p_fej[3] = {0, 0, 0};
     // Gate memory of marginalised inlier observations.
-    int old_inliers = 0;
+    int old_inliers = 0, old_outliers = 0;
     bool has_first = false;
     Eigen::Vector3d first_ray = Eigen::Vector3d::Zero(), first_centre = Eigen::Vector3d::Zero();
     Eigen::Vector3d last_centre = Eigen::Vector3d::Zero(); // of the last marginalised inlier
@@ -651,23 +651,67 @@ struct WindowEstimator::Impl {
     return cost;
   }
   /* Start (or restart) a feature's point from the best two-view pair of its observations. */
+  /* A few robust Gauss-Newton iterations on a feature's point alone (the poses held), from p. */
+  void refinePointAlone(const Feature &ft, double *p) const
+  {
+    for (int it = 0; it < 6; ++it) {
+      Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d g = Eigen::Vector3d::Zero();
+      for (const Obs &ob : ft.obs) {
+        Eigen::Vector2d r;
+        Eigen::Matrix<double, 2, 10> J;
+        const Frame &f = frames[static_cast<std::size_t>(frameIndex(ob.frame))];
+        if (!window_detail::observationResidual(ft.Ra, ft.ca, p, f.cam, ob.w, r, &J))
+          continue;
+        const double w = weightOf(r.squaredNorm(), Phase::Robust);
+        const Eigen::Matrix<double, 2, 3> Jp = J.rightCols<3>();
+        H += w * Jp.transpose() * Jp;
+        g += w * Jp.transpose() * r;
+      }
+      const double info = 1.0 / (o.prior_sigma_inverse_depth * o.prior_sigma_inverse_depth);
+      H(2, 2) += info;
+      g(2) += info * (p[2] - o.prior_inverse_depth);
+      const Eigen::Vector3d dx = H.ldlt().solve(-g);
+      if (!dx.allFinite())
+        return;
+      for (int j = 0; j < 3; ++j)
+        p[j] += dx(j);
+      if (dx.squaredNorm() < 1e-14)
+        return;
+    }
+  }
+
+  /* Start (or restart) a feature's point: candidates from every pair of its observations that
+     triangulates and from every observation's ray at the prior's depth, each refined alone with the
+     robust loss and scored robustly against all its observations; the best one wins (with
+     keep_current, the current point competes too). */
   void initialisePoint(Feature &ft, bool keep_current)
   {
     double best[3] = {ft.p[0], ft.p[1], ft.p[2]};
     double best_cost = keep_current ? featureCost(ft, ft.p) : std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < ft.obs.size(); ++i)
+    auto consider = [&](double *p) {
+      refinePointAlone(ft, p);
+      if (!(p[2] > 0) || !std::isfinite(p[0] + p[1] + p[2]))
+        return;
+      const double c = featureCost(ft, p);
+      if (c < best_cost) {
+        best_cost = c;
+        std::copy(p, p + 3, best);
+      }
+    };
+    for (std::size_t i = 0; i < ft.obs.size(); ++i) {
+      const Frame &fi = frames[static_cast<std::size_t>(frameIndex(ft.obs[i].frame))];
+      const Eigen::Vector3d ray = fi.cam.R * Eigen::Vector3d(ft.obs[i].w.m[0], ft.obs[i].w.m[1], 1.0);
+      double p[3];
+      if (anchorParameters(ft, fi.cam.c + ray / o.prior_inverse_depth, p))
+        consider(p);
       for (std::size_t j = i + 1; j < ft.obs.size(); ++j) {
         Eigen::Vector3d P;
-        double p[3];
-        if (!triangulate(ft.obs[i], ft.obs[j], P) || !anchorParameters(ft, P, p))
-          continue;
-        const double c = featureCost(ft, p);
-        if (c < best_cost) {
-          best_cost = c;
-          std::copy(p, p + 3, best);
-        }
+        if (triangulate(ft.obs[i], ft.obs[j], P) && anchorParameters(ft, P, p))
+          consider(p);
       }
-    if (!std::isfinite(best_cost)) { // no pair triangulates (no parallax): the prior's depth
+    }
+    if (!std::isfinite(best_cost)) { // nothing in front of the cameras: the prior's depth
       best[0] = ft.obs.front().w.m[0];
       best[1] = ft.obs.front().w.m[1];
       best[2] = o.prior_inverse_depth;
@@ -861,6 +905,7 @@ struct WindowEstimator::Impl {
         ft.young = false;
         if (ob.outlier) {
           rejected.insert({ft.id, frame0});
+          ++ft.old_outliers;
           continue;
         }
         if (!ft.in_state)
@@ -919,14 +964,16 @@ struct WindowEstimator::Impl {
       return e;
     }
     // Gates on the inlier observations.
-    int inliers = ft.old_inliers;
+    int inliers = ft.old_inliers, outliers = ft.old_outliers;
     bool has_first = ft.has_first;
     Eigen::Vector3d first_ray = ft.first_ray, first_centre = ft.first_centre, last_centre = ft.last_centre;
     double parallax = ft.old_parallax;
     bool behind = false;
     for (const Obs &ob : ft.obs) {
-      if (ob.outlier)
+      if (ob.outlier) {
+        ++outliers;
         continue;
+      }
       const Frame &f = frames[static_cast<std::size_t>(frameIndex(ob.frame))];
       ++inliers;
       last_centre = f.cam.c;
@@ -948,7 +995,9 @@ struct WindowEstimator::Impl {
       behind = behind || !observationResidual(ft, frames[static_cast<std::size_t>(fl)], last, r_last, nullptr);
     }
     e.parallax_px = parallax;
-    if (inliers < 2) {
+    // Two observations always agree on a point: with an outlier among them, two inliers cannot
+    // tell which were the outliers.
+    if (inliers < 2 || (outliers > 0 && inliers < 3)) {
       e.status = Status::TooFewFrames;
       return e;
     }
@@ -1191,6 +1240,7 @@ struct WindowEstimator::Impl {
     ft.has_fej = false;
     ft.has_first = false;
     ft.old_inliers = 0;
+    ft.old_outliers = 0;
     ft.old_parallax = 0;
     enterState(ft);
   }

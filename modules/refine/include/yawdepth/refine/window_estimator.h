@@ -39,7 +39,9 @@
 
   Reported per feature: the point in the camera frame of its last observed frame and its
   covariance (the marginal of the point and that frame's pose, from the inverse information),
-  with the gates of `refine`: `too_few_frames` (fewer than two inlier observations),
+  with the gates of `refine`: `too_few_frames` (fewer than two inlier observations, or fewer than
+  three when some were flagged: two observations always agree on a point, so two cannot tell
+  which were the outliers),
   `undistort_failed`, `no_motion` (camera centre moved less than gates.min_baseline between the
   first and the last inlier), `degenerate` (largest rotation-compensated parallax below
   gates.min_parallax_px), `behind`, else `ok`. A feature whose last observation left the window is
