@@ -3,12 +3,14 @@
   against OpenCV's two-view triangulation, on seeded synthetic scenes with the paper's camera.
 
   A plain program that prints plain-text tables (paste them into a README as they are):
-    bench_accuracy [--trials N] [--seed S] [--quick] [--frames F]
+    bench_accuracy [--trials N] [--seed S] [--quick] [--frames F] [--window K]
   --trials N  trials per scene (default 200); every trial draws new points and new noise.
   --seed S    base seed (default 1); trial t of scene s uses seed S + 100000 s + t.
   --quick     40 trials.
   --frames F  frames per scene (default 10, the paper's; with more, `window` marginalises the older
               frames: its 10-frame window is then smaller than the scene).
+  --window K  the window estimator's window (default 10; 2 makes it an iterated EKF-SLAM: only the
+              newest increment relinearised, everything older in the Gaussian prior).
 
   What it measures (see the printed header for the details):
   1. Depth zc of every point at its last observed frame, by paper / exact / fused / refine and by
@@ -311,7 +313,7 @@ void printCleanTable(const std::string &title, const CleanStats &s, long trials,
 
 void usage(const char *argv0)
 {
-  std::fprintf(stderr, "usage: %s [--trials N] [--seed S] [--quick] [--frames F]\n", argv0);
+  std::fprintf(stderr, "usage: %s [--trials N] [--seed S] [--quick] [--frames F] [--window K]\n", argv0);
 }
 
 } // namespace
@@ -321,13 +323,15 @@ int main(int argc, char **argv)
   long trials = 200;
   std::uint64_t seed = 1;
   bool quick = false;
-  int frames = 10;
+  int frames = 10, window = WindowOptions().window;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--trials" && i + 1 < argc) {
       trials = std::strtol(argv[++i], nullptr, 10);
     } else if (a == "--seed" && i + 1 < argc) {
       seed = std::strtoull(argv[++i], nullptr, 10);
+    } else if (a == "--window" && i + 1 < argc) {
+      window = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
     } else if (a == "--frames" && i + 1 < argc) {
       frames = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
     } else if (a == "--quick") {
@@ -344,6 +348,10 @@ int main(int argc, char **argv)
     trials = 40;
   if (trials < 1) {
     std::fprintf(stderr, "bench_accuracy: --trials must be >= 1\n");
+    return 2;
+  }
+  if (window < 2 || window > 1000) {
+    std::fprintf(stderr, "bench_accuracy: --window must be between 2 and 1000\n");
     return 2;
   }
   if (frames < 2 || frames > 1000) {
@@ -371,10 +379,10 @@ int main(int argc, char **argv)
   std::printf("yawdepth accuracy benchmark: depth zc of each point at its last observed frame\n");
   std::printf("================================================================================\n");
   std::printf("Methods: paper (eq. 5, last increment), exact (two-view, last increment), fused (per-feature\n"
-              "  filter over all frames), window (sliding-window smoother of points + motion, 10 frames, older ones\n"
+              "  filter over all frames), window (sliding-window smoother of points + motion, %d frames, older ones\n"
               "  marginalised; frame by frame, each point read when its last frame leaves the window), refine (joint\n"
               "  MAP of points + motion over all frames, initialised with fused), opencv (cv::triangulatePoints on\n"
-              "  the first and last observation, measured motion).\n");
+              "  the first and last observation, measured motion).\n", window);
   std::printf("Scenes: paper's camera (fx 1734.1, fy 1734.5, u0 319.2, v0 241.4, Brown distortion, 640x480),\n"
               "  rig offset (-0.1503, 0, 0) m; yaw 0/45/90 deg x straight / turning 1 deg per frame;\n"
               "  %d frames, 0.02 m forward per frame; 30 points, depth 0.5 to 3 m in the first frame.\n", frames);
@@ -394,8 +402,8 @@ int main(int argc, char **argv)
               trials, static_cast<unsigned long long>(seed));
   std::printf("Reproduce: cmake -S . -B build-acc -DYAWDEPTH_BUILD_TESTS=OFF -DYAWDEPTH_BUILD_EXAMPLES=OFF &&\n"
               "  cmake --build build-acc --target bench_accuracy && build-acc/benchmarks/bench_accuracy --trials %ld --seed %llu"
-              " --frames %d\n",
-              trials, static_cast<unsigned long long>(seed), frames);
+              " --frames %d --window %d\n",
+              trials, static_cast<unsigned long long>(seed), frames, window);
   std::printf("refine: %s\n", refine_ok ? "available (Ceres)" : "unavailable (built without Ceres)");
   std::fflush(stdout);
 
@@ -420,6 +428,7 @@ int main(int argc, char **argv)
     opt.filter.noise = noise;
     ropt.noise = noise;
     wopt.noise = noise;
+    wopt.window = window;
     SceneOptions so;
     so.frames = frames;
     so.step = 0.02;

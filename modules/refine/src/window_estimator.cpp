@@ -493,7 +493,7 @@ struct WindowEstimator::Impl {
   /*
     Gauss-Newton with step halving over layout l (the state, or a part of it; only_frame as for
     linearize()). After each step the gradient at the new point and the last factorisation predict
-    what another iteration would gain; below kMinDecrease the solve stops (the remainder is carried
+    what another iteration would gain; below options.convergence the solve stops (the remainder is carried
     into the next frame's solve, or into the prior exactly, with its gradient). Returns the
     factorisations made; `llt` keeps the last one.
   */
