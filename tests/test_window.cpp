@@ -103,16 +103,20 @@ TEST_CASE("window: camera, reprojection and increment Jacobians match central fi
     double x[kFrameDim] = {u(rng), 0.1 * u(rng), u(rng), 0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng), u(rng)};
     CameraPose cam;
     cameraPose(x, Rref, mount, cam);
-    // Camera derivatives.
-    for (int j = 0; j < kFrameDim; ++j) {
+    // The camera with frame parameter j moved by +h and by -h.
+    auto shifted = [&](int j, CameraPose &cp, CameraPose &cm) {
       double xp[kFrameDim], xm[kFrameDim];
       std::copy(x, x + kFrameDim, xp);
       std::copy(x, x + kFrameDim, xm);
       xp[j] += h;
       xm[j] -= h;
-      CameraPose cp, cm;
       cameraPose(xp, Rref, mount, cp);
       cameraPose(xm, Rref, mount, cm);
+    };
+    // Camera derivatives.
+    for (int j = 0; j < kFrameDim; ++j) {
+      CameraPose cp, cm;
+      shifted(j, cp, cm);
       CHECK(((cp.R - cm.R) / (2 * h) - cam.dR[j]).norm() < kFiniteDifference);
       CHECK(((cp.c - cm.c) / (2 * h) - cam.dc[j]).norm() < kFiniteDifference);
       if (j >= 3 && j < 6)
@@ -136,14 +140,8 @@ TEST_CASE("window: camera, reprojection and increment Jacobians match central fi
     for (int j = 0; j < 10; ++j) {
       Eigen::Vector2d rp, rm;
       if (j < kFrameDim) {
-        double xp[kFrameDim], xm[kFrameDim];
-        std::copy(x, x + kFrameDim, xp);
-        std::copy(x, x + kFrameDim, xm);
-        xp[j] += h;
-        xm[j] -= h;
         CameraPose cp, cm;
-        cameraPose(xp, Rref, mount, cp);
-        cameraPose(xm, Rref, mount, cm);
+        shifted(j, cp, cm);
         observationResidual(Ra, ca, p, cp, w, rp, nullptr);
         observationResidual(Ra, ca, p, cm, w, rm, nullptr);
       } else {

@@ -530,13 +530,17 @@ struct WindowEstimator::Impl {
       const Saved s = save();
       double scale = 1.0;
       bool accepted = false;
+      Eigen::VectorXd g_new;
       for (int h = 0; h < (refactor ? 6 : 1); ++h, scale *= 0.5) {
         applyStep(l, dx, scale);
-        const double c = linearize(l, phase, only_frame, nullptr, nullptr);
+        // The full step usually holds: its gradient comes with its cost, for the next prediction.
+        const double c = linearize(l, phase, only_frame, nullptr, h == 0 ? &g_new : nullptr);
         // A chord step must deliver most of what it promised; a full step only has to descend.
         if (std::isfinite(c) && c <= cost - (refactor ? 0.0 : 0.5 * predicted) + 1e-12 * std::abs(cost)) {
           accepted = true;
           cost = c;
+          if (h > 0)
+            linearize(l, phase, only_frame, nullptr, &g_new);
           break;
         }
         restore(s);
@@ -548,7 +552,7 @@ struct WindowEstimator::Impl {
         continue;
       }
       // What would the next step gain? 0.5 g^T H^-1 g with the new gradient and the last factorisation.
-      linearize(l, phase, only_frame, nullptr, &g);
+      g = std::move(g_new);
       const double next = 0.5 * g.dot(llt.solve(g));
       if (next < o.convergence || factorisations >= o.max_iterations)
         break;
@@ -681,9 +685,9 @@ struct WindowEstimator::Impl {
     }
   }
 
-  /* Start (or restart) a feature's point: candidates from every pair of its observations that
-     triangulates and from every observation's ray at the prior's depth, each refined alone with the
-     robust loss and scored robustly against all its observations; the best one wins (with
+  /* Start (or restart) a feature's point: candidates from the pairs of (up to five of) its
+     observations that triangulate and from their rays at the prior's depth, each refined alone with
+     the robust loss and scored robustly against all its observations; the best one wins (with
      keep_current, the current point competes too). */
   void initialisePoint(Feature &ft, bool keep_current)
   {
@@ -699,15 +703,21 @@ struct WindowEstimator::Impl {
         std::copy(p, p + 3, best);
       }
     };
-    for (std::size_t i = 0; i < ft.obs.size(); ++i) {
-      const Frame &fi = frames[static_cast<std::size_t>(frameIndex(ft.obs[i].frame))];
-      const Eigen::Vector3d ray = fi.cam.R * Eigen::Vector3d(ft.obs[i].w.m[0], ft.obs[i].w.m[1], 1.0);
+    // At most five observations, spread over the window, seed the candidates (15 at most).
+    const std::size_t n = ft.obs.size(), m = std::min<std::size_t>(n, 5);
+    std::vector<std::size_t> seeds;
+    for (std::size_t k = 0; k < m; ++k)
+      seeds.push_back(m == 1 ? 0 : k * (n - 1) / (m - 1));
+    for (std::size_t a = 0; a < seeds.size(); ++a) {
+      const Obs &oi = ft.obs[seeds[a]];
+      const Frame &fi = frames[static_cast<std::size_t>(frameIndex(oi.frame))];
+      const Eigen::Vector3d ray = fi.cam.R * Eigen::Vector3d(oi.w.m[0], oi.w.m[1], 1.0);
       double p[3];
       if (anchorParameters(ft, fi.cam.c + ray / o.prior_inverse_depth, p))
         consider(p);
-      for (std::size_t j = i + 1; j < ft.obs.size(); ++j) {
+      for (std::size_t b = a + 1; b < seeds.size(); ++b) {
         Eigen::Vector3d P;
-        if (triangulate(ft.obs[i], ft.obs[j], P) && anchorParameters(ft, P, p))
+        if (triangulate(oi, ft.obs[seeds[b]], P) && anchorParameters(ft, P, p))
           consider(p);
       }
     }
@@ -787,6 +797,28 @@ struct WindowEstimator::Impl {
     }
     H = 0.5 * (Hkk + Hkk.transpose());
     g = gk;
+  }
+
+  /* Schur-complement out of (H, g), whose rows are `vars` stacked in order, the variables for which
+     gone(v) holds; returns the others, in order. */
+  template <typename Gone>
+  static std::vector<PriorVar> schurOut(Eigen::MatrixXd &H, Eigen::VectorXd &g, const std::vector<PriorVar> &vars,
+                                        Gone gone)
+  {
+    std::vector<int> drop;
+    std::vector<PriorVar> kept;
+    int off = 0;
+    for (const PriorVar &v : vars) {
+      const bool out = gone(v);
+      for (int j = 0; j < v.dim; ++j)
+        if (out)
+          drop.push_back(off + j);
+      if (!out)
+        kept.push_back(v);
+      off += v.dim;
+    }
+    schur(H, g, drop);
+    return kept;
   }
 
   /* Drop the oldest frame (and the features no later window frame saw) into the prior. */
@@ -878,23 +910,12 @@ struct WindowEstimator::Impl {
     linearize(l, Phase::Inliers, 0, &H, &g);
 
     // Drop the oldest frame's components and the leaving features'.
-    std::vector<int> drop;
-    std::vector<PriorVar> kept;
-    int off = 0;
-    for (const PriorVar &v : vars) {
-      const bool gone = (v.is_frame && v.key == frame0) ||
-                        (!v.is_frame && std::find(leaving.begin(), leaving.end(), v.key) != leaving.end());
-      for (int j = 0; j < v.dim; ++j)
-        if (gone)
-          drop.push_back(off + j);
-      if (!gone)
-        kept.push_back(v);
-      off += v.dim;
-    }
-    schur(H, g, drop);
+    prior_vars = schurOut(H, g, vars, [&](const PriorVar &v) {
+      return (v.is_frame && v.key == frame0) ||
+             (!v.is_frame && std::find(leaving.begin(), leaving.end(), v.key) != leaving.end());
+    });
     Hp = std::move(H);
     gp = std::move(g);
-    prior_vars = std::move(kept);
 
     // Observations of the oldest frame leave the window: their flags are final; gates remember them.
     for (auto &kv : features) {
@@ -1210,20 +1231,7 @@ struct WindowEstimator::Impl {
   /* Marginalise a feature out of the prior (the information the prior held on it is dropped). */
   void dropFromPrior(long id)
   {
-    std::vector<int> drop;
-    std::vector<PriorVar> kept;
-    int off = 0;
-    for (const PriorVar &v : prior_vars) {
-      const bool gone = !v.is_frame && v.key == id;
-      for (int j = 0; j < v.dim; ++j)
-        if (gone)
-          drop.push_back(off + j);
-      if (!gone)
-        kept.push_back(v);
-      off += v.dim;
-    }
-    schur(Hp, gp, drop);
-    prior_vars = std::move(kept);
+    prior_vars = schurOut(Hp, gp, prior_vars, [id](const PriorVar &v) { return !v.is_frame && v.key == id; });
     cache_valid = false;
   }
 

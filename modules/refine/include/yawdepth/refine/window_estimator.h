@@ -24,18 +24,23 @@
   prior_sigma_inverse_depth: \f$ 10\,\text{m}^{-1} \f$ by default, under \f$ 10^{-5} \f$ of the
   information two frames 2 cm apart give a point at 3 m, so that a point without parallax stays finite).
 
-  Each frame: Gauss–Newton on the window (a dense solve: the prior couples every feature),
-  first with a Cauchy loss (scale robust_threshold_px) so that gross errors cannot drag the
-  solution, then observations whose reprojection error exceeds outlier_threshold_px are flagged
-  and the last iterations are plain least squares on the inliers (efficient, and the covariance
-  is the inverse of the information). When the window holds more than `window` frames, the
-  oldest is marginalised: its factors and the previous prior are linearised at the current
-  estimate and the frame (with every feature no later frame of the window observed) is removed
-  by the Schur complement. The prior's Jacobians stay fixed at that linearisation point for good
-  (first-estimate linearisation), so it cannot become overconfident by relinearisation. Flags of
-  the marginalised observations are final. A feature enters the state at its second observation
-  within the window (from the best two-view triangulation of its observations, scored robustly);
-  a single observation that leaves the window is dropped.
+  Each frame: the new frame's pose is aligned alone to the state (dead reckoning as the start),
+  then Gauss–Newton runs on the whole window (a dense solve: the prior couples every feature;
+  chord steps reuse the last factorisation while they make progress; it stops when another step
+  would lower the cost by less than `convergence`). Least squares first; when that changes an
+  outlier flag (reprojection error beyond outlier_threshold_px), a Cauchy phase (scale
+  robust_threshold_px) runs before the final least squares on the inliers, so that the estimate is
+  efficient and the covariance is the inverse of the information. When the window holds more than
+  `window` frames, the oldest is marginalised: its factors and the previous prior are linearised
+  at the current estimate and the frame (with every feature no later frame of the window
+  observed) is removed by the Schur complement. Every later Jacobian of a frame or feature in the
+  prior is evaluated at the value it had when it entered the prior (first-estimate Jacobians), so
+  that relinearisation cannot make the prior overconfident. Flags of the marginalised observations
+  are final. A feature enters the state at its second observation within the window; its start is
+  the best of candidates (the pairs of up to five of its observations, spread over the window,
+  triangulated; their rays at the prior's depth), each refined alone with the robust loss and scored robustly against all its
+  observations. A feature whose window observations are mostly flagged restarts from them (what
+  the prior held on it is dropped). A single observation that leaves the window is dropped.
 
   Reported per feature: the point in the camera frame of its last observed frame and its
   covariance (the marginal of the point and that frame's pose, from the inverse information),
@@ -45,10 +50,11 @@
   `undistort_failed`, `no_motion` (camera centre moved less than gates.min_baseline between the
   first and the last inlier), `degenerate` (largest rotation-compensated parallax below
   gates.min_parallax_px), `behind`, else `ok`. A feature whose last observation left the window is
-  removed from the state and its last estimate kept (estimate() returns it until forget()).
+  removed from the state and its last estimate kept (estimate() returns it until forget()); if it
+  is observed again it starts anew.
 
-  Cost per frame: O((3N + 7K)^3) for N features in the state and K frames (the dense solve);
-  see the README's cost table.
+  Cost per frame: O((3N + 5K)^3) for N features in the state and K planar frames (7K for 6-DoF):
+  the dense solve; see the README's cost table.
 */
 #include <Eigen/Core>
 #include <deque>
@@ -99,7 +105,9 @@ public:
   ~WindowEstimator();
   WindowEstimator(const WindowEstimator &) = delete;
   WindowEstimator &operator=(const WindowEstimator &) = delete;
+  /*! \brief Movable (the state moves with it). */
   WindowEstimator(WindowEstimator &&) noexcept;
+  /*! \brief Movable (the state moves with it). */
   WindowEstimator &operator=(WindowEstimator &&) noexcept;
 
   /*! \brief What happened to one observation of the frame just added (flags may change later). */
