@@ -890,7 +890,7 @@ struct WindowEstimator::Impl {
             addFeatureVar(kv.first);
     // Variables that join the prior's non-trivial part now keep their current value as the point
     // where every later Jacobian of theirs is evaluated.
-    for (int fi = 0; fi < 2 && fi < static_cast<int>(frames.size()); ++fi)
+    for (int fi = 0; fi < (absolute ? 1 : 2) && fi < static_cast<int>(frames.size()); ++fi) // per-pose noise: no link to the next frame
       if (!frames[static_cast<std::size_t>(fi)].has_fej) {
         Frame &f = frames[static_cast<std::size_t>(fi)];
         f.has_fej = true;
