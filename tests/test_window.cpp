@@ -376,6 +376,8 @@ TEST_CASE("window: features appear and vanish, frames without motion or without 
   CHECK(est.estimate(777).status == Status::TooFewFrames);
   est.forget(20);
   CHECK(est.estimate(20).status == Status::TooFewFrames);
+  for (const Observation &ob : tracks[20].observations)
+    CHECK_FALSE(est.isOutlier(20, ob.frame)); // its flags are forgotten too
 }
 
 TEST_CASE("window: a camera that does not move gives no_motion, not a depth", "[window]")

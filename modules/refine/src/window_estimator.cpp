@@ -1340,6 +1340,9 @@ std::vector<long> WindowEstimator::ids() const
 void WindowEstimator::forget(long id)
 {
   impl_->finished.erase(id);
+  auto &rej = impl_->rejected; // its final outlier flags too
+  rej.erase(rej.lower_bound({id, std::numeric_limits<long>::min()}),
+            rej.upper_bound({id, std::numeric_limits<long>::max()}));
   const auto it = impl_->features.find(id);
   if (it == impl_->features.end())
     return;

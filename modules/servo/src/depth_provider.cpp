@@ -184,7 +184,19 @@ void DepthProvider::update(const MotionSample &odometry, const std::vector<std::
   }
   for (const auto &p : points)
     refresh(p.first);
-  // Features no longer tracked by the estimator fall back to their prior.
+  for (const auto &p : points)
+    last_seen_[p.first] = frames_used_;
+  // Features no longer tracked by the estimator fall back to their prior; the window estimator
+  // forgets those unseen for max_missing_frames estimator frames, so that a loop that runs for
+  // hours keeps bounded memory.
+  for (auto it = last_seen_.begin(); it != last_seen_.end();) {
+    if (frames_used_ - it->second > o_.max_missing_frames) {
+      window_->forget(it->first);
+      it = last_seen_.erase(it);
+    } else {
+      ++it;
+    }
+  }
   for (auto &kv : state_)
     if (!seen.count(kv.first))
       refresh(kv.first);

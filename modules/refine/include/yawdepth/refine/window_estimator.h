@@ -133,7 +133,9 @@ public:
   bool isOutlier(long id, long frame) const;
   /*! \brief Ids of the features in the state (seen at least twice in the window, still tracked). */
   std::vector<long> ids() const;
-  /*! \brief Forget a feature (in the state it is marginalised; its kept estimate is dropped). */
+  /*! \brief Forget a feature (in the state it is marginalised; its kept estimate and outlier flags
+      are dropped). The kept estimates of features that left the state stay until then: a long-running
+      caller forgets the ids it no longer tracks, as DepthProvider does. */
   void forget(long id);
   /*! \brief Frame of the last addFrame() (0 before the first). */
   long frame() const;

@@ -112,8 +112,9 @@ struct DepthProviderOptions {
       period and min_translation. */
   NoiseModel noise = servoNoiseModel();
   double initial_depth = 0.0;            //!< Filter's initial median depth (m); 0 = prior_depth.
-  /*! Forget a feature unseen for this many estimator frames (fused; the window estimator keeps a
-      feature while it is seen within its window, and restarts it when it comes back later). */
+  /*! Forget a feature unseen for this many estimator frames (the window estimator keeps a feature
+      in its state while it is seen within its window, restarts it when it comes back later, and
+      drops what it kept of it after this many frames). */
   int max_missing_frames = 30;
   DepthMethod method = DepthMethod::Window; //!< The estimator.
   int window = 10;                       //!< Frames in the window estimator's window (>= 2).
@@ -218,6 +219,7 @@ private:
   FusedEstimator fused_;
   std::unique_ptr<WindowEstimator> window_;
   std::map<long, MotionSample> fed_rows_; // the rows given to the window estimator, by its frame number
+  std::map<long, long> last_seen_;        // estimator frame at which each id was last given
   long period_ = 0, frames_used_ = 0, skipped_ = 0;
   bool have_fed_ = false;
   MotionSample last_fed_, current_;
