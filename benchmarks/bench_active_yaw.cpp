@@ -5,7 +5,7 @@
   targets). Reported per target layout and yaw policy: the time until every target's depth sigma
   (the estimator's own) has fallen below 2 % of its depth, over several noise seeds.
 
-    bench_active_yaw [--seeds N] [--seed S] [--frames F]
+    bench_active_yaw [--seeds N] [--seed S] [--frames F] [--layout I]
 
   Scene: the paper's camera (1734 px focal length, 640x480: +-10.5 degrees of horizontal field of
   view) and rig (optical centre 0.1503 m off the pan axis); 0.2 m/s forward, 10 frames per second;
@@ -70,6 +70,7 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
   double yaw = policy.steered ? std::atan2(layout.centre.x(), layout.centre.z()) : policy.yaw;
   MotionSample truth, measured;
   std::vector<double> reached(n, kNever);
+  std::vector<MotionSample> log; // the measured motion, one row per frame
   for (int k = 0; k < frames; ++k) {
     truth.frame = measured.frame = k;
     truth.z = kSpeed * kDt * k;
@@ -108,7 +109,13 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
         reached[i] = k * kDt;
       done += reached[i] < kNever ? 1 : 0;
     }
+    // The helper gets every target the estimator tracks that still needs depth (predicted into the
+    // current view from the measured motion, whether or not it is in view now) and the ones in view.
+    log.push_back(measured);
+    const vpHomogeneousMatrix cMw_measured = wMc(rig, measured).inverse();
+    std::vector<bool> in_view(n, false);
     for (const FrameObservation &o : obs) {
+      in_view[static_cast<std::size_t>(o.id)] = true;
       const PointEstimate e = est.estimate(o.id);
       Eigen::Vector2d m;
       if (!camera.undistort(Eigen::Vector2d(o.u, o.v), m))
@@ -118,8 +125,20 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
       f.y = m.y();
       const bool ok = e.ok() && e.frame == k && e.c_P.z() > 0;
       f.Z = ok ? e.c_P.z() : 1.0 / wo.prior_inverse_depth;
+      f.sigma_rel = ok ? e.sigmaZ() / e.c_P.z() : std::numeric_limits<double>::quiet_NaN();
       f.weight = reached[static_cast<std::size_t>(o.id)] < kNever ? 0.0 : 1.0;
       helper.push_back(f);
+    }
+    for (int i = 0; i < n; ++i) {
+      const PointEstimate e = est.estimate(i);
+      if (in_view[static_cast<std::size_t>(i)] || reached[static_cast<std::size_t>(i)] < kNever || !e.ok() ||
+          !(e.c_P.z() > 0))
+        continue;
+      const vpColVector P = cMw_measured * wMc(rig, log[static_cast<std::size_t>(e.frame)]) *
+                            vpColVector({e.c_P.x(), e.c_P.y(), e.c_P.z(), 1.0});
+      if (!(P[2] > 0.05))
+        continue; // behind the camera now: passed
+      helper.push_back(YawHelperFeature{P[0] / P[2], P[1] / P[2], P[2], 1.0, e.sigmaZ() / e.c_P.z()});
     }
     if (done == n)
       break;
@@ -146,7 +165,7 @@ std::string fmtTime(double t)
 
 int main(int argc, char **argv)
 {
-  int seeds = 10, frames = 400;
+  int seeds = 10, frames = 400, only = -1;
   std::uint64_t seed = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -156,8 +175,10 @@ int main(int argc, char **argv)
       seed = std::strtoull(argv[++i], nullptr, 10);
     else if (a == "--frames" && i + 1 < argc)
       frames = std::atoi(argv[++i]);
+    else if (a == "--layout" && i + 1 < argc)
+      only = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--seeds N] [--seed S] [--frames F]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--seeds N] [--seed S] [--frames F] [--layout I (0-based row)]\n", argv[0]);
       return 2;
     }
   }
@@ -175,7 +196,12 @@ int main(int argc, char **argv)
       {"beside, 1.5 m to the right", {1.5, 0.0, 0.8}, {0.2, 0.1, 0.3}},
       {"left, 2 m off the path, 4 m", {-2.0, 0.0, 4.0}, {0.3, 0.1, 0.3}},
       {"far right, 4 m off the path, 8 m", {4.0, 0.0, 8.0}, {0.4, 0.1, 0.4}},
+      {"spread right, 1-3 m off, 1.5-4.5 m", {2.0, 0.0, 3.0}, {1.0, 0.2, 1.5}},
   };
+  if (only >= static_cast<int>(layouts.size())) {
+    std::fprintf(stderr, "bench_active_yaw: --layout must be below %zu\n", layouts.size());
+    return 2;
+  }
   const std::vector<Policy> policies = {{"front (0 deg)", false, 0.0},     {"30 deg toward", false, 30 * kDeg},
                                         {"60 deg toward", false, 60 * kDeg}, {"90 deg toward", false, 90 * kDeg},
                                         {"steered (helper)", true, 0.0}};
@@ -190,7 +216,10 @@ int main(int argc, char **argv)
   for (const Policy &p : policies)
     std::printf(" %14s", p.name);
   std::printf("\n%s\n", std::string(112, '-').c_str());
-  for (const Layout &L : layouts) {
+  for (std::size_t li = 0; li < layouts.size(); ++li) {
+    if (only >= 0 && static_cast<std::size_t>(only) != li)
+      continue;
+    const Layout &L = layouts[li];
     std::printf("%-36s", L.name);
     const double side = L.centre.x() < 0 ? -1.0 : 1.0;
     for (const Policy &p : policies) {

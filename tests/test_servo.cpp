@@ -233,10 +233,29 @@ TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion",
         Approx(back.target_yaw));
   home.home_yaw = 4.0; // outside the joint's range
   CHECK_THROWS_AS(recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d::Zero(), done, home), Error);
-  // Driving forward: bounded, and never a worse parallax than now.
+  // Driving forward: bounded, and never less information than holding the yaw.
   const YawRecommendation fwd = recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, o);
   CHECK(std::abs(fwd.rate) <= o.max_rate + 1e-12);
-  CHECK(fwd.parallax_target >= fwd.parallax_now - 1e-12);
+  CHECK(fwd.information_target >= fwd.information_now);
+  CHECK(fwd.information_now > 0);
+  // A feature still to measure that is out of view (35 degrees right, the image spans +-28): the pan
+  // turns toward it ...
+  const std::vector<YawHelperFeature> outside{{0.7, 0.0, 2.0, 1.0}};
+  const YawRecommendation seek = recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), outside, o);
+  CHECK(seek.rate > 0.1);
+  CHECK(seek.information_now == 0.0);
+  CHECK(seek.information_target > 0);
+  CHECK_FALSE(seek.visible_now);
+  // ... but not at the price of a feature in view that still needs depth, on the image's left edge.
+  const std::vector<YawHelperFeature> both{{0.7, 0.0, 2.0, 1.0}, {-0.4, 0.0, 2.0, 1.0}};
+  const YawRecommendation kept = recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), both, o);
+  CHECK(kept.feasible);
+  CHECK(camera.project(Eigen::Vector2d(std::tan(std::atan(-0.4) - kept.target_yaw), 0.0)).x() >= o.margin_px);
+  // A feature whose depth is already known to 0.01 % gains almost nothing: it no longer draws the pan.
+  std::vector<YawHelperFeature> known = outside;
+  known[0].sigma_rel = 1e-4;
+  CHECK(recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), known, o).information_target <
+        1e-2 * seek.information_target);
   // Side view, translation along the camera's -X: parallax far larger than at front view.
   const YawRecommendation side = recommendYawRate(camera, rig, M_PI / 2, Eigen::Vector3d(0, 0, 0.2), f, o);
   const YawRecommendation front = recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, o);
@@ -259,6 +278,23 @@ TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion",
   // Bad input.
   CHECK_THROWS_AS(recommendYawRate(camera, rig, 0.0, Eigen::Vector3d::Zero(), {}, o), Error);
   CHECK_THROWS_AS(recommendYawRate(CameraModel(), rig, 0.0, Eigen::Vector3d::Zero(), f, o), Error);
+  std::vector<YawHelperFeature> bad_sigma = f;
+  bad_sigma[0].sigma_rel = -0.1;
+  CHECK_THROWS_AS(recommendYawRate(camera, rig, 0.0, Eigen::Vector3d::Zero(), bad_sigma, o), Error);
+  for (int which = 0; which < 5; ++which) {
+    YawHelperOptions b;
+    if (which == 0)
+      b.lookahead = 0;
+    else if (which == 1)
+      b.steps = 0;
+    else if (which == 2)
+      b.sigma_px = 0;
+    else if (which == 3)
+      b.frame_rate = std::numeric_limits<double>::infinity();
+    else
+      b.switch_margin = -1;
+    CHECK_THROWS_AS(b.validate(), Error);
+  }
 }
 
 TEST_CASE("pan robot: the camera Jacobian matches the kinematics", "[servo]")

@@ -17,7 +17,6 @@ using namespace refine_detail;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 using window_detail::kFrameDim; // x, y, z, dx, dy, dz, yaw
 constexpr double kMaxInvSigma = 1e6;       // 1 um, 1 urad: a component this certain is still estimated
 

@@ -23,6 +23,16 @@ void YawHelperOptions::validate() const
     throw Error("yaw helper: margin_px must be finite and non-negative");
   if (!(std::isfinite(min_yaw) && std::isfinite(max_yaw) && min_yaw < max_yaw))
     throw Error("yaw helper: need min_yaw < max_yaw");
+  if (!(std::isfinite(lookahead) && lookahead > 0 && lookahead <= 60))
+    throw Error("yaw helper: lookahead must be in (0, 60] s");
+  if (steps < 1 || steps > 1000)
+    throw Error("yaw helper: steps must be in [1, 1000]");
+  if (!(std::isfinite(sigma_px) && sigma_px > 0))
+    throw Error("yaw helper: sigma_px must be finite and positive");
+  if (!(std::isfinite(frame_rate) && frame_rate > 0))
+    throw Error("yaw helper: frame_rate must be finite and positive");
+  if (!(std::isfinite(switch_margin) && switch_margin >= 0))
+    throw Error("yaw helper: switch_margin must be finite and non-negative");
   if (!std::isnan(home_yaw) && !(std::isfinite(home_yaw) && home_yaw >= min_yaw && home_yaw <= max_yaw))
     throw Error("yaw helper: home_yaw must be NaN (none) or within [min_yaw, max_yaw]");
 }
@@ -45,44 +55,117 @@ namespace {
 
 struct Candidate {
   double yaw = 0;
-  double parallax = 0;
-  double centring = 0; // squared relative centroid offset
-  bool visible = false;
+  double parallax = 0;    // translational flow now, panning toward the candidate (px/s)
+  double information = 0; // J: the D-optimal information gain over the lookahead
+  double centring = 0;    // squared relative centroid offset (at most 1), averaged over the lookahead
+  bool keeps = true;      // every weighted feature now in view stays in view at the candidate yaw
 };
 
-Candidate evaluate(const CameraModel &camera, const YawRig &rig, double yaw, double rate, const Eigen::Vector3d &v_velocity,
-                   const std::vector<Eigen::Vector3d> &v_points, const std::vector<YawHelperFeature> &features,
-                   double margin_px)
+/* The largest normalised radius up to which the lens model maps outward (its radial derivative stays
+   positive): beyond it a polynomial model folds back, and a point far outside the field of view would
+   project inside the image. Scanned along the x axis, to 10 (84 degrees off axis). */
+double validRadius(const CameraModel &camera)
 {
-  Candidate c;
-  c.yaw = yaw;
-  c.visible = true;
-  const Eigen::Matrix3d cRv = rig.vRc(yaw).transpose();
-  std::vector<YawHelperFeature> seen = features;
-  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-  const double w = camera.width(), h = camera.height();
-  for (std::size_t i = 0; i < v_points.size(); ++i) {
-    const Eigen::Vector3d c_P = rig.cameraPoint(yaw, v_points[i]);
-    if (!(c_P.z() > 1e-9)) {
-      c.visible = false;
-      seen[i].Z = 1.0; // keep a finite score
-      continue;
-    }
-    seen[i].x = c_P.x() / c_P.z();
-    seen[i].y = c_P.y() / c_P.z();
-    seen[i].Z = c_P.z();
-    const Eigen::Vector2d uv = camera.project(Eigen::Vector2d(seen[i].x, seen[i].y));
-    if (!(uv.x() >= margin_px && uv.x() <= w - 1 - margin_px && uv.y() >= margin_px && uv.y() <= h - 1 - margin_px))
-      c.visible = false;
-    centroid += uv;
+  constexpr double kStep = 0.01, kMax = 10.0;
+  for (double r = kStep; r <= kMax; r += kStep) {
+    Eigen::Matrix2d J;
+    camera.distortNormalized(Eigen::Vector2d(r, 0.0), &J);
+    if (!(J(0, 0) > 0))
+      return r - kStep;
   }
-  centroid /= static_cast<double>(v_points.size());
-  const double ox = (centroid.x() - camera.u0()) / (0.5 * w), oy = (centroid.y() - camera.v0()) / (0.5 * h);
-  c.centring = ox * ox + oy * oy;
-  // Panning at `rate` moves the optical centre (offset t0 from the yaw axis): rate * (e_y x Ry(yaw) t0).
+  return kMax;
+}
+
+bool inImage(const CameraModel &camera, double valid_radius, const Eigen::Vector3d &c_P, double margin_px,
+             Eigen::Vector2d *uv)
+{
+  if (!(c_P.z() > 1e-9))
+    return false;
+  const Eigen::Vector2d m(c_P.x() / c_P.z(), c_P.y() / c_P.z());
+  if (!(m.squaredNorm() < valid_radius * valid_radius))
+    return false;
+  *uv = camera.project(m);
+  return uv->x() >= margin_px && uv->x() <= camera.width() - 1 - margin_px && uv->y() >= margin_px &&
+         uv->y() <= camera.height() - 1 - margin_px;
+}
+
+/* The camera centre's velocity in the vision frame when panning at `rate`: the robot's, plus the
+   lever arm's rate * (e_y x Ry(yaw) t0). */
+Eigen::Vector3d centreVelocity(const YawRig &rig, double yaw, double rate, const Eigen::Vector3d &v_velocity)
+{
   const Eigen::Vector3d off = rotY(yaw) * rig.cameraOffset();
-  const Eigen::Vector3d v_cam = v_velocity + rate * Eigen::Vector3d(off.z(), 0, -off.x());
-  c.parallax = parallaxRate(camera, cRv * v_cam, seen);
+  return v_velocity + rate * Eigen::Vector3d(off.z(), 0, -off.x());
+}
+
+struct Scene {
+  const CameraModel &camera;
+  const YawRig &rig;
+  double yaw;                              // now
+  Eigen::Vector3d v_velocity;              // of the vision frame's origin
+  std::vector<Eigen::Vector3d> v_points;   // the features, vision frame now
+  std::vector<double> weights;             // w_i
+  std::vector<double> prior;               // sigma_r,i^2
+  std::vector<bool> in_view_now;           // inside the image minus the margin now
+  Eigen::Vector3d v_C0;                    // the camera centre now, vision frame
+  double valid_radius;                     // validRadius(camera)
+  const std::vector<YawHelperFeature> &features;
+};
+
+Candidate evaluate(const Scene &sc, double target, const YawHelperOptions &o)
+{
+  const CameraModel &camera = sc.camera;
+  Candidate c;
+  c.yaw = target;
+  // Now, at the candidate yaw: does every weighted feature now in view stay in view?
+  for (std::size_t i = 0; i < sc.v_points.size(); ++i) {
+    Eigen::Vector2d uv;
+    if (sc.weights[i] > 0 && sc.in_view_now[i] && !inImage(camera, sc.valid_radius, sc.rig.cameraPoint(target, sc.v_points[i]), o.margin_px, &uv))
+      c.keeps = false;
+  }
+  const double rate0 = std::clamp(o.gain * (target - sc.yaw), -o.max_rate, o.max_rate);
+  c.parallax = parallaxRate(camera, sc.rig.vRc(sc.yaw).transpose() * centreVelocity(sc.rig, sc.yaw, rate0, sc.v_velocity),
+                            sc.features);
+  // Played forward: the pan under the recommended rate law, the robot at its velocity.
+  const double dt = o.lookahead / o.steps;
+  const double frames = o.frame_rate * dt / (o.sigma_px * o.sigma_px);
+  std::vector<double> info(sc.v_points.size(), 0.0);
+  double yaw = sc.yaw;
+  for (int s = 1; s <= o.steps; ++s) {
+    const double rate = std::clamp(o.gain * (target - yaw), -o.max_rate, o.max_rate);
+    yaw = std::clamp(yaw + rate * dt, o.min_yaw, o.max_yaw);
+    const Eigen::Vector3d v_origin = sc.v_velocity * (s * dt);
+    const Eigen::Matrix3d cRv = sc.rig.vRc(yaw).transpose();
+    Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+    int counted = 0;
+    for (std::size_t i = 0; i < sc.v_points.size(); ++i) {
+      const Eigen::Vector3d c_P = sc.rig.cameraPoint(yaw, sc.v_points[i] - v_origin);
+      if (c_P.z() > 1e-9) {
+        centroid += camera.project(Eigen::Vector2d(c_P.x() / c_P.z(), c_P.y() / c_P.z()));
+        ++counted;
+      }
+      Eigen::Vector2d uv;
+      if (!(sc.weights[i] > 0) || !inImage(camera, sc.valid_radius, c_P, o.margin_px, &uv))
+        continue;
+      // d m / d log Z along the current bearing: the point moves by (P - C0) per unit log-depth.
+      const Eigen::Vector3d d = cRv * (sc.v_points[i] - sc.v_C0);
+      const double iz = 1.0 / c_P.z();
+      const double du = camera.kx() * iz * (d.x() - c_P.x() * iz * d.z());
+      const double dv = camera.ky() * iz * (d.y() - c_P.y() * iz * d.z());
+      info[i] += frames * (du * du + dv * dv);
+    }
+    // The recentring term: the features' centroid offset, averaged over the lookahead.
+    double offset2 = 1.0; // none in front of the camera: as bad as the image border
+    if (counted > 0) {
+      centroid /= counted;
+      const double ox = (centroid.x() - camera.u0()) / (0.5 * camera.width());
+      const double oy = (centroid.y() - camera.v0()) / (0.5 * camera.height());
+      offset2 = std::min(1.0, ox * ox + oy * oy);
+    }
+    c.centring += offset2 / o.steps;
+  }
+  for (std::size_t i = 0; i < info.size(); ++i)
+    if (sc.weights[i] > 0)
+      c.information += sc.weights[i] * std::log1p(sc.prior[i] * info[i]);
   return c;
 }
 
@@ -99,62 +182,77 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
     throw Error("yaw helper: no features");
   if (!std::isfinite(yaw) || !v_velocity.allFinite())
     throw Error("yaw helper: yaw and velocity must be finite");
-  std::vector<Eigen::Vector3d> v_points;
-  v_points.reserve(features.size());
+  Scene sc{camera, rig, yaw, v_velocity, {}, {}, {}, {}, rig.visionPoint(yaw, Eigen::Vector3d::Zero()), validRadius(camera),
+           features};
   for (const YawHelperFeature &f : features) {
     if (!(std::isfinite(f.x) && std::isfinite(f.y) && std::isfinite(f.Z) && f.Z > 0 && std::isfinite(f.weight) &&
           f.weight >= 0))
       throw Error("yaw helper: each feature needs finite x, y, a positive depth and a non-negative weight");
-    v_points.emplace_back(rig.visionPoint(yaw, Eigen::Vector3d(f.x * f.Z, f.y * f.Z, f.Z)));
+    if (!(std::isnan(f.sigma_rel) || (std::isfinite(f.sigma_rel) && f.sigma_rel > 0)))
+      throw Error("yaw helper: a feature's sigma_rel must be NaN (unknown) or finite and positive");
+    const Eigen::Vector3d c_P(f.x * f.Z, f.y * f.Z, f.Z);
+    sc.v_points.emplace_back(rig.visionPoint(yaw, c_P));
+    sc.weights.push_back(f.weight);
+    const double sr = std::isnan(f.sigma_rel) ? 1.0 : f.sigma_rel;
+    sc.prior.push_back(sr * sr);
+    Eigen::Vector2d uv;
+    sc.in_view_now.push_back(inImage(camera, sc.valid_radius, c_P, options.margin_px, &uv));
   }
 
   const double reach = options.max_rate * options.horizon;
   const double lo = std::max(options.min_yaw, yaw - reach), hi = std::min(options.max_yaw, yaw + reach);
+  const double hold_yaw = std::clamp(yaw, options.min_yaw, options.max_yaw);
+  const Candidate now = evaluate(sc, hold_yaw, options);
+  YawRecommendation r;
+  r.parallax_now = parallaxRate(camera, rig.vRc(yaw).transpose() * v_velocity, features);
+  r.information_now = now.information;
+  r.visible_now = true;
+  for (std::size_t i = 0; i < features.size(); ++i)
+    r.visible_now = r.visible_now && sc.in_view_now[i];
+
   const bool measured = std::all_of(features.begin(), features.end(), [](const YawHelperFeature &f) { return f.weight == 0; });
   if (measured && std::isfinite(options.home_yaw)) { // nothing left to learn here: back to the home view
-    YawRecommendation r;
     r.target_yaw = std::clamp(options.home_yaw, lo, hi);
     r.rate = std::clamp(options.gain * (r.target_yaw - yaw), -options.max_rate, options.max_rate);
-    const Candidate now = evaluate(camera, rig, yaw, 0.0, v_velocity, v_points, features, options.margin_px);
-    r.parallax_now = r.parallax_target = now.parallax;
-    r.visible_now = now.visible;
+    r.parallax_target = r.parallax_now;
+    r.information_target = now.information;
     return r;
   }
-  std::vector<Candidate> cands;
-  const Candidate now = evaluate(camera, rig, yaw, 0.0, v_velocity, v_points, features, options.margin_px);
-  for (int k = 0; k < options.candidates; ++k) {
-    const double t = lo + (hi - lo) * k / (options.candidates - 1.0);
-    const double rate = std::clamp(options.gain * (t - yaw), -options.max_rate, options.max_rate);
-    cands.push_back(evaluate(camera, rig, t, rate, v_velocity, v_points, features, options.margin_px));
-  }
-  double pmax = 0;
-  bool any_visible = false;
+  std::vector<Candidate> cands{now};
+  for (int k = 0; k < options.candidates; ++k)
+    cands.push_back(evaluate(sc, lo + (hi - lo) * k / (options.candidates - 1.0), options));
+  const bool any_keeps = std::any_of(cands.begin(), cands.end(), [](const Candidate &c) { return c.keeps; });
+  double jmax = 0;
   for (const Candidate &c : cands)
-    if (c.visible) {
-      pmax = std::max(pmax, c.parallax);
-      any_visible = true;
-    }
-  // Score; with no admissible candidate, only recentre the features.
+    if (c.keeps || !any_keeps)
+      jmax = std::max(jmax, c.information);
+  // Below this, nothing is learnt (the round-off of a camera that does not translate): recentre only.
+  constexpr double kNoInformation = 1e-6;
+  const auto score = [&](const Candidate &c) {
+    if (jmax > kNoInformation)
+      return c.information / jmax - options.centring_weight * c.centring;
+    return -c.centring; // nothing to learn: recentre the features
+  };
   const Candidate *best = nullptr;
   double best_score = -std::numeric_limits<double>::infinity();
   for (const Candidate &c : cands) {
-    if (any_visible && !c.visible)
+    if (any_keeps && !c.keeps)
       continue;
-    const double p = (any_visible && pmax > 0) ? c.parallax / pmax : 0.0;
     // Ties (e.g. no translation) go to the smallest change of yaw.
-    const double score = p - options.centring_weight * c.centring - 1e-9 * std::abs(c.yaw - yaw);
-    if (score > best_score) {
-      best_score = score;
+    const double sc_c = score(c) - 1e-9 * std::abs(c.yaw - yaw);
+    if (sc_c > best_score) {
+      best_score = sc_c;
       best = &c;
     }
   }
-  YawRecommendation r;
-  r.target_yaw = best ? best->yaw : yaw;
+  // Hysteresis: hold the current yaw unless the best candidate is clearly better.
+  if (best != &cands.front() && (now.keeps || !any_keeps) && score(now) >= best_score - options.switch_margin)
+    best = &cands.front();
+  r.target_yaw = best->yaw;
   r.rate = std::clamp(options.gain * (r.target_yaw - yaw), -options.max_rate, options.max_rate);
-  r.parallax_now = now.parallax;
-  r.parallax_target = best ? best->parallax : now.parallax;
-  r.visible_now = now.visible;
-  r.feasible = any_visible;
+  r.parallax_target = best->parallax;
+  r.information_target = best->information;
+  r.feasible = any_keeps;
   return r;
 }
 

@@ -20,23 +20,36 @@
   (2) The yaw decides which features stay in view and where they are in the image (a feature's
   flow in pixels grows toward the image border).
 
-  The model: the features are taken as fixed points in the vision frame (their bearing and depth
-  now); a candidate yaw \f$\theta\f$, reached at the rate
-  \f$ r = \mathrm{clamp}(g\,(\theta - \theta_0), \pm\dot\theta_{\max}) \f$, is scored with
-  the features reprojected in the camera at that yaw and the camera's translation (robot and pan
-  offset) at that rate:
-  \f[ J(\theta) = \frac{P(\theta)}{P_{\max}} - w_c\, c(\theta)^2,\qquad
-      P(\theta) = \frac{1}{n}\sum_i w_i\, k \,\lVert \dot{\mathbf m}_{T,i}(\theta) \rVert \ \text{(px/s)} \f]
-  where \f$P_{\max}\f$ is the largest P over the candidates, \f$c\f$ the features' centroid
-  offset from the principal point relative to the half image (the visibility term), and a
-  candidate is inadmissible when a feature leaves the image minus `margin_px` or gets behind the
-  camera. The candidates are the yaws reachable within `horizon` seconds at up to `max_rate`
-  (and within [min_yaw, max_yaw]); the best one is the target yaw and the recommended rate is
-  \f$ \dot\theta = \mathrm{clamp}(g\,(\theta^* - \theta_0),\ \pm \dot\theta_{\max}) \f$. With
-  no camera offset and no robot translation the rate only recentres the features. Feature
-  weights \f$w_i\f$ (e.g. 0 for a converged feature, 1 otherwise) scale each feature's term. When
-  every weight is 0 and `home_yaw` is set, the target is home_yaw (as far as the horizon reaches):
-  the features are measured, the pan goes back to looking for new ones.
+  The model (receding-horizon active structure from motion): the features are fixed points in the
+  vision frame (their bearing and depth now). A candidate target yaw \f$\theta\f$ is played
+  forward over `lookahead` seconds: the robot keeps its velocity, the pan moves toward
+  \f$\theta\f$ at \f$ \dot\theta = \mathrm{clamp}(g\,(\theta - \theta_t), \pm\dot\theta_{\max}) \f$
+  (the rate this function will recommend), and at each of `steps` instants t the Fisher information
+  that a view from there adds on feature i's log-depth is
+  \f[ \Delta I_i(t) = \frac{f_{\mathrm{frames}}\,\Delta t}{\sigma_{px}^2}
+      \Big\lVert K\,\frac{\partial \mathbf m_i(t)}{\partial \log Z_i} \Big\rVert^2,\qquad
+      \frac{\partial \mathbf m_i(t)}{\partial \log Z_i} = \frac{\partial \pi}{\partial\, {}^{c}\mathbf P}\,
+      {}^{c(t)}\mathbf R_{v}\,(\mathbf P_i - \mathbf C_0) \f]
+  (the image motion that a change of the depth along the current bearing causes in the view at t:
+  zero at t = 0, growing with the baseline from the current centre \f$\mathbf C_0\f$), counted
+  only while the feature is inside the image minus `margin_px`. It includes both ways the yaw
+  helps: the pan's lever arm (YawRig::cameraOffset(), the paper's Lb) translates the camera, and
+  the yaw decides which features stay in view and where. The candidate's score is D-optimal, the
+  gain in log-determinant of the features' depth information:
+  \f[ J(\theta) = \sum_i w_i \log\Big(1 + \sigma_{r,i}^2 \sum_t \Delta I_i(t)\Big) \f]
+  with \f$\sigma_{r,i}\f$ the feature's current relative depth sigma (1 when unknown): a feature
+  that is already well measured gains little, one that is not gains most, so the pan serves the
+  worst-measured features first. The candidates are the yaws reachable within `horizon` seconds at
+  `max_rate` (and within [min_yaw, max_yaw]) and the current yaw; a candidate that loses a weighted
+  feature now in view (it leaves the image minus the margin at the candidate yaw) is inadmissible
+  unless every candidate does. The winner maximises \f$ J/J_{\max} - w_c\,c(\theta)^2 \f$, with
+  \f$c\f$ the centroid offset of the features from the principal point relative to the half image
+  (averaged over the lookahead; with the default \f$w_c = 0\f$ the features are recentred only
+  when nothing can be learnt, e.g. a camera that does not translate), and the current yaw is kept
+  unless the winner beats it by `switch_margin`. Feature weights \f$w_i\f$ (e.g. 0 for a converged
+  feature, 1 otherwise) scale each feature's term. When every weight is 0 and `home_yaw` is set,
+  the target is home_yaw (as far as the horizon reaches): the features are measured, the pan goes
+  back to looking for new ones.
 
   Use it as a secondary task: the primary IBVS task usually uses every joint, so the classic
   projector I - W^+W is zero; ViSP's large projection operator (vpServo::secondaryTask(de2dt,
@@ -58,7 +71,9 @@ struct YawHelperFeature {
   /*! normalised (undistorted) image coordinate x in the current camera frame */
   double x = 0, y = 0; //!< normalised (undistorted) image coordinate y in the current camera frame
   double Z = 1;        //!< depth (m), > 0: the estimate, or the prior
-  double weight = 1;   //!< weight of its parallax (>= 0), e.g. min(1, sigma_Z/Z / threshold)
+  double weight = 1;   //!< weight of its depth information (>= 0), e.g. 0 once converged, 1 before
+  /*! its current relative depth sigma sigma_Z / Z (> 0); NaN (the default): unknown, taken as 1 */
+  double sigma_rel = std::numeric_limits<double>::quiet_NaN();
 };
 
 /*! \brief Options of recommendYawRate(). */
@@ -67,8 +82,18 @@ struct YawHelperOptions {
   double horizon = 1.0;           //!< candidates: yaws reachable in this time at max_rate (s)
   int candidates = 41;            //!< number of candidate yaws (odd, >= 3)
   double gain = 2.0;              //!< rate = gain * (target - current) (1/s), clamped
-  double centring_weight = 0.5;   //!< w_c of the visibility term
+  /*! w_c of the recentring term while information is gained (0: the features are recentred only
+      when nothing can be learnt; measured with bench_active_yaw, any w_c > 0 makes the pan follow
+      the targets' centroid, which costs time and buys nothing that the visibility rule does not) */
+  double centring_weight = 0.0;
   double margin_px = 40;          //!< features must stay this far inside the image (px)
+  double lookahead = 3.0;         //!< how far ahead each candidate is played (s)
+  int steps = 15;                 //!< instants over the lookahead (>= 1)
+  double sigma_px = 0.3;          //!< pixel noise of the tracks (px), scales the information
+  double frame_rate = 10.0;       //!< frames per second that the estimator gets (Hz)
+  /*! the current yaw is kept unless the best candidate's score beats it by this much (scores are
+      relative to the best information gain: 0.01 = 1 %) */
+  double switch_margin = 0.01;
   /*! the pan joint's range: lower end (rad) */
   double min_yaw = -M_PI, max_yaw = M_PI; //!< the pan joint's range: upper end (rad)
   /*! Where to pan when no feature needs depth information any more (every weight 0): the view in
@@ -83,10 +108,12 @@ struct YawHelperOptions {
 struct YawRecommendation {
   double rate = 0;              //!< recommended yaw rate (rad/s), within +-max_rate
   double target_yaw = 0;        //!< the best candidate yaw (rad)
-  double parallax_now = 0;      //!< P at the current yaw (px/s, weighted mean)
-  double parallax_target = 0;   //!< P at the target yaw (px/s)
+  double parallax_now = 0;      //!< translational flow at the current yaw, standing (px/s, weighted mean: parallaxRate())
+  double parallax_target = 0;   //!< the same at the target yaw, panning toward it (px/s)
+  double information_now = 0;   //!< J of holding the current yaw (see the file)
+  double information_target = 0; //!< J of the target yaw
   bool visible_now = true;      //!< every feature inside the image (minus margin) at the current yaw
-  bool feasible = true;         //!< some candidate keeps every feature in view (else rate recentres only)
+  bool feasible = true;         //!< some candidate keeps every weighted feature now in view in view
 };
 
 /*!
