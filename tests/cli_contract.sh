@@ -178,7 +178,15 @@ for m in fused window refine; do
   run "$N.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$N" --points 20 --yaw 1.2 \
       --sigma-px 0.3 --sigma-odom 0.001 --sigma-heading 0.00087 --sigma-yaw 0.00087 --seed 11
   run "$N.est" estimate --method "$m" --camera "$YML" --rig "$RIG" --motion "$N/motion.csv" --tracks "$N/tracks.csv" \
-      --out "$N/points.csv" --outliers "$N/outliers.csv"
+      --out "$N/points.csv" --outliers "$N/outliers.csv" --ply "$N/points.ply"
+  # The PLY cloud: a header naming as many vertices as there are ok rows, then one line per vertex
+  # (x y z sigma_z id) whose sigma_z and id are those of the points file.
+  ply_ok=$(awk 'NR == FNR { if (FNR > 1) { split($0, f, ","); if (f[10] == "ok") { k++; s[f[1]] = f[9] } } next }
+                /^element vertex / { n = $3 } /^end_header/ { body = 1; next }
+                body { v++; if (!($5 in s) || ($4 - s[$5]) > 1e-9 * s[$5] || (s[$5] - $4) > 1e-9 * s[$5]) bad = 1 }
+                END { print (n == k && v == k && k > 0 && !bad) ? "yes" : "no n=" n " v=" v " ok=" k }' \
+               FS=, "$N/points.csv" FS=" " "$N/points.ply" 2>&1)
+  [ "$ply_ok" = yes ] && pass || fail "estimate $m --ply: $ply_ok"
   if [ "$(rc_of "$N.est")" -eq 0 ] && [ -s "$N/points.csv" ] && [ -s "$N/outliers.csv" ] &&
      [ "$(head -n 1 "$N/outliers.csv" | tr -d '\r')" = "frame,id,u,v" ] &&
      [ "$(awk -F, 'NR > 1 && $10 == "ok" && $9 > 0 { k++ } END { print k+0 }' "$N/points.csv")" -ge 15 ]; then
@@ -194,7 +202,27 @@ PE="$W/paper_two"
 run "$PE.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$PE" --frames 2 --step -0.0565685 --yaw 0.785398 \
     --pattern chessboard:5x4:0.02 --board-distance 0.62 --blur 0.7 --image-noise 2
 run "$PE.m" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PE/motion.csv" --pattern chessboard:5x4:0.02 \
-    --sigma-px 0.05 --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-yaw 1e-6 --report "$PE/report" --out "$PE/points.csv"
+    --sigma-px 0.05 --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-yaw 1e-6 --report "$PE/report" --out "$PE/points.csv" \
+    --ply "$PE/points.ply"
+# measure's cloud carries the gray level at each corner (a chessboard corner is mid-gray).
+grep -q '^property uchar red$' "$PE/points.ply" 2>/dev/null &&
+  awk '/^end_header/ { b = 1; next } b { n++; if ($4 < 30 || $4 > 225 || $4 != $5 || $4 != $6) bad = 1 } END { exit !(n == 20 && !bad) }' \
+    "$PE/points.ply" && pass || fail "measure --ply: no gray colour, or not 20 mid-gray vertices"
+# track: natural corners of the same two images, gated by the motion; measure --features klt in one go.
+run "$PE.t" track --camera "$YML" --rig "$RIG" --motion "$PE/motion.csv" --out "$PE/klt.csv"
+if [ "$(rc_of "$PE.t")" -eq 0 ] && [ "$(head -n 1 "$PE/klt.csv" | tr -d '\r')" = "frame,id,u,v" ] &&
+   [ "$(awk -F, 'NR > 1 && $1 != f0 { n++ } NR == 2 { f0 = $1 } END { print n + 0 }' "$PE/klt.csv")" -ge 10 ]; then
+  pass
+else
+  fail "track on the paper's two images: exit $(rc_of "$PE.t"): $(first "$PE.t.err")"
+fi
+run "$PE.k" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PE/motion.csv" --features klt --out "$PE/klt_points.csv"
+res=$(awk -F, 'NR > 1 && $10 == "ok" { k++ } END { print k+0 }' "$PE/klt_points.csv" 2>/dev/null)
+if [ "$(rc_of "$PE.k")" -eq 0 ] && [ "${res:-0}" -ge 3 ]; then pass; else
+  fail "measure --features klt: exit $(rc_of "$PE.k"), ${res:-0} ok points: $(first "$PE.k.err")"; fi
+run "$PE.kr" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PE/motion.csv" --features klt --report "$PE/kr"
+[ "$(rc_of "$PE.kr")" -eq 1 ] && grep -q "needs --pattern" "$PE.kr.err" && pass ||
+  fail "measure --features klt --report: exit $(rc_of "$PE.kr"), not refused"
 if [ "$(rc_of "$PE.m")" -eq 0 ] && [ -s "$PE/report/figure.png" ] && [ -s "$PE/report/report.txt" ]; then pass; else
   fail "measure paper setup: exit $(rc_of "$PE.m"): $(first "$PE.m.err")"; fi
 res=$(awk -F, 'NR > 1 && $10 == "ok" { k++ } END { print k+0 }' "$PE/points.csv" 2>/dev/null)
@@ -569,6 +597,8 @@ refused out_is_rig "is the input --rig" estimate --camera "$XML" --rig "$F/rig.y
   --tracks "$F/t.csv" --out "$F/rig.yaml"
 cmp -s "$RIG" "$F/rig.yaml" && pass || fail "files: the rig input changed"
 refused outliers_empty "empty file name" "${EF[@]}" --method fused --outliers ""
+refused ply_is_motion "is the input --motion" "${EF[@]}" --ply "$F/m.csv" --out "$F/p.csv"
+refused ply_is_out "are the same file" "${EF[@]}" --ply "$F/p.csv" --out "$F/p.csv"
 # Devices and endless inputs: refused at once, never read.
 for what in motion tracks camera rig; do
   case $what in

@@ -19,6 +19,7 @@
 #include <unistd.h>
 #include <yawdepth/error.h>
 #include <yawdepth/features/detector.h>
+#include <yawdepth/features/klt_tracker.h>
 #include <yawdepth/features/pattern.h>
 #include <yawdepth/render/renderer.h>
 
@@ -688,4 +689,170 @@ TEST_CASE("toTracks groups by id and sorts by frame", "[features]") {
   CHECK(tracks[1].observations[0].frame == 2);
   CHECK(tracks[1].observations[0].u == 11);
   CHECK(tracks[1].observations[1].frame == 5);
+}
+
+namespace {
+
+// A textured plane Z = depth in front of camera 1 (smoothed random noise, seeded), seen by a camera
+// 2 at pose c2Mc1: image 2 is image 1 warped by the plane's homography K (R + t n^T / d) K^-1.
+struct PlaneScene {
+  CameraModel camera = CameraModel::brown(600, 600, 320, 240, {0, 0, 0, 0}, 640, 480);
+  double depth = 2.0;
+  cv::Mat texture(unsigned seed) const
+  {
+    cv::Mat noise(480, 640, CV_32F);
+    cv::RNG rng(seed);
+    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
+    cv::Mat smooth;
+    cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 2.0);
+    cv::normalize(smooth, smooth, 0, 255, cv::NORM_MINMAX);
+    cv::Mat out;
+    smooth.convertTo(out, CV_8U);
+    return out;
+  }
+  cv::Matx33d homography(const vpHomogeneousMatrix &c2Mc1) const
+  {
+    const cv::Matx33d K(600, 0, 320, 0, 600, 240, 0, 0, 1);
+    cv::Matx33d A;
+    for (unsigned i = 0; i < 3; ++i)
+      for (unsigned j = 0; j < 3; ++j)
+        A(i, j) = c2Mc1[i][j] + (j == 2 ? c2Mc1[i][3] / depth : 0.0);
+    return K * A * K.inv();
+  }
+  cv::Mat warp(const cv::Mat &image, const vpHomogeneousMatrix &c2Mc1) const
+  {
+    cv::Mat out;
+    cv::warpPerspective(image, out, cv::Mat(homography(c2Mc1)), image.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
+    return out;
+  }
+  Eigen::Vector2d map(const vpHomogeneousMatrix &c2Mc1, double u, double v) const
+  {
+    const cv::Vec3d p = homography(c2Mc1) * cv::Vec3d(u, v, 1.0);
+    return {p[0] / p[2], p[1] / p[2]};
+  }
+};
+
+} // namespace
+
+TEST_CASE("klt: tracks follow a textured plane, ids stable, the true motion's epipolar gate cuts nothing", "[features][klt]")
+{
+  constexpr double kTrackTolPx = 0.15; // KLT on a smooth texture with a cubic warp
+  const PlaneScene scene;
+  const cv::Mat im1 = scene.texture(7);
+  // A sideways step with a little pan: parallax of 600 * 0.03 / 2 = 9 px plus 6 px of rotation.
+  const vpHomogeneousMatrix c2Mc1(-0.03, 0.0, 0.01, 0.0, 0.01, 0.0);
+  const cv::Mat im2 = scene.warp(im1, c2Mc1);
+  KltOptions o;
+  o.max_features = 150;
+  KltTracker tracker(scene.camera, o);
+  const std::vector<DetectedFeature> f1 = tracker.track(im1);
+  REQUIRE(f1.size() >= 100);
+  CHECK(tracker.lastStats().detected == static_cast<int>(f1.size()));
+  // The ids are distinct, and the features at least min_distance apart.
+  std::map<long, DetectedFeature> by_id;
+  for (const DetectedFeature &f : f1)
+    by_id[f.id] = f;
+  CHECK(by_id.size() == f1.size());
+  double closest = 1e9;
+  for (std::size_t i = 0; i < f1.size(); ++i)
+    for (std::size_t j = i + 1; j < f1.size(); ++j)
+      closest = std::min(closest, std::hypot(f1[i].u - f1[j].u, f1[i].v - f1[j].v));
+  CHECK(closest >= o.min_distance);
+  KltMotion m;
+  m.cMp = c2Mc1;
+  m.sigma_rot = 0.001;
+  m.sigma_trans = 0.001;
+  const std::vector<DetectedFeature> f2 = tracker.track(im2, &m);
+  const KltStats st = tracker.lastStats();
+  CHECK(st.lost_epipolar == 0);
+  CHECK(st.tracked >= static_cast<int>(0.9 * f1.size()));
+  int checked = 0;
+  double worst = 0;
+  for (const DetectedFeature &f : f2) {
+    const auto it = by_id.find(f.id);
+    if (it == by_id.end())
+      continue; // a new feature
+    const Eigen::Vector2d truth = scene.map(c2Mc1, it->second.u, it->second.v);
+    worst = std::max(worst, std::hypot(f.u - truth.x(), f.v - truth.y()));
+    ++checked;
+  }
+  CHECK(checked == st.tracked);
+  CHECK(worst < kTrackTolPx);
+}
+
+TEST_CASE("klt: the epipolar segment and the band cut tracks that the motion cannot explain", "[features][klt]")
+{
+  constexpr double kRoundOff = 1e-6; // px
+  const PlaneScene scene;
+  KltOptions o;
+  o.min_depth = 0.5;
+  KltTracker tracker(scene.camera, o);
+  const vpHomogeneousMatrix cMp(-0.05, 0.0, 0.02, 0.0, 0.02, 0.0);
+  // A point at depth 3 m seen in both cameras: on its epipolar segment.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> uni(-0.4, 0.4);
+  for (int k = 0; k < 20; ++k) {
+    const Eigen::Vector3d P(uni(rng) * 3, uni(rng) * 3, 3.0 + uni(rng));
+    const vpColVector Q = cMp * vpColVector({P.x(), P.y(), P.z(), 1.0});
+    const Eigen::Vector2d a = scene.camera.project(Eigen::Vector2d(P.x() / P.z(), P.y() / P.z()));
+    const Eigen::Vector2d b = scene.camera.project(Eigen::Vector2d(Q[0] / Q[2], Q[1] / Q[2]));
+    CHECK(tracker.epipolarDistance(a, b, cMp) < kRoundOff);
+    // Moved across the epipolar line (nearly along v: the baseline is mostly along x) by 3 px: 3 px away.
+    CHECK(tracker.epipolarDistance(a, b + Eigen::Vector2d(0, 3), cMp) == Approx(3.0).margin(0.1));
+    // Nearer than min_depth would have to be, along the line: off the segment's near end.
+    const double near = 0.2;
+    const Eigen::Vector3d Pn = P * (near / P.z());
+    const vpColVector Qn = cMp * vpColVector({Pn.x(), Pn.y(), Pn.z(), 1.0});
+    const Eigen::Vector2d bn = scene.camera.project(Eigen::Vector2d(Qn[0] / Qn[2], Qn[1] / Qn[2]));
+    CHECK(tracker.epipolarDistance(a, bn, cMp) > 5.0);
+  }
+  // No translation: the segment is the rotation's prediction, a point.
+  const vpHomogeneousMatrix rot(0, 0, 0, 0.0, 0.02, 0.0);
+  const Eigen::Vector2d a(300, 200);
+  Eigen::Vector2d m;
+  REQUIRE(scene.camera.undistort(a, m));
+  const vpColVector q = rot * vpColVector({m.x(), m.y(), 1.0, 1.0});
+  const Eigen::Vector2d b = scene.camera.project(Eigen::Vector2d(q[0] / q[2], q[1] / q[2]));
+  CHECK(tracker.epipolarDistance(a, b, rot) < kRoundOff);
+  CHECK(tracker.epipolarDistance(a, b + Eigen::Vector2d(2, 0), rot) == Approx(2.0).margin(1e-6));
+  // The band: k sqrt(2 sigma_px^2 + (f sigma_rot)^2 + (f sigma_t / Z_min)^2).
+  KltMotion motion;
+  motion.sigma_rot = 0.001;
+  motion.sigma_trans = 0.0005;
+  CHECK(tracker.bandHalfWidth(motion) ==
+        Approx(o.gate_sigmas * std::sqrt(2 * 0.25 + 0.36 + 0.36)).epsilon(1e-12));
+
+  // Tracking with a motion that says the camera went up, not sideways: the tracks are cut.
+  const cv::Mat im1 = scene.texture(11);
+  const vpHomogeneousMatrix truth(-0.04, 0.0, 0.0, 0.0, 0.0, 0.0);
+  const cv::Mat im2 = scene.warp(im1, truth);
+  KltTracker gated(scene.camera, KltOptions());
+  const std::size_t n1 = gated.track(im1).size();
+  KltMotion wrong;
+  wrong.cMp = vpHomogeneousMatrix(0.0, -0.04, 0.0, 0.0, 0.0, 0.0);
+  wrong.sigma_rot = 1e-4;
+  wrong.sigma_trans = 1e-4;
+  gated.track(im2, &wrong);
+  CHECK(gated.lastStats().lost_epipolar >= static_cast<int>(0.9 * n1));
+  CHECK(gated.lastStats().detected > 0); // new features where the old ones were cut
+}
+
+TEST_CASE("klt: bad input", "[features][klt]")
+{
+  const PlaneScene scene;
+  KltTracker tracker(scene.camera);
+  CHECK_THROWS_AS(tracker.track(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0))), Error);
+  CHECK_THROWS_AS(tracker.track(cv::Mat(480, 640, CV_8UC3, cv::Scalar(0))), Error);
+  CHECK_THROWS_AS(tracker.track(cv::Mat()), Error);
+  CHECK_THROWS_AS(KltTracker(CameraModel::brown(600, 600, 320, 240, {0, 0, 0, 0})), Error); // no image size
+  KltOptions bad;
+  bad.window = 20;
+  CHECK_THROWS_AS(KltTracker(scene.camera, bad), Error);
+  bad = KltOptions();
+  bad.min_depth = 0;
+  CHECK_THROWS_AS(bad.validate(), Error);
+  // A blank image has no corners: no features, and no crash on the next frame either.
+  const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(128));
+  CHECK(tracker.track(blank).empty());
+  CHECK(tracker.track(blank).empty());
 }

@@ -1,6 +1,7 @@
 // Tests of the public file formats (shared/docs/formats.md): readers, writers, atomic writes.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -851,4 +853,104 @@ TEST_CASE("rig file: yaw_offset and yaw_axis", "[io][rig]")
     CHECK_THROWS_AS(readRigFile(path), Error);
   }
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("ply: ok points in the world frame, header, colour only when every point has one", "[io][ply]")
+{
+  constexpr double kRoundOff = 1e-12; // m, for points within a few metres
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  const YawRig rig(Eigen::Vector3d(-0.15, 0.02, 0.05));
+  std::vector<MotionSample> samples;
+  for (long f = 0; f < 6; ++f) {
+    MotionSample s;
+    s.frame = 10 + f;
+    s.x = uni(rng);
+    s.y = 0.1 * uni(rng);
+    s.z = 2 * uni(rng);
+    s.heading = uni(rng);
+    s.yaw = uni(rng);
+    samples.push_back(s);
+  }
+  std::vector<PointRow> rows;
+  std::map<std::pair<long, long>, int> gray;
+  for (long id = 0; id < 20; ++id) {
+    PointRow r;
+    r.id = 1000 + id;
+    r.estimate.frame = samples[static_cast<std::size_t>(id % 6)].frame;
+    r.estimate.c_P = Eigen::Vector3d(uni(rng), uni(rng), 2 + uni(rng));
+    r.estimate.c_cov = Eigen::Matrix3d::Identity() * (0.001 * (id + 1)) * (0.001 * (id + 1));
+    r.estimate.status = id % 5 == 4 ? Status::Degenerate : Status::Ok;
+    rows.push_back(r);
+    gray[{r.estimate.frame, r.id}] = static_cast<int>(id * 12);
+  }
+  const std::vector<PlyPoint> pts = plyPoints(rig, samples, rows, gray);
+  REQUIRE(pts.size() == 16); // the 4 degenerate rows left out
+  std::size_t k = 0;
+  for (const PointRow &r : rows) {
+    if (!r.estimate.ok())
+      continue;
+    const MotionSample &s = samples[static_cast<std::size_t>(r.estimate.frame - 10)];
+    const vpColVector w = wMc(rig, s) * vpColVector({r.estimate.c_P.x(), r.estimate.c_P.y(), r.estimate.c_P.z(), 1.0});
+    CHECK(pts[k].id == r.id);
+    CHECK((pts[k].w_P - Eigen::Vector3d(w[0], w[1], w[2])).norm() < kRoundOff);
+    CHECK(pts[k].sigma_z == r.estimate.sigmaZ());
+    CHECK(pts[k].gray == (r.id - 1000) * 12);
+    ++k;
+  }
+  // The text: header, then one vertex per line that reads back to the same numbers.
+  const auto parse = [](const std::string &text, std::vector<std::string> &header) {
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line) && line != "end_header")
+      header.push_back(line);
+    std::vector<std::vector<double>> v;
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      std::vector<double> row;
+      double x;
+      while (ls >> x)
+        row.push_back(x);
+      v.push_back(row);
+    }
+    return v;
+  };
+  std::vector<std::string> header;
+  const std::vector<std::vector<double>> v = parse(plyText(pts), header);
+  REQUIRE(header.size() >= 3);
+  CHECK(header[0] == "ply");
+  CHECK(header[1] == "format ascii 1.0");
+  CHECK(std::find(header.begin(), header.end(), "element vertex 16") != header.end());
+  CHECK(std::find(header.begin(), header.end(), "property uchar red") != header.end());
+  REQUIRE(v.size() == 16);
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    REQUIRE(v[i].size() == 8); // x y z red green blue sigma_z id
+    CHECK(v[i][0] == pts[i].w_P.x());
+    CHECK(v[i][2] == pts[i].w_P.z());
+    CHECK(v[i][3] == pts[i].gray);
+    CHECK(v[i][5] == pts[i].gray);
+    CHECK(v[i][6] == pts[i].sigma_z);
+    CHECK(v[i][7] == pts[i].id);
+  }
+  // One point without a gray level: no colour at all; no points: a valid empty cloud.
+  std::vector<PlyPoint> partial = pts;
+  partial[3].gray = -1;
+  header.clear();
+  const std::vector<std::vector<double>> w = parse(plyText(partial), header);
+  CHECK(std::find(header.begin(), header.end(), "property uchar red") == header.end());
+  REQUIRE(w.size() == 16);
+  CHECK(w[0].size() == 5);
+  header.clear();
+  CHECK(parse(plyText({}), header).empty());
+  CHECK(std::find(header.begin(), header.end(), "element vertex 0") != header.end());
+  // Refused: a point at a frame the motion does not have, an id beyond 32 bits, a gray level above 255.
+  std::vector<PointRow> lost = rows;
+  lost[0].estimate.frame = 99;
+  CHECK_THROWS_AS(plyPoints(rig, samples, lost), Error);
+  std::vector<PlyPoint> big = pts;
+  big[0].id = 1L << 40;
+  CHECK_THROWS_AS(plyText(big), Error);
+  big = pts;
+  big[0].gray = 256;
+  CHECK_THROWS_AS(plyText(big), Error);
 }

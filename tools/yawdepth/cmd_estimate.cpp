@@ -12,8 +12,8 @@ namespace yawdepth::cli {
 namespace {
 
 struct EstimateArgs {
-  std::string camera, camera_name, rig, motion, tracks, out, outliers;
-  bool outliers_given = false;
+  std::string camera, camera_name, rig, motion, tracks, out, outliers, ply;
+  bool outliers_given = false, ply_given = false;
   MethodArgs method;
   InputOptions input;
 };
@@ -34,6 +34,9 @@ Runner addEstimate(CLI::App &app)
                   "fused/refine: also write the observations rejected as outliers (CSV frame,id,u,v)")
       ->each([args](const std::string &) { args->outliers_given = true; });
   sub->add_option("--out", args->out, "Output points CSV (default: standard output); never one of the inputs");
+  sub->add_option("--ply", args->ply,
+                  "Also write the ok points as a PLY point cloud (world frame of the motion log, with sigma_z and id)")
+      ->each([args](const std::string &) { args->ply_given = true; });
   addInputOptions(sub, args->input);
 
   return [args]() {
@@ -45,6 +48,8 @@ Runner addEstimate(CLI::App &app)
     std::vector<NamedPath> outputs = {{"--out", args->out.empty() ? std::string("-") : args->out}};
     if (args->outliers_given)
       outputs.push_back({"--outliers", args->outliers});
+    if (args->ply_given)
+      outputs.push_back({"--ply", args->ply});
     checkOutputs(inputs, outputs);
     const CameraModel camera = loadCameraFile(args->camera, args->camera_name);
     const RigFile rig_file = readRigFile(args->rig);
@@ -57,13 +62,17 @@ Runner addEstimate(CLI::App &app)
     std::vector<std::vector<bool>> flags;
     MethodArgs method = args->method;
     method.noise = noiseForLog(args->method, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
-    const std::vector<PointEstimate> estimates = runMethod(camera, rig, motion.samples, tracks, method, flags);
+    std::vector<MotionSample> motion_estimate;
+    const std::vector<PointEstimate> estimates =
+        runMethod(camera, rig, motion.samples, tracks, method, flags, &motion_estimate);
     std::vector<PointRow> rows;
     rows.reserve(tracks.size());
     for (std::size_t i = 0; i < tracks.size(); ++i)
       rows.push_back({tracks[i].id, estimates[i]});
     if (args->outliers_given)
       writeTracksCsv(args->outliers, rejectedObservations(tracks, flags));
+    if (args->ply_given)
+      writePointsPly(args->ply, plyPoints(rig, motion_estimate.empty() ? motion.samples : motion_estimate, rows));
     if (args->out.empty() || args->out == "-")
       writePointsCsv(std::cout, rows);
     else

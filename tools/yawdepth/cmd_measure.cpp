@@ -1,5 +1,7 @@
 // `yawdepth measure`: detect a pattern in the motion log's images, build tracks, estimate points,
 // and optionally write the paper's Fig. 3 report.
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include "commands.h"
 #include "method_options.h"
@@ -18,7 +20,8 @@ namespace yawdepth::cli {
 namespace {
 
 struct MeasureArgs {
-  std::string camera, camera_name, rig, motion, pattern, out, report, tracks_out, outliers;
+  std::string camera, camera_name, rig, motion, pattern, features, out, report, tracks_out, outliers, ply;
+  KltArgs klt;
   MethodArgs method;
   InputOptions input;
   bool quiet = false;
@@ -31,17 +34,24 @@ Runner addMeasure(CLI::App &app)
 {
   auto a = std::make_shared<MeasureArgs>();
   CLI::App *sub = app.add_subcommand(
-      "measure", "Detect a chessboard or AprilTags in the images of a motion log and measure their 3D points.");
+      "measure", "Detect a chessboard or AprilTags (or track natural corners) in the images of a motion log and "
+                 "measure their 3D points.");
   sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
   sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset)")->required();
   sub->add_option("--motion", a->motion, "Motion log CSV with an image column (paths relative to the CSV's folder)")
       ->required();
-  sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE or apriltag:FAMILY:SIZE (metres)")->required();
+  sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE or apriltag:FAMILY:SIZE (metres)");
+  sub->add_option("--features", a->features,
+                  "klt: instead of a pattern, track natural corners (as `yawdepth track`) and measure them")
+      ->check(CLI::IsMember({"klt"}));
+  addKltOptions(sub, a->klt);
   addMethodOptions(sub, a->method, bestMethod());
   sub->add_option("--out", a->out, "Output points CSV (default: standard output)");
   sub->add_option("--report", a->report,
                   "Folder for the paper's Fig. 3 report: report.txt, blocks.csv, plane.csv, figure.png");
+  sub->add_option("--ply", a->ply,
+                  "Also write the ok points as a PLY point cloud (world frame, gray level at the feature, sigma_z, id)");
   sub->add_option("--tracks-out", a->tracks_out, "Also write the detected features as a tracks CSV (frame,id,u,v)");
   sub->add_option("--outliers", a->outliers, "fused/refine: also write the observations rejected as outliers");
   sub->add_flag("--quiet", a->quiet, "No progress or per-frame detection messages on stderr");
@@ -52,7 +62,14 @@ Runner addMeasure(CLI::App &app)
   return [a, sub]() {
     a->method.noise.validate();
     a->method.gates.validate();
-    const PatternSpec pattern = PatternSpec::parse(a->pattern);
+    const bool klt = !a->features.empty();
+    if (klt == (sub->count("--pattern") > 0))
+      throw Error(klt ? "give --pattern or --features klt, not both" : "give --pattern or --features klt");
+    if (klt && sub->count("--report") > 0)
+      throw Error("--report draws a pattern's blocks: it needs --pattern");
+    if (klt && sub->count("--debug-dir") > 0)
+      throw Error("--debug-dir draws pattern detections: it needs --pattern");
+    const PatternSpec pattern = klt ? PatternSpec() : PatternSpec::parse(a->pattern);
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
     const RigFile rig_file = readRigFile(a->rig);
     const YawRig rig = rigOf(rig_file);
@@ -68,7 +85,7 @@ Runner addMeasure(CLI::App &app)
           inputs.push_back({"--motion's image", image});
       std::vector<NamedPath> outputs = {{"--out", a->out.empty() ? std::string("-") : a->out}};
       for (const auto &[option, value] : {std::pair<const char *, std::string *>{"--tracks-out", &a->tracks_out},
-                                          {"--outliers", &a->outliers}})
+                                          {"--outliers", &a->outliers}, {"--ply", &a->ply}})
         if (sub->count(option) > 0)
           outputs.push_back({option, *value});
       if (sub->count("--report") > 0) {
@@ -83,46 +100,57 @@ Runner addMeasure(CLI::App &app)
     }
     const std::vector<std::string> debug_files = debugFiles(a->debug_dir, motion.images);
 
-    PatternDetector detector(pattern);
-    detector.setCamera(camera);
-    std::vector<FrameDetection> detections;
-    std::vector<std::string> failures; // per-frame reasons, printed once we know the run succeeds
     const std::size_t n = motion.samples.size();
-    // Progress for long sequences, only on a terminal: a caller capturing stderr gets one line per
-    // problem, not a progress bar.
-    const bool progress = !a->quiet && n >= 20 && isatty(STDERR_FILENO);
-    const std::size_t every = std::max<std::size_t>(1, n / 10);
     std::size_t found = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const long frame = motion.samples[i].frame;
-      if (motion.images[i].empty()) {
-        failures.push_back("measure: frame " + std::to_string(frame) + ": no image");
-        continue;
+    std::map<std::pair<long, long>, int> gray; // the gray level at each feature, for --ply
+    std::vector<Track> tracks;
+    if (klt) {
+      const bool six_dof = n > 0 && motion.samples.front().six_dof;
+      tracks = kltTracks(camera, rig, motion, noiseForLog(a->method, six_dof, motion.yaw_column), a->klt, a->quiet, &gray);
+      found = n;
+    } else {
+      PatternDetector detector(pattern);
+      detector.setCamera(camera);
+      std::vector<FrameDetection> detections;
+      std::vector<std::string> failures; // per-frame reasons, printed once we know the run succeeds
+      // Progress for long sequences, only on a terminal: a caller capturing stderr gets one line per
+      // problem, not a progress bar.
+      const bool progress = !a->quiet && n >= 20 && isatty(STDERR_FILENO);
+      const std::size_t every = std::max<std::size_t>(1, n / 10);
+      for (std::size_t i = 0; i < n; ++i) {
+        const long frame = motion.samples[i].frame;
+        if (motion.images[i].empty()) {
+          failures.push_back("measure: frame " + std::to_string(frame) + ": no image");
+          continue;
+        }
+        const cv::Mat image = readGrayImage(motion.images[i]);
+        if (camera.width() > 0 && (image.cols != static_cast<int>(camera.width()) ||
+                                   image.rows != static_cast<int>(camera.height())))
+          throw Error(motion.images[i] + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                      " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+        FrameDetection d = detector.detect(image, frame);
+        for (const DetectedFeature &f : d.features) // the gray level at each feature, for --ply
+          gray[{frame, f.id}] = grayLevelAt(image, f.u, f.v);
+        if (d.found)
+          ++found;
+        else
+          failures.push_back("measure: frame " + std::to_string(frame) + ": " + d.reason);
+        for (const std::string &w : d.warnings)
+          failures.push_back("measure: frame " + std::to_string(frame) + ": " + w);
+        if (!debug_files.empty())
+          writeDebugImage(debug_files[i], image, d);
+        detections.push_back(std::move(d));
+        if (progress && ((i + 1) % every == 0 || i + 1 == n))
+          std::cerr << "measure: " << i + 1 << "/" << n << " frames, pattern found in " << found << "\n";
       }
-      const cv::Mat image = readGrayImage(motion.images[i]);
-      if (image.cols != static_cast<int>(camera.width()) && camera.width() > 0)
-        throw Error(motion.images[i] + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                    " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
-      FrameDetection d = detector.detect(image, frame);
-      if (d.found)
-        ++found;
-      else
-        failures.push_back("measure: frame " + std::to_string(frame) + ": " + d.reason);
-      for (const std::string &w : d.warnings)
-        failures.push_back("measure: frame " + std::to_string(frame) + ": " + w);
-      if (!debug_files.empty())
-        writeDebugImage(debug_files[i], image, d);
-      detections.push_back(std::move(d));
-      if (progress && ((i + 1) % every == 0 || i + 1 == n))
-        std::cerr << "measure: " << i + 1 << "/" << n << " frames, pattern found in " << found << "\n";
+      if (found == 0)
+        throw Error("the pattern " + pattern.toString() + " was not found in any of the " + std::to_string(n) +
+                    " images" + (failures.empty() ? std::string() : " (" + failures.front().substr(9) + ")"));
+      if (!a->quiet)
+        for (const std::string &f : failures)
+          std::cerr << f << "\n";
+      tracks = PatternDetector::toTracks(detections);
     }
-    if (found == 0)
-      throw Error("the pattern " + pattern.toString() + " was not found in any of the " + std::to_string(n) +
-                  " images" + (failures.empty() ? std::string() : " (" + failures.front().substr(9) + ")"));
-    if (!a->quiet)
-      for (const std::string &f : failures)
-        std::cerr << f << "\n";
-    const std::vector<Track> tracks = PatternDetector::toTracks(detections);
     if (sub->count("--tracks-out") > 0)
       writeTracksCsv(a->tracks_out, tracks);
 
@@ -141,7 +169,7 @@ Runner addMeasure(CLI::App &app)
     if (sub->count("--outliers") > 0)
       writeTracksCsv(a->outliers, rejectedObservations(tracks, flags));
     // No silent loss: every board feature not measured is named, with why.
-    if (!a->quiet) {
+    if (!a->quiet && !klt) {
       std::map<long, const PointEstimate *> by_id;
       std::map<long, std::size_t> seen;
       for (std::size_t i = 0; i < tracks.size(); ++i) {
@@ -195,6 +223,8 @@ Runner addMeasure(CLI::App &app)
         std::cerr << formatBoardMetrics(m) << "report: " << a->report << "/report.txt, " << a->report
                   << "/figure.png\n";
     }
+    if (sub->count("--ply") > 0)
+      writePointsPly(a->ply, plyPoints(rig, motion_estimate.empty() ? motion.samples : motion_estimate, rows, gray));
     if (a->out.empty() || a->out == "-")
       writePointsCsv(std::cout, rows);
     else

@@ -18,6 +18,7 @@ Runner addEstimate(CLI::App &app);
 Runner addErrorAnalysis(CLI::App &app);
 Runner addSimulate(CLI::App &app);
 Runner addMeasure(CLI::App &app);
+Runner addTrack(CLI::App &app);
 Runner addCalibrateCamera(CLI::App &app);
 Runner addCalibrateRig(CLI::App &app);
 

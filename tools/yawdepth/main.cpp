@@ -107,6 +107,7 @@ int main(int argc, char **argv)
   };
   add(addEstimate);
   add(addMeasure);
+  add(addTrack);
   add(addErrorAnalysis);
   add(addSimulate);
   add(addCalibrateCamera);

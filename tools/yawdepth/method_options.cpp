@@ -11,20 +11,8 @@ namespace yawdepth::cli {
 
 std::string bestMethod() { return refineAvailable() ? "refine" : "fused"; }
 
-void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &default_method)
+void addMotionNoiseOptions(CLI::App *sub, MethodArgs &args)
 {
-  args.method = default_method;
-  args.robust_px = RefineOptions().robust_threshold_px;
-  args.outlier_px = RefineOptions().outlier_threshold_px;
-  sub->add_option("--method", args.method,
-                  "paper: eq. (5) on the last increment as published; exact: finite-increment two-view form (exact on "
-                  "noise-free data); fused: recursive filter per feature over every frame (cheapest); window: "
-                  "frame-by-frame smoother of every point with the last 10 frames' motion, older frames marginalised "
-                  "(at the joint bound, what a servo loop gets); refine: joint MAP of every point with the motion over "
-                  "all frames (Ceres)")
-      ->check(CLI::IsMember({"paper", "exact", "fused", "window", "refine"}))
-      ->capture_default_str();
-  sub->add_option("--sigma-px", args.noise.sigma_px, "Pixel noise (px)")->check(FiniteNonNegative)->capture_default_str();
   sub->add_option("--sigma-odom", args.noise.sigma_odom, "Odometry translation noise per increment, per axis (m)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
@@ -44,6 +32,23 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
                                           "Noise of each yaw reading (rad); 0 by default for a 6-DoF log without a yaw column")
                               ->check(FiniteNonNegative)
                               ->capture_default_str();
+}
+
+void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &default_method)
+{
+  args.method = default_method;
+  args.robust_px = RefineOptions().robust_threshold_px;
+  args.outlier_px = RefineOptions().outlier_threshold_px;
+  sub->add_option("--method", args.method,
+                  "paper: eq. (5) on the last increment as published; exact: finite-increment two-view form (exact on "
+                  "noise-free data); fused: recursive filter per feature over every frame (cheapest); window: "
+                  "frame-by-frame smoother of every point with the last 10 frames' motion, older frames marginalised "
+                  "(at the joint bound, what a servo loop gets); refine: joint MAP of every point with the motion over "
+                  "all frames (Ceres)")
+      ->check(CLI::IsMember({"paper", "exact", "fused", "window", "refine"}))
+      ->capture_default_str();
+  sub->add_option("--sigma-px", args.noise.sigma_px, "Pixel noise (px)")->check(FiniteNonNegative)->capture_default_str();
+  addMotionNoiseOptions(sub, args);
   sub->add_option("--min-baseline", args.gates.min_baseline, "Camera translation below this is no_motion (m)")
       ->check(FiniteNonNegative)
       ->capture_default_str();

@@ -2,11 +2,14 @@
 // The estimation options shared by `estimate` and `measure`: method, noise model, gates, refine's
 // thresholds; and running the chosen method on tracks.
 #include <CLI/CLI.hpp>
+#include <map>
 #include <string>
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/estimation/types.h>
+#include <yawdepth/features/klt_tracker.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/io/files.h>
 
 namespace yawdepth::cli {
 
@@ -19,7 +22,10 @@ struct MethodArgs {
   double outlier_px = 2.0;
 };
 
-/*! \brief Register --method (with `default_method`), the noise, gate and refine options on `sub`. */
+/*! \brief Register the motion's noise options (--sigma-odom, --sigma-heading, --sigma-rot, --motion-noise,
+    --sigma-yaw) on `sub`. */
+void addMotionNoiseOptions(CLI::App *sub, MethodArgs &args);
+/*! \brief Register --method (with `default_method`), --sigma-px, the motion's noise, gate and refine options on `sub`. */
 void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &default_method);
 
 /*!
@@ -37,6 +43,24 @@ std::string bestMethod();
   \param motion_estimate When given, receives the motion log as the method estimated it (refine's
   refined rows; the measured rows for the other methods): where each point's frame is in the world.
 */
+/*! \brief KLT tracking options of `track` and `measure --features klt`. */
+struct KltArgs {
+  KltOptions klt;
+  bool no_gate = false;
+};
+/*! \brief Register --max-features, --min-distance, --track-sigma-px, --min-depth, --gate-sigmas, --no-gate. */
+void addKltOptions(CLI::App *sub, KltArgs &args);
+/*!
+  \brief KLT tracks (KltTracker) through the images of a motion log, each frame gated by the motion's
+  increment and its uncertainty from `noise`; tracks seen in fewer than 2 frames are dropped. Prints a
+  one-line summary on stderr unless `quiet`. Throws yawdepth::Error for a missing or unreadable image
+  or one of another size than the camera's. `gray`, when given, receives the gray level at every
+  feature, keyed (frame, id).
+*/
+std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
+                             const NoiseModel &noise, const KltArgs &args, bool quiet,
+                             std::map<std::pair<long, long>, int> *gray = nullptr);
+
 std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                                      const std::vector<Track> &tracks, const MethodArgs &args,
                                      std::vector<std::vector<bool>> &outliers,

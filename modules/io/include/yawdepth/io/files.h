@@ -110,6 +110,32 @@ void writePointsCsv(std::ostream &out, const std::vector<PointRow> &rows);
 */
 void writePointsCsv(const std::string &path, const std::vector<PointRow> &rows);
 
+/*! \brief One vertex of a PLY point cloud (`--ply FILE`). */
+struct PlyPoint {
+  long id = 0;                                  //!< Feature id (within 32 bits).
+  Eigen::Vector3d w_P = Eigen::Vector3d::Zero(); //!< Position in the motion log's world frame (m).
+  double sigma_z = 0;                           //!< 1-sigma depth uncertainty at its frame (m).
+  int gray = -1;                                //!< Gray level at the feature (0-255), -1 when unknown.
+};
+/*!
+  \brief The `ok` points of `rows` in the motion log's world frame:
+  \f$ {}^wP = {}^wT_c(\text{frame})\, {}^cP \f$ with wMc() of the motion row of each point's frame.
+  \param rig The rig. \param samples The motion (as estimated, when the method refines it).
+  \param rows The points. \param gray Gray level of feature id at frame, keyed (frame, id), when known.
+  Throws yawdepth::Error when a point's frame is not in `samples`.
+*/
+std::vector<PlyPoint> plyPoints(const YawRig &rig, const std::vector<MotionSample> &samples,
+                                const std::vector<PointRow> &rows,
+                                const std::map<std::pair<long, long>, int> &gray = {});
+/*!
+  \brief A PLY point cloud, ASCII 1.0 (MeshLab, CloudCompare, Open3D, PCL read it): per vertex
+  `x y z` (double, m), `red green blue` (uchar, the gray level; only when every point has one),
+  `sigma_z` (double, m) and `id` (int).
+*/
+std::string plyText(const std::vector<PlyPoint> &points);
+/*! \brief plyText() to a file, atomically. */
+void writePointsPly(const std::string &path, const std::vector<PlyPoint> &points);
+
 /*! \brief Write a motion log CSV (frame,x,y,z,heading,yaw[,image], or the 6-DoF form when the
     samples are 6-DoF), atomically, 17 significant digits. */
 void writeMotionCsv(const std::string &path, const MotionLog &motion);

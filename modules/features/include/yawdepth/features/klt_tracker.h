@@ -1,0 +1,145 @@
+#pragma once
+/*!
+  \file klt_tracker.h
+  \brief Natural-feature tracks for any textured scene: corners tracked frame to frame by pyramidal
+  Lucas-Kanade (OpenCV's calcOpticalFlowPyrLK, as ViSP's vpKltOpencv), cut when the known motion
+  says they cannot be right.
+
+  Each frame: every live feature is tracked from the previous image into the new one, then back
+  (forward-backward check: a track whose backward track misses its start by more than
+  `forward_backward_px` is cut); a track that leaves the image (minus `border_px`) ends; a track
+  outside its **epipolar band** is cut. Where tracks have thinned out (fewer than
+  `redetect_fraction` x `max_features` live), new corners (Shi-Tomasi, goodFeaturesToTrack) are
+  detected at least `min_distance` px from every live feature and get new ids; ids are never
+  reused, so a feature that is lost and found again is a new feature.
+
+  The epipolar band. With the camera's motion from the previous frame known (cMp: the previous
+  camera's pose in the current camera's frame), a point seen along the previous bearing
+  \f$\mathbf b = (x_p, y_p, 1)\f$ at any depth \f$Z \ge Z_{\min}\f$ projects in the current image
+  onto the segment between the image of \f$ {}^cR_p\,\mathbf b \f$ (infinitely far) and that of
+  \f$ {}^cR_p\,\mathbf b\,Z_{\min} + {}^ct_p \f$ (as near as `min_depth`): the epipolar line, cut to
+  the depths a real point can have. The track's new position must lie within
+  \f[ w = k\,\sqrt{2\sigma_{px}^2 + (f\,\sigma_\theta)^2 + (f\,\sigma_t / Z_{\min})^2} \f]
+  pixels of that segment (k = `gate_sigmas`; \f$\sigma_\theta, \sigma_t\f$ the rotation and
+  translation uncertainty of the increment, f the focal length). A track that drifts along an edge
+  or jumps to a repeated texture leaves this band and is cut rather than averaged into a depth.
+  With a camera that does not translate the segment shrinks to a point: the gate is then the
+  rotation's prediction.
+*/
+#include <functional>
+#include <limits>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+#include <opencv2/core.hpp>
+#include <visp3/core/vpHomogeneousMatrix.h>
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/estimation/types.h>
+#include <yawdepth/features/detector.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth {
+
+/*! \brief Options of KltTracker. */
+struct KltOptions {
+  int max_features = 300;            //!< most features alive at once
+  double min_distance = 10;          //!< px between features (detection)
+  double quality = 0.01;             //!< Shi-Tomasi quality level (fraction of the best corner)
+  int block_size = 7;                //!< corner detection block (px)
+  int window = 21;                   //!< Lucas-Kanade window (px, odd, >= 5)
+  int pyramid_levels = 3;            //!< pyramid levels above the image (0: none)
+  double forward_backward_px = 0.5;  //!< largest forward-backward error of a kept track (px)
+  double redetect_fraction = 0.8;    //!< detect new corners when fewer than this x max_features are alive
+  double border_px = 8;              //!< a feature closer to the image border ends
+  double gate_sigmas = 4;            //!< k: half-width of the epipolar band in sigmas
+  double sigma_px = 0.5;             //!< tracker noise per point (px)
+  double min_depth = 0.1;            //!< Z_min: the nearest a tracked point can be (m)
+  /*! \brief Throws yawdepth::Error for invalid options. */
+  void validate() const;
+};
+
+/*! \brief The camera's motion since the previous frame, for the epipolar gate. */
+struct KltMotion {
+  vpHomogeneousMatrix cMp;  //!< the previous camera's pose in the current camera's frame
+  double sigma_rot = 0;     //!< 1-sigma of its rotation (rad)
+  double sigma_trans = 0;   //!< 1-sigma of its translation (m, per axis)
+};
+
+/*! \brief What one KltTracker::track() call did. */
+struct KltStats {
+  int tracked = 0;          //!< tracks continued into this frame
+  int lost_flow = 0;        //!< ended: Lucas-Kanade found no match
+  int lost_fb = 0;          //!< cut: forward-backward error above the threshold
+  int lost_border = 0;      //!< ended: left the image (minus the border)
+  int lost_epipolar = 0;    //!< cut: outside the epipolar band
+  int detected = 0;         //!< new features
+};
+
+/*!
+  \brief Pyramidal Lucas-Kanade tracks with stable ids, forward-backward check, re-detection and the
+  epipolar gate (see the file).
+*/
+class KltTracker {
+public:
+  /*! \param camera The camera (its image size is required; images must have it).
+      \param options Tracking options. */
+  explicit KltTracker(const CameraModel &camera, const KltOptions &options = KltOptions());
+
+  /*!
+    \brief Track the live features into `image` and detect new ones where tracks thinned out.
+    \param image The next frame, 8-bit gray, the camera's size (else yawdepth::Error).
+    \param motion The camera's motion since the previous image, for the epipolar gate; nullptr: no gate.
+    \return The features in this image: id and observed (distorted) pixel.
+  */
+  std::vector<DetectedFeature> track(const cv::Mat &image, const KltMotion *motion = nullptr);
+  /*! \brief What the last track() call did. */
+  const KltStats &lastStats() const { return stats_; }
+  /*!
+    \brief Distance (px) of `uv` from the epipolar segment of `uv_prev` (see the file); NaN when the
+    segment is not defined (a point that would be behind the camera at every depth).
+    \param uv_prev The feature in the previous image (observed pixel). \param uv In the current image.
+    \param cMp The previous camera's pose in the current camera's frame.
+  */
+  double epipolarDistance(const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv, const vpHomogeneousMatrix &cMp) const;
+  /*! \brief Half-width of the epipolar band (px) for a motion's uncertainty (see the file). */
+  double bandHalfWidth(const KltMotion &motion) const;
+
+private:
+  CameraModel camera_;
+  KltOptions options_;
+  cv::Mat previous_;
+  std::vector<cv::Point2f> points_;
+  std::vector<long> ids_;
+  long next_id_ = 0;
+  KltStats stats_;
+};
+
+/*! \brief Gray level (0-255) at a sub-pixel position of an 8-bit gray image, bilinear; -1 outside
+    the image or for an image of another type. */
+int grayLevelAt(const cv::Mat &image, double u, double v);
+
+/*! \brief What trackSequence() found. */
+struct SequenceTracks {
+  std::vector<Track> tracks;                   //!< every feature seen in 2 frames or more, by id
+  KltStats totals;                             //!< the per-frame KltStats summed
+  std::map<std::pair<long, long>, int> gray;   //!< gray level (0-255) at each feature, keyed (frame, id)
+};
+
+/*!
+  \brief KLT tracks through a sequence of images with known motion: KltTracker on each image in turn,
+  each step gated by the motion's increment, its uncertainty from `noise` (the increment's
+  translation, incrementTranslationSigma(); its rotation, sigma_heading or sigma_rot with two yaw
+  readings), unless `gate` is false.
+  \param camera The camera (with its image size). \param rig The rig. \param samples The motion, one row per image.
+  \param images The image files (8-bit gray, or converted), one per row.
+  \param noise The motion's noise model. \param options Tracking options. \param gate Use the epipolar gate.
+  \param progress Called after each image with (images done, total), when set.
+  Throws yawdepth::Error for a missing or unreadable image, or one of another size than the camera's.
+*/
+SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &samples,
+                             const std::vector<std::string> &images, const NoiseModel &noise,
+                             const KltOptions &options = KltOptions(), bool gate = true,
+                             const std::function<void(std::size_t, std::size_t)> &progress = {});
+
+} // namespace yawdepth

@@ -1,0 +1,249 @@
+#include <yawdepth/features/klt_tracker.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <string>
+#include <yawdepth/error.h>
+
+namespace yawdepth {
+
+void KltOptions::validate() const
+{
+  if (max_features < 1 || max_features > 100000)
+    throw Error("klt: max_features must be in [1, 100000]");
+  if (!(std::isfinite(min_distance) && min_distance >= 1))
+    throw Error("klt: min_distance must be at least 1 px");
+  if (!(std::isfinite(quality) && quality > 0 && quality < 1))
+    throw Error("klt: quality must be in (0, 1)");
+  if (block_size < 3 || block_size > 31)
+    throw Error("klt: block_size must be in [3, 31]");
+  if (window < 5 || window > 101 || window % 2 == 0)
+    throw Error("klt: window must be odd and in [5, 101]");
+  if (pyramid_levels < 0 || pyramid_levels > 8)
+    throw Error("klt: pyramid_levels must be in [0, 8]");
+  if (!(std::isfinite(forward_backward_px) && forward_backward_px > 0))
+    throw Error("klt: forward_backward_px must be finite and positive");
+  if (!(std::isfinite(redetect_fraction) && redetect_fraction >= 0 && redetect_fraction <= 1))
+    throw Error("klt: redetect_fraction must be in [0, 1]");
+  if (!(std::isfinite(border_px) && border_px >= 0))
+    throw Error("klt: border_px must be finite and non-negative");
+  if (!(std::isfinite(gate_sigmas) && gate_sigmas > 0))
+    throw Error("klt: gate_sigmas must be finite and positive");
+  if (!(std::isfinite(sigma_px) && sigma_px > 0))
+    throw Error("klt: sigma_px must be finite and positive");
+  if (!(std::isfinite(min_depth) && min_depth > 0))
+    throw Error("klt: min_depth must be finite and positive");
+}
+
+KltTracker::KltTracker(const CameraModel &camera, const KltOptions &options) : camera_(camera), options_(options)
+{
+  options_.validate();
+  if (camera_.width() == 0 || camera_.height() == 0)
+    throw Error("klt: the camera needs an image size");
+}
+
+double KltTracker::bandHalfWidth(const KltMotion &motion) const
+{
+  const double f = std::max(camera_.kx(), camera_.ky());
+  const double s = options_.sigma_px, r = f * motion.sigma_rot, t = f * motion.sigma_trans / options_.min_depth;
+  return options_.gate_sigmas * std::sqrt(2 * s * s + r * r + t * t);
+}
+
+double KltTracker::epipolarDistance(const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv,
+                                    const vpHomogeneousMatrix &cMp) const
+{
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  Eigen::Vector2d mp, mc;
+  if (!camera_.undistort(uv_prev, mp) || !camera_.undistort(uv, mc))
+    return kNaN;
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j)
+      R(i, j) = cMp[static_cast<unsigned>(i)][static_cast<unsigned>(j)];
+    t[i] = cMp[static_cast<unsigned>(i)][3];
+  }
+  const Eigen::Vector3d dir = R * Eigen::Vector3d(mp.x(), mp.y(), 1.0);
+  // Depths Z in [Z_min, inf): P(Z) = dir Z + t, a segment in the image from the near end to the
+  // point at infinity (dir). Keep the part in front of the camera.
+  constexpr double kFront = 1e-9;
+  double z_near = options_.min_depth;
+  if (dir.z() <= kFront) // the bearing turned away from the camera: no far end in view
+    return kNaN;
+  if (t.z() + dir.z() * z_near <= kFront) // the near end behind the camera: start where it comes in front
+    z_near = (kFront - t.z()) / dir.z() * 1.001;
+  const Eigen::Vector3d pn = dir * z_near + t;
+  const Eigen::Vector2d a(pn.x() / pn.z(), pn.y() / pn.z()), b(dir.x() / dir.z(), dir.y() / dir.z());
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double s = len2 > 0 ? std::clamp((mc - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  const Eigen::Vector2d d = mc - (a + s * ab);
+  return std::hypot(d.x() * camera_.kx(), d.y() * camera_.ky());
+}
+
+std::vector<DetectedFeature> KltTracker::track(const cv::Mat &image, const KltMotion *motion)
+{
+  if (image.empty() || image.type() != CV_8UC1)
+    throw Error("klt: the image must be 8-bit gray");
+  if (image.cols != static_cast<int>(camera_.width()) || image.rows != static_cast<int>(camera_.height()))
+    throw Error("klt: the image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                " but the camera is " + std::to_string(camera_.width()) + "x" + std::to_string(camera_.height()));
+  stats_ = KltStats();
+  const cv::Size win(options_.window, options_.window);
+  const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
+  const double lo = options_.border_px, hi_u = image.cols - 1 - options_.border_px,
+               hi_v = image.rows - 1 - options_.border_px;
+  const auto inside = [&](const cv::Point2f &p) { return p.x >= lo && p.y >= lo && p.x <= hi_u && p.y <= hi_v; };
+
+  std::vector<cv::Point2f> kept;
+  std::vector<long> kept_ids;
+  if (!points_.empty() && !previous_.empty()) {
+    std::vector<cv::Point2f> next, back;
+    std::vector<unsigned char> status, status_back;
+    std::vector<float> err, err_back;
+    cv::calcOpticalFlowPyrLK(previous_, image, points_, next, status, err, win, options_.pyramid_levels, term);
+    cv::calcOpticalFlowPyrLK(image, previous_, next, back, status_back, err_back, win, options_.pyramid_levels, term);
+    const double band = motion ? bandHalfWidth(*motion) : 0.0;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      if (!status[i] || !status_back[i] || !std::isfinite(next[i].x) || !std::isfinite(next[i].y)) {
+        ++stats_.lost_flow;
+        continue;
+      }
+      if (std::hypot(back[i].x - points_[i].x, back[i].y - points_[i].y) > options_.forward_backward_px) {
+        ++stats_.lost_fb;
+        continue;
+      }
+      if (!inside(next[i])) {
+        ++stats_.lost_border;
+        continue;
+      }
+      if (motion) {
+        const double d = epipolarDistance(Eigen::Vector2d(points_[i].x, points_[i].y),
+                                           Eigen::Vector2d(next[i].x, next[i].y), motion->cMp);
+        if (!(d <= band)) { // NaN too: no depth in front of both cameras explains the match
+          ++stats_.lost_epipolar;
+          continue;
+        }
+      }
+      kept.push_back(next[i]);
+      kept_ids.push_back(ids_[i]);
+    }
+    stats_.tracked = static_cast<int>(kept.size());
+  }
+
+  // New corners where the tracks thinned out, away from the live ones.
+  const int alive = static_cast<int>(kept.size());
+  if (alive < options_.redetect_fraction * options_.max_features || alive == 0) {
+    cv::Mat mask(image.size(), CV_8UC1, cv::Scalar(0));
+    const int b = static_cast<int>(std::ceil(options_.border_px));
+    if (image.cols > 2 * b && image.rows > 2 * b)
+      mask(cv::Rect(b, b, image.cols - 2 * b, image.rows - 2 * b)).setTo(255);
+    const int r = static_cast<int>(std::ceil(options_.min_distance));
+    for (const cv::Point2f &p : kept)
+      cv::circle(mask, cv::Point(cvRound(p.x), cvRound(p.y)), r, cv::Scalar(0), cv::FILLED);
+    std::vector<cv::Point2f> corners;
+    const int wanted = options_.max_features - alive;
+    if (wanted > 0)
+      cv::goodFeaturesToTrack(image, corners, wanted, options_.quality, options_.min_distance, mask,
+                              options_.block_size);
+    if (!corners.empty()) {
+      const cv::Size half(std::max(2, options_.window / 4), std::max(2, options_.window / 4));
+      cv::cornerSubPix(image, corners, half, cv::Size(-1, -1),
+                       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.01));
+    }
+    // Sub-pixel refinement can pull two detections onto one corner: keep the spacing.
+    const double min_d2 = options_.min_distance * options_.min_distance;
+    const auto crowded = [&](const cv::Point2f &c) {
+      return std::any_of(kept.begin(), kept.end(), [&](const cv::Point2f &p) {
+        const double du = p.x - c.x, dv = p.y - c.y;
+        return du * du + dv * dv < min_d2;
+      });
+    };
+    for (const cv::Point2f &c : corners) {
+      if (!inside(c) || !std::isfinite(c.x) || !std::isfinite(c.y) || crowded(c))
+        continue;
+      kept.push_back(c);
+      kept_ids.push_back(next_id_++);
+      ++stats_.detected;
+    }
+  }
+  points_ = std::move(kept);
+  ids_ = std::move(kept_ids);
+  previous_ = image.clone();
+  std::vector<DetectedFeature> out;
+  out.reserve(points_.size());
+  for (std::size_t i = 0; i < points_.size(); ++i)
+    out.push_back(DetectedFeature{ids_[i], points_[i].x, points_[i].y});
+  return out;
+}
+
+int grayLevelAt(const cv::Mat &image, double u, double v)
+{
+  if (image.type() != CV_8UC1 || !(u >= 0 && v >= 0 && u <= image.cols - 1 && v <= image.rows - 1))
+    return -1;
+  const int u0 = std::min(static_cast<int>(u), std::max(0, image.cols - 2));
+  const int v0 = std::min(static_cast<int>(v), std::max(0, image.rows - 2));
+  const int u1 = std::min(u0 + 1, image.cols - 1), v1 = std::min(v0 + 1, image.rows - 1);
+  const double a = u - u0, b = v - v0;
+  const double g = (1 - a) * (1 - b) * image.at<unsigned char>(v0, u0) + a * (1 - b) * image.at<unsigned char>(v0, u1) +
+                   (1 - a) * b * image.at<unsigned char>(v1, u0) + a * b * image.at<unsigned char>(v1, u1);
+  return static_cast<int>(std::lround(std::clamp(g, 0.0, 255.0)));
+}
+
+SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &samples,
+                             const std::vector<std::string> &images, const NoiseModel &noise, const KltOptions &options,
+                             bool gate, const std::function<void(std::size_t, std::size_t)> &progress)
+{
+  if (images.size() != samples.size())
+    throw Error("klt: " + std::to_string(images.size()) + " images for " + std::to_string(samples.size()) +
+                " motion rows");
+  KltTracker tracker(camera, options);
+  const std::size_t n = samples.size();
+  SequenceTracks out;
+  std::vector<FrameDetection> frames;
+  frames.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const MotionSample &s = samples[i];
+    if (images[i].empty())
+      throw Error("frame " + std::to_string(s.frame) + ": no image (KLT tracking needs every frame's image)");
+    const cv::Mat image = readGrayImage(images[i]);
+    if (image.cols != static_cast<int>(camera.width()) || image.rows != static_cast<int>(camera.height()))
+      throw Error(images[i] + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                  " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+    FrameDetection d;
+    d.frame = s.frame;
+    if (i > 0 && gate) {
+      const MotionSample &p = samples[i - 1];
+      KltMotion m;
+      m.cMp = wMc(rig, s).inverse() * wMc(rig, p);
+      const double dist = std::sqrt((s.x - p.x) * (s.x - p.x) + (s.y - p.y) * (s.y - p.y) + (s.z - p.z) * (s.z - p.z));
+      m.sigma_trans = incrementTranslationSigma(noise, dist);
+      const double turn = s.six_dof ? noise.sigma_rot : noise.sigma_heading;
+      m.sigma_rot = std::sqrt(turn * turn + 2 * noise.sigma_yaw * noise.sigma_yaw);
+      d.features = tracker.track(image, &m);
+    } else {
+      d.features = tracker.track(image, nullptr);
+    }
+    for (const DetectedFeature &f : d.features)
+      out.gray[{s.frame, f.id}] = grayLevelAt(image, f.u, f.v);
+    const KltStats &st = tracker.lastStats();
+    out.totals.tracked += st.tracked;
+    out.totals.lost_flow += st.lost_flow;
+    out.totals.lost_fb += st.lost_fb;
+    out.totals.lost_border += st.lost_border;
+    out.totals.lost_epipolar += st.lost_epipolar;
+    out.totals.detected += st.detected;
+    d.found = !d.features.empty();
+    frames.push_back(std::move(d));
+    if (progress)
+      progress(i + 1, n);
+  }
+  for (Track &t : PatternDetector::toTracks(frames))
+    if (t.observations.size() >= 2) // a feature seen once measures nothing
+      out.tracks.push_back(std::move(t));
+  return out;
+}
+
+} // namespace yawdepth

@@ -1,0 +1,118 @@
+// `yawdepth track`: natural-feature tracks (KLT) from the images of a motion log, gated by the
+// known motion; also what `measure --features klt` runs.
+#include "commands.h"
+#include "method_options.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <unistd.h>
+#include <yawdepth/camera/camera_file.h>
+#include <yawdepth/error.h>
+#include <yawdepth/io/files.h>
+
+namespace yawdepth::cli {
+
+void addKltOptions(CLI::App *sub, KltArgs &args)
+{
+  sub->add_option("--max-features", args.klt.max_features, "KLT: most features tracked at once")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  sub->add_option("--min-distance", args.klt.min_distance, "KLT: minimum spacing of features (px)")
+      ->check(CLI::Range(1.0, 1000.0))
+      ->capture_default_str();
+  sub->add_option("--track-sigma-px", args.klt.sigma_px, "KLT: tracker noise per point for the epipolar gate (px)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--min-depth", args.klt.min_depth, "KLT: the nearest a tracked point can be (m), for the epipolar gate")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--gate-sigmas", args.klt.gate_sigmas, "KLT: half-width of the epipolar band (sigmas)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_flag("--no-gate", args.no_gate, "KLT: do not gate the tracks with the motion (no epipolar band)");
+}
+
+std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
+                             const NoiseModel &noise, const KltArgs &args, bool quiet,
+                             std::map<std::pair<long, long>, int> *gray)
+{
+  if (motion.images.empty())
+    throw Error("the motion log has no 'image' column: KLT tracking needs the image of each frame");
+  if (camera.width() == 0 || camera.height() == 0)
+    throw Error("KLT tracking needs the camera's image size (image_width, image_height in the camera file)");
+  const std::size_t n = motion.samples.size();
+  const bool progress = !quiet && n >= 20 && isatty(STDERR_FILENO);
+  const std::size_t every = std::max<std::size_t>(1, n / 10);
+  SequenceTracks seq = trackSequence(camera, rig, motion.samples, motion.images, noise, args.klt, !args.no_gate,
+                                     [&](std::size_t done, std::size_t total) {
+                                       if (progress && (done % every == 0 || done == total))
+                                         std::cerr << "track: " << done << "/" << total << " frames\n";
+                                     });
+  const KltStats &t = seq.totals;
+  if (!quiet)
+    std::cerr << "track: " << n << " frames, " << t.detected << " features detected, " << seq.tracks.size()
+              << " tracked over 2 frames or more; cut: " << t.lost_epipolar << " outside the epipolar band, "
+              << t.lost_fb << " forward-backward, " << t.lost_flow << " lost, " << t.lost_border
+              << " left the image\n";
+  if (gray)
+    *gray = std::move(seq.gray);
+  return std::move(seq.tracks);
+}
+
+namespace {
+
+struct TrackArgs {
+  std::string camera, camera_name, rig, motion, out;
+  MethodArgs method;
+  KltArgs klt;
+  InputOptions input;
+  bool quiet = false;
+};
+
+} // namespace
+
+Runner addTrack(CLI::App &app)
+{
+  auto a = std::make_shared<TrackArgs>();
+  CLI::App *sub = app.add_subcommand(
+      "track", "Track natural corners (KLT) through the images of a motion log, gated by the known motion.");
+  sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML (with the image size)")->required();
+  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
+  sub->add_option("--rig", a->rig,
+                  "Rig file (YAML): where the camera sits; without it the camera is at the vision frame's origin");
+  sub->add_option("--motion", a->motion, "Motion log CSV with an image column (paths relative to the CSV's folder)")
+      ->required();
+  sub->add_option("--out", a->out, "Output tracks CSV (frame,id,u,v)")->required();
+  addMotionNoiseOptions(sub, a->method);
+  addKltOptions(sub, a->klt);
+  sub->add_flag("--quiet", a->quiet, "No summary on stderr");
+  addInputOptions(sub, a->input);
+  return [a]() {
+    a->method.noise.validate();
+    RigFile rig_file;
+    if (!a->rig.empty())
+      rig_file = readRigFile(a->rig);
+    const YawRig rig = rigOf(rig_file);
+    MotionLog motion = readMotionCsv(a->motion, rig_file.yaw, a->input.limits());
+    applyRigFile(rig_file, motion.samples);
+    {
+      std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};
+      if (!a->rig.empty())
+        inputs.push_back({"--rig", a->rig});
+      for (const std::string &image : motion.images)
+        if (!image.empty())
+          inputs.push_back({"--motion's image", image});
+      checkOutputs(inputs, {{"--out", a->out}});
+    }
+    const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
+    const bool six_dof = !motion.samples.empty() && motion.samples.front().six_dof;
+    const NoiseModel noise = noiseForLog(a->method, six_dof, motion.yaw_column);
+    const std::vector<Track> tracks = kltTracks(camera, rig, motion, noise, a->klt, a->quiet);
+    writeTracksCsv(a->out, tracks);
+    return 0;
+  };
+}
+
+} // namespace yawdepth::cli
