@@ -278,7 +278,7 @@ TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("calibrate-camera options: fixed aspect ratio and principal point", "[calibration]")
+TEST_CASE("calibrate-camera options: fixed aspect ratio and principal point", "[calibration][slow]")
 {
   const CameraSet &set = cameraSet();
   const CalibrationDetections det = detectCalibrationViews(set.board, set.names, set.images);
@@ -296,7 +296,7 @@ TEST_CASE("calibrate-camera options: fixed aspect ratio and principal point", "[
   CHECK_FALSE(cal.visp_fitted);
 }
 
-TEST_CASE("calibrate-camera flags and drops an outlier view", "[calibration]")
+TEST_CASE("calibrate-camera flags and drops an outlier view", "[calibration][slow]")
 {
   const CameraSet &set = cameraSet();
   CalibrationDetections det = detectCalibrationViews(set.board, set.names, set.images);
@@ -440,7 +440,7 @@ std::vector<double> yawReadings(double from_deg, double to_deg, int n)
 
 } // namespace
 
-TEST_CASE("calibrate-rig: offset, axis and yaw zero of a board standing square", "[calibration][rig]")
+TEST_CASE("calibrate-rig: offset, axis and yaw zero of a board standing square", "[calibration][rig][slow]")
 {
   const CameraModel camera = wideCamera();
   const BoardLayout board = chessboard(6, 5, 0.03);
@@ -502,7 +502,7 @@ TEST_CASE("calibrate-rig: static robot, board at an angle: offset found, yaw zer
   CHECK(rig.rms_px < 0.1);
 }
 
-TEST_CASE("calibrate-rig: the robot's translation gives the yaw zero", "[calibration][rig]")
+TEST_CASE("calibrate-rig: the robot's translation gives the yaw zero", "[calibration][rig][slow]")
 {
   const CameraModel camera = wideCamera();
   const BoardLayout board = chessboard(6, 5, 0.03);
@@ -644,7 +644,7 @@ Eigen::Isometry3d isoOf(const vpHomogeneousMatrix &M) { return toIsometry(M); }
 
 } // namespace
 
-TEST_CASE("hand-eye: eye-in-hand and eye-to-hand recover the camera pose within its honest sigma", "[calibration][handeye]")
+TEST_CASE("hand-eye: eye-in-hand and eye-to-hand recover the camera pose within its honest sigma", "[calibration][handeye][slow]")
 {
   const CameraModel camera =
       CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);

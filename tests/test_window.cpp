@@ -267,7 +267,7 @@ TEST_CASE("window is efficient and honest with marginalisation (Monte Carlo agai
   CHECK(pooled.coverage() < kMaxCoverage);
 }
 
-TEST_CASE("window flags gross outliers and stays near the clean bound", "[window][outliers]")
+TEST_CASE("window flags gross outliers and stays near the clean bound", "[window][outliers][slow]")
 {
   const CameraModel camera = paperCamera();
   const YawRig rig = paperRig();
