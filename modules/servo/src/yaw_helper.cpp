@@ -139,8 +139,9 @@ Candidate evaluate(const Scene &sc, double target, const YawHelperOptions &o)
     int counted = 0;
     for (std::size_t i = 0; i < sc.v_points.size(); ++i) {
       const Eigen::Vector3d c_P = sc.rig.cameraPoint(yaw, sc.v_points[i] - v_origin);
-      if (c_P.z() > 1e-9) {
-        centroid += camera.project(Eigen::Vector2d(c_P.x() / c_P.z(), c_P.y() / c_P.z()));
+      const Eigen::Vector2d m(c_P.x() / c_P.z(), c_P.y() / c_P.z());
+      if (c_P.z() > 1e-9 && m.squaredNorm() < sc.valid_radius * sc.valid_radius) { // not folded by the lens model
+        centroid += camera.project(m);
         ++counted;
       }
       Eigen::Vector2d uv;
