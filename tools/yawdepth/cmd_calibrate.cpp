@@ -365,11 +365,7 @@ Runner addCalibrateRig(CLI::App &app)
         failures.push_back("frame " + std::to_string(frame) + ": no image");
         continue;
       }
-      const cv::Mat image = readGrayImage(motion.images[i]);
-      if (camera.width() > 0 &&
-          (image.cols != static_cast<int>(camera.width()) || image.rows != static_cast<int>(camera.height())))
-        throw Error(motion.images[i] + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                    " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+      const cv::Mat image = readGrayImage(motion.images[i], camera);
       const FrameDetection d = detector.detect(image, frame);
       if (!d.found) {
         failures.push_back("frame " + std::to_string(frame) + ": " + d.reason);

@@ -123,11 +123,7 @@ Runner addMeasure(CLI::App &app)
           failures.push_back("measure: frame " + std::to_string(frame) + ": no image");
           continue;
         }
-        const cv::Mat image = readGrayImage(motion.images[i]);
-        if (camera.width() > 0 && (image.cols != static_cast<int>(camera.width()) ||
-                                   image.rows != static_cast<int>(camera.height())))
-          throw Error(motion.images[i] + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                      " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+        const cv::Mat image = readGrayImage(motion.images[i], camera);
         FrameDetection d = detector.detect(image, frame);
         for (const DetectedFeature &f : d.features) // the gray level at each feature, for --ply
           gray[{frame, f.id}] = grayLevelAt(image, f.u, f.v);

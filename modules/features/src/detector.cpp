@@ -1018,6 +1018,16 @@ cv::Mat drawDetection(const cv::Mat &image, const FrameDetection &d) {
   return out;
 }
 
+cv::Mat readGrayImage(const std::string &path, const CameraModel &camera)
+{
+  cv::Mat image = readGrayImage(path);
+  if (camera.width() > 0 &&
+      (image.cols != static_cast<int>(camera.width()) || image.rows != static_cast<int>(camera.height())))
+    throw Error(path + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+  return image;
+}
+
 cv::Mat readGrayImage(const std::string &path) {
   // Read the bytes ourselves (clear messages for missing, empty, endless or huge files; only a
   // regular file or a pipe), check the size its header declares, then decode in memory.

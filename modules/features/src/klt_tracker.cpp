@@ -208,10 +208,7 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
     const MotionSample &s = samples[i];
     if (images[i].empty())
       throw Error("frame " + std::to_string(s.frame) + ": no image (KLT tracking needs every frame's image)");
-    const cv::Mat image = readGrayImage(images[i]);
-    if (image.cols != static_cast<int>(camera.width()) || image.rows != static_cast<int>(camera.height()))
-      throw Error(images[i] + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                  " but the camera is " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+    const cv::Mat image = readGrayImage(images[i], camera); // the camera has a size: KltTracker requires one
     FrameDetection d;
     d.frame = s.frame;
     if (i > 0 && gate) {

@@ -169,5 +169,8 @@ int refineDotGridCentres(const cv::Mat &gray, std::vector<cv::Point2d> &centres,
 
 /*! \brief Read an image file as 8-bit grayscale; throws yawdepth::Error (unreadable, truncated, empty). */
 cv::Mat readGrayImage(const std::string &path);
+/*! \brief Same, and throws yawdepth::Error ("PATH: image is WxH but the camera is WxH") when the
+    camera has an image size and the image is of another. */
+cv::Mat readGrayImage(const std::string &path, const CameraModel &camera);
 
 } // namespace yawdepth
