@@ -1,8 +1,9 @@
 /*
   bench_active_yaw: does steering the pan help depth? A robot drives straight past a group of
   target points while the window estimator measures them; the camera's yaw is held fixed (front
-  view, 30, 60 or 90 degrees) or steered every frame by recommendYawRate() (started pointing at the
-  targets). Reported per target layout and yaw policy: the time until every target's depth sigma
+  view, 30, 60 or 90 degrees) or steered every frame by YawHelper (recommendYawRate() with a memory
+  of where it looked, started pointing at the targets), with and without its exploration of unseen
+  bearings. Reported per target layout and yaw policy: the time until every target's depth sigma
   (the estimator's own) has fallen below 2 % of its depth, over several noise seeds.
 
     bench_active_yaw [--seeds N] [--seed S] [--frames F] [--layout I]
@@ -46,6 +47,7 @@ struct Policy {
   const char *name;
   bool steered;
   double yaw; // fixed yaw (rad); the steered policy starts pointing at the layout
+  bool explore = true; // the steered policy explores unseen bearings (YawHelper) once nothing is left to learn
 };
 
 /* Seconds until every target reached sigma_Z / Z < 2 % (kNever if one never does). */
@@ -67,6 +69,9 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
   ho.min_yaw = -120 * kDeg;
   ho.max_yaw = 120 * kDeg;
   ho.home_yaw = side * 90 * kDeg; // measured what it sees: back to the side view, toward the targets
+  YawExploreOptions xo;
+  xo.enabled = policy.explore;
+  YawHelper helper_state(camera, rig, ho, xo);
   double yaw = policy.steered ? std::atan2(layout.centre.x(), layout.centre.z()) : policy.yaw;
   MotionSample truth, measured;
   std::vector<double> reached(n, kNever);
@@ -142,9 +147,8 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
     }
     if (done == n)
       break;
-    if (policy.steered && !helper.empty()) {
-      const YawRecommendation r =
-          recommendYawRate(camera, rig, measured.yaw, Eigen::Vector3d(0, 0, kSpeed), helper, ho);
+    if (policy.steered) {
+      const YawRecommendation r = helper_state.recommend(k * kDt, measured.yaw, Eigen::Vector3d(0, 0, kSpeed), helper);
       yaw = std::clamp(yaw + r.rate * kDt, ho.min_yaw, ho.max_yaw);
     }
   }
@@ -204,18 +208,18 @@ int main(int argc, char **argv)
   }
   const std::vector<Policy> policies = {{"front (0 deg)", false, 0.0},     {"30 deg toward", false, 30 * kDeg},
                                         {"60 deg toward", false, 60 * kDeg}, {"90 deg toward", false, 90 * kDeg},
-                                        {"steered (helper)", true, 0.0}};
+                                        {"no exploring", true, 0.0, false}, {"steered (helper)", true, 0.0}};
   std::printf("yawdepth active yaw: seconds until every target's depth sigma < 2 %% of its depth (window estimator)\n");
   std::printf("Reproduce: build/benchmarks/bench_active_yaw --seeds %d --seed %llu --frames %d\n", seeds,
               static_cast<unsigned long long>(seed), frames);
   std::printf("12 targets per layout in a box (+-0.2 to 0.4 m, +-0.1 m high); 0.2 m/s, 10 frames/s, run of %.0f s; median\n"
               "(and worst) over %d seeds; fixed yaws look toward the layout's side (right or left).\n",
               frames * kDt, seeds);
-  std::printf("%s\n", std::string(112, '-').c_str());
+  std::printf("%s\n", std::string(127, '-').c_str());
   std::printf("%-36s", "layout");
   for (const Policy &p : policies)
     std::printf(" %14s", p.name);
-  std::printf("\n%s\n", std::string(112, '-').c_str());
+  std::printf("\n%s\n", std::string(127, '-').c_str());
   for (std::size_t li = 0; li < layouts.size(); ++li) {
     if (only >= 0 && static_cast<std::size_t>(only) != li)
       continue;
@@ -237,6 +241,6 @@ int main(int argc, char **argv)
     }
     std::printf("\n");
   }
-  std::printf("%s\n", std::string(112, '-').c_str());
+  std::printf("%s\n", std::string(127, '-').c_str());
   return 0;
 }

@@ -297,6 +297,95 @@ TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion",
   }
 }
 
+TEST_CASE("yaw helper with memory: measures first, then explores unseen bearings, then goes home", "[servo]")
+{
+  const CameraModel camera = testCamera(); // +-28 degrees horizontally
+  const YawRig rig(Eigen::Vector3d(-0.15, 0, 0));
+  YawHelperOptions o;
+  o.min_yaw = -2.0;
+  o.max_yaw = 2.0;
+  const Eigen::Vector3d forward(0, 0, 0.2);
+  YawHelper helper(camera, rig, o);
+  // Nothing seen yet anywhere: every view is stale.
+  CHECK(helper.staleness(0.0, 0.0) == Approx(1.0));
+  // No features while driving forward: explore, toward a side of the path first (most parallax).
+  const YawRecommendation first = helper.recommend(0.0, 0.0, forward, {});
+  CHECK(first.mode == YawMode::Explore);
+  CHECK(std::abs(first.target_yaw) > 0.6);
+  CHECK(std::abs(first.rate) == Approx(o.max_rate));
+  // What was just in view is no longer stale, and becomes stale again over stale_time.
+  const YawExploreOptions xo;
+  CHECK(helper.staleness(0.0, 0.0) == Approx(0.0).margin(1e-12));
+  CHECK(helper.staleness(xo.stale_time, 0.0) == Approx(1.0 - std::exp(-1.0)).epsilon(1e-9));
+  // Played forward at 10 Hz: within 12 s the pan sweeps both sides, every bearing up to 85 degrees off
+  // the path looked at.
+  double yaw = 0.0, lo = 0.0, hi = 0.0;
+  for (int k = 1; k <= 120; ++k) {
+    const YawRecommendation r = helper.recommend(0.1 * k, yaw, forward, {});
+    REQUIRE(std::abs(r.rate) <= o.max_rate + 1e-12);
+    yaw = std::clamp(yaw + 0.1 * r.rate, o.min_yaw, o.max_yaw);
+    lo = std::min(lo, yaw);
+    hi = std::max(hi, yaw);
+  }
+  CHECK(lo < -0.9);
+  CHECK(hi > 0.9);
+  for (double a = -1.0; a <= 1.0; a += 0.05)
+    CHECK(helper.staleness(12.0, a) < 0.99);
+  // A feature in view that still needs depth: measuring comes first, as recommendYawRate() says.
+  const std::vector<YawHelperFeature> f{{0.05, 0.0, 2.0, 1.0}, {-0.05, 0.05, 2.0, 1.0}};
+  const YawRecommendation meas = helper.recommend(12.1, yaw, forward, f);
+  const YawRecommendation plain = recommendYawRate(camera, rig, yaw, forward, f, o);
+  CHECK(meas.mode == YawMode::Measure);
+  CHECK(meas.rate == Approx(plain.rate));
+  CHECK(meas.target_yaw == Approx(plain.target_yaw));
+  // Everything seen a moment ago (min_stale = 1 cannot be reached): home when set, else recentre
+  // the converged features, and hold without any.
+  YawExploreOptions strict;
+  strict.min_stale = 1.0;
+  YawHelperOptions home = o;
+  home.home_yaw = 1.0;
+  YawHelper homing(camera, rig, home, strict);
+  for (double a = -2.0; a <= 2.0; a += 0.2)
+    (void)homing.recommend(0.0, a, forward, {});
+  const std::vector<YawHelperFeature> done{{0.3, 0.0, 2.0, 0.0}};
+  const YawRecommendation back = homing.recommend(0.1, 0.0, forward, done);
+  CHECK(back.mode == YawMode::Home);
+  CHECK(back.target_yaw == Approx(1.0));
+  CHECK(back.rate == Approx(o.max_rate));
+  YawHelper centring(camera, rig, o, strict);
+  for (double a = -2.0; a <= 2.0; a += 0.2)
+    (void)centring.recommend(0.0, a, forward, {});
+  const YawRecommendation rec = centring.recommend(0.0, 0.0, forward, done);
+  CHECK(rec.mode == YawMode::Recentre);
+  CHECK(rec.rate > 0); // the feature is right of centre
+  CHECK(centring.recommend(0.1, 0.0, forward, {}).rate == 0.0);
+  // Exploration off: straight to home.
+  YawExploreOptions off;
+  off.enabled = false;
+  YawHelper no_explore(camera, rig, home, off);
+  CHECK(no_explore.recommend(0.0, 0.0, forward, {}).mode == YawMode::Home);
+  // After reset() every view is stale again.
+  helper.reset();
+  CHECK(helper.staleness(20.0, yaw) == Approx(1.0));
+  // Bad input.
+  CHECK_NOTHROW(helper.recommend(-1.0, 0.0, forward, {})); // any start time after reset() ...
+  CHECK_THROWS_AS(helper.recommend(-2.0, 0.0, forward, {}), Error); // ... but time may not go back
+  CHECK_THROWS_AS(helper.recommend(0.0, std::nan(""), forward, {}), Error);
+  CHECK_THROWS_AS(YawHelper(CameraModel(), rig, o), Error);
+  for (int which = 0; which < 4; ++which) {
+    YawExploreOptions b;
+    if (which == 0)
+      b.bin = 0;
+    else if (which == 1)
+      b.stale_time = -1;
+    else if (which == 2)
+      b.min_stale = 2;
+    else
+      b.parallax_floor = std::nan("");
+    CHECK_THROWS_AS(YawHelper(camera, rig, o, b), Error);
+  }
+}
+
 TEST_CASE("pan robot: the camera Jacobian matches the kinematics", "[servo]")
 {
   UnicyclePanRobot robot;

@@ -217,6 +217,7 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
     r.rate = std::clamp(options.gain * (r.target_yaw - yaw), -options.max_rate, options.max_rate);
     r.parallax_target = r.parallax_now;
     r.information_target = now.information;
+    r.mode = YawMode::Home;
     return r;
   }
   std::vector<Candidate> cands{now};
@@ -254,6 +255,140 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
   r.parallax_target = best->parallax;
   r.information_target = best->information;
   r.feasible = any_keeps;
+  r.mode = jmax > kNoInformation ? YawMode::Measure : YawMode::Recentre;
+  return r;
+}
+
+void YawExploreOptions::validate() const
+{
+  if (!(std::isfinite(bin) && bin >= 1e-4 && bin <= 0.2))
+    throw Error("yaw helper: the exploration bin must be within [1e-4, 0.2] rad");
+  if (!(std::isfinite(stale_time) && stale_time > 0))
+    throw Error("yaw helper: stale_time must be finite and positive");
+  if (!(std::isfinite(min_stale) && min_stale >= 0 && min_stale <= 1))
+    throw Error("yaw helper: min_stale must be within [0, 1]");
+  if (!(std::isfinite(parallax_floor) && parallax_floor >= 0 && parallax_floor <= 1))
+    throw Error("yaw helper: parallax_floor must be within [0, 1]");
+}
+
+namespace {
+
+/* Bearing about the pan axis (the vision frame's y) of a direction: 0 straight ahead (+z), positive
+   toward +x (the yaw's sense: rotY(theta) adds theta to it). */
+double bearing(const Eigen::Vector3d &d) { return std::atan2(d.x(), d.z()); }
+
+} // namespace
+
+YawHelper::YawHelper(const CameraModel &camera, const YawRig &rig, const YawHelperOptions &options,
+                     const YawExploreOptions &explore)
+    : camera_(camera), rig_(rig), options_(options), explore_(explore)
+{
+  options_.validate();
+  explore_.validate();
+  if (camera_.width() == 0 || camera_.height() == 0)
+    throw Error("yaw helper: the camera needs an image size");
+  Eigen::Vector2d left, right;
+  if (!camera_.undistort(Eigen::Vector2d(0.0, camera_.v0()), left) ||
+      !camera_.undistort(Eigen::Vector2d(camera_.width() - 1.0, camera_.v0()), right))
+    throw Error("yaw helper: the camera model cannot undistort its image's left and right edges");
+  const Eigen::Matrix3d v_R0 = rig_.vRc(0.0);
+  fov_left_ = bearing(v_R0 * Eigen::Vector3d(left.x(), 0.0, 1.0));
+  fov_right_ = bearing(v_R0 * Eigen::Vector3d(right.x(), 0.0, 1.0));
+  if (!(fov_right_ > fov_left_))
+    throw Error("yaw helper: the camera's field of view does not span any bearing about the pan axis");
+  bin_origin_ = options_.min_yaw + fov_left_;
+  const double span = options_.max_yaw + fov_right_ - bin_origin_;
+  last_seen_.assign(static_cast<std::size_t>(std::ceil(span / explore_.bin)) + 1,
+                    -std::numeric_limits<double>::infinity());
+}
+
+void YawHelper::reset()
+{
+  std::fill(last_seen_.begin(), last_seen_.end(), -std::numeric_limits<double>::infinity());
+  last_t_ = -std::numeric_limits<double>::infinity();
+}
+
+std::pair<int, int> YawHelper::binsInView(double yaw) const
+{
+  const int n = static_cast<int>(last_seen_.size());
+  const int lo = static_cast<int>(std::ceil((yaw + fov_left_ - bin_origin_) / explore_.bin));
+  const int hi = static_cast<int>(std::floor((yaw + fov_right_ - bin_origin_) / explore_.bin));
+  return {std::clamp(lo, 0, n - 1), std::clamp(hi, 0, n - 1)};
+}
+
+double YawHelper::staleness(double t, double yaw) const
+{
+  const std::pair<int, int> b = binsInView(std::clamp(yaw, options_.min_yaw, options_.max_yaw));
+  double sum = 0;
+  for (int i = b.first; i <= b.second; ++i)
+    sum += -std::expm1(-(t - last_seen_[static_cast<std::size_t>(i)]) / explore_.stale_time);
+  return sum / (b.second - b.first + 1);
+}
+
+YawRecommendation YawHelper::recommend(double t, double yaw, const Eigen::Vector3d &v_velocity,
+                                       const std::vector<YawHelperFeature> &features)
+{
+  if (!std::isfinite(t) || !(t >= last_t_))
+    throw Error("yaw helper: times must be finite and not decrease");
+  if (!std::isfinite(yaw) || !v_velocity.allFinite())
+    throw Error("yaw helper: yaw and velocity must be finite");
+  last_t_ = t;
+  const std::pair<int, int> seen = binsInView(std::clamp(yaw, options_.min_yaw, options_.max_yaw));
+  for (int i = seen.first; i <= seen.second; ++i)
+    last_seen_[static_cast<std::size_t>(i)] = t;
+
+  YawRecommendation r;
+  r.target_yaw = yaw;
+  r.mode = YawMode::Recentre;
+  if (!features.empty()) {
+    YawHelperOptions o = options_;
+    o.home_yaw = std::numeric_limits<double>::quiet_NaN(); // home is decided below, after exploring
+    r = recommendYawRate(camera_, rig_, yaw, v_velocity, features, o);
+    if (r.mode == YawMode::Measure)
+      return r;
+  }
+  const auto rateTo = [&](double target) {
+    return std::clamp(options_.gain * (target - yaw), -options_.max_rate, options_.max_rate);
+  };
+  if (explore_.enabled) {
+    // The view with the most stale parallax within the joint's range; among about equal ones, the nearest.
+    constexpr double kNearness = 0.05; // value traded per pi of pan travel
+    const Eigen::Vector3d v_axis0 = rig_.vRc(0.0) * Eigen::Vector3d::UnitZ();
+    const double axis0 = bearing(v_axis0);
+    const double speed = std::hypot(v_velocity.x(), v_velocity.z());
+    const double heading = speed > 1e-9 ? std::atan2(v_velocity.x(), v_velocity.z()) : 0.0;
+    double best = -std::numeric_limits<double>::infinity(), best_yaw = yaw, best_stale = 0;
+    const int n = static_cast<int>(std::ceil((options_.max_yaw - options_.min_yaw) / explore_.bin));
+    for (int k = 0; k <= n; ++k) {
+      const double cand = std::min(options_.max_yaw, options_.min_yaw + k * explore_.bin);
+      const double stale = staleness(t, cand);
+      // What a new feature seen there is worth: its parallax, the sine of its angle to the motion
+      // (uniform when the robot does not translate), with a floor for the features that the motion
+      // will later bring to the side.
+      const double parallax = speed > 1e-9 ? std::abs(std::sin(cand + axis0 - heading)) : 1.0;
+      const double score = stale * (explore_.parallax_floor + (1.0 - explore_.parallax_floor) * parallax) -
+                           kNearness * std::abs(cand - yaw) / M_PI;
+      if (score > best) {
+        best = score;
+        best_yaw = cand;
+        best_stale = stale;
+      }
+    }
+    if (best_stale >= explore_.min_stale && best_stale > 0) {
+      r.target_yaw = best_yaw;
+      r.rate = rateTo(best_yaw);
+      r.mode = YawMode::Explore;
+      return r;
+    }
+  }
+  if (std::isfinite(options_.home_yaw)) {
+    r.target_yaw = options_.home_yaw;
+    r.rate = rateTo(options_.home_yaw);
+    r.mode = YawMode::Home;
+    return r;
+  }
+  if (features.empty())
+    r.rate = 0.0; // nothing to centre: hold
   return r;
 }
 

@@ -59,6 +59,7 @@
 */
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 #include <Eigen/Core>
 #include <yawdepth/camera/camera_model.h>
@@ -104,6 +105,14 @@ struct YawHelperOptions {
   void validate() const;
 };
 
+/*! \brief Why the pan goes where YawRecommendation::target_yaw says. */
+enum class YawMode {
+  Measure,  //!< toward the most depth information on the features that still need it
+  Explore,  //!< nothing to learn from the tracked features: toward the view longest unseen (YawHelper)
+  Home,     //!< every feature measured, nothing left to explore: toward YawHelperOptions::home_yaw
+  Recentre  //!< nothing to learn and no home view: keep the features centred
+};
+
 /*! \brief What recommendYawRate() found. */
 struct YawRecommendation {
   double rate = 0;              //!< recommended yaw rate (rad/s), within +-max_rate
@@ -114,6 +123,7 @@ struct YawRecommendation {
   double information_target = 0; //!< J of the target yaw
   bool visible_now = true;      //!< every feature inside the image (minus margin) at the current yaw
   bool feasible = true;         //!< some candidate keeps every weighted feature now in view in view
+  YawMode mode = YawMode::Measure; //!< why the target was chosen
 };
 
 /*!
@@ -128,6 +138,77 @@ struct YawRecommendation {
 YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig, double yaw,
                                    const Eigen::Vector3d &v_velocity, const std::vector<YawHelperFeature> &features,
                                    const YawHelperOptions &options = YawHelperOptions());
+
+/*! \brief Options of YawHelper's exploration (the views it has not looked at recently). */
+struct YawExploreOptions {
+  bool enabled = true;        //!< explore when the tracked features give nothing to learn
+  double bin = M_PI / 180;    //!< width of a bearing bin of the look-up memory (rad)
+  /*! a bearing looked at this long ago is stale to 1 - 1/e (s): what is there may have changed
+      (the robot moved, something came into range) */
+  double stale_time = 10.0;
+  /*! explore only toward a view whose bins are on average at least this stale (0..1); otherwise the
+      pan goes home (or recentres) */
+  double min_stale = 0.3;
+  /*! a view's worth is its staleness times (floor + (1 - floor) |sin(angle to the motion)|): the
+      parallax that a new feature there would give, with this floor (0..1) for the views ahead that
+      the motion will later turn to the side */
+  double parallax_floor = 0.2;
+  /*! \brief Throws yawdepth::Error for invalid options. */
+  void validate() const;
+};
+
+/*!
+  \brief The yaw helper with a memory: recommendYawRate() plus exploration of unseen bearings.
+
+  recommendYawRate() knows only the features it is given: once they are measured there is nothing to
+  learn, and a target the camera has never seen cannot draw the pan. YawHelper remembers, per
+  bearing bin of the vision frame (the yaw about the pan axis, `YawExploreOptions::bin` wide), when
+  the camera's horizontal field of view last covered it. Each call:
+  - marks the bins in view at the current yaw as seen now;
+  - if the tracked features still have depth information to give (recommendYawRate()'s best score
+    is not zero), returns that recommendation (YawMode::Measure): measuring comes first, and a
+    feature found while exploring takes the pan from then on;
+  - otherwise, if some yaw within [min_yaw, max_yaw] has a field of view whose bins' staleness
+    \f$ s_b = 1 - e^{-(t - t_b)/\tau} \f$ (1 for a bin never seen; \f$\tau\f$ = stale_time)
+    averages at least min_stale, pans toward the view of most worth: its staleness times the
+    parallax a new feature there would give (\f$ f + (1 - f)\,|\sin\beta| \f$, \f$\beta\f$ its
+    bearing from the direction of travel, f = parallax_floor), less 0.05 per pi of pan travel
+    (YawMode::Explore: a sweep over what it has not looked at, sides of the path first);
+  - otherwise goes to home_yaw (YawMode::Home) or recentres (YawMode::Recentre).
+
+  The bins are bearings relative to the robot (the vision frame), not the world: a bearing seen a
+  while ago becomes stale again as the robot moves. Call it once per frame with increasing times.
+*/
+class YawHelper {
+public:
+  /*! \brief A helper for this camera (needs its image size) and rig; throws yawdepth::Error for bad options. */
+  YawHelper(const CameraModel &camera, const YawRig &rig, const YawHelperOptions &options = YawHelperOptions(),
+            const YawExploreOptions &explore = YawExploreOptions());
+  /*!
+    \brief The recommended yaw rate now.
+    \param t Time of this call (s), not before the previous call's.
+    \param yaw Current yaw reading (rad).
+    \param v_velocity Velocity of the vision frame's origin in the vision frame (m/s).
+    \param features The tracked features (may be empty: then it explores, or goes home).
+  */
+  YawRecommendation recommend(double t, double yaw, const Eigen::Vector3d &v_velocity,
+                              const std::vector<YawHelperFeature> &features);
+  /*! \brief Forgets where the camera has looked. */
+  void reset();
+  /*! \brief Staleness (0..1) of the view at yaw `yaw` at time t (the mean over its bins). */
+  double staleness(double t, double yaw) const;
+
+private:
+  std::pair<int, int> binsInView(double yaw) const;
+  CameraModel camera_;
+  YawRig rig_;
+  YawHelperOptions options_;
+  YawExploreOptions explore_;
+  double fov_left_ = 0, fov_right_ = 0; // bearings of the image's left / right edge off the optical axis (rad)
+  double bin_origin_ = 0;               // bearing of bin 0's lower edge (rad)
+  std::vector<double> last_seen_;       // per bin: time it was last in view (-inf: never)
+  double last_t_ = -std::numeric_limits<double>::infinity();
+};
 
 /*! \brief The parallax term P (px/s, weighted mean) of the features for a camera translating at c_T (m/s, camera frame). */
 double parallaxRate(const CameraModel &camera, const Eigen::Vector3d &c_T, const std::vector<YawHelperFeature> &features);
