@@ -21,4 +21,12 @@ for pose in 0 5; do
   [ -n "$t" ] && [ -n "$e" ] || { echo "servo_ibvs_4pts pose $pose: did not converge (true: '$t', estimated: '$e')" >&2; exit 1; }
   [ $((100 * e)) -le $((105 * t)) ] || { echo "servo_ibvs_4pts pose $pose: $e iterations against $t with true depth" >&2; exit 1; }
 done
-echo "2 passed, 0 failed"
+# The Pioneer with a pan head (vpSimulatorPioneerPan), front and side: within 1.05x of true depth.
+pioneer() { "$tmp/build/servo_pioneer_pan" --quiet "$@" | tail -1 | sed -n 's/^converged iterations=\([0-9]*\).*/\1/p'; }
+for scenario in front side; do
+  t=$(pioneer --depth true --scenario "$scenario")
+  e=$(pioneer --depth estimated --scenario "$scenario")
+  [ -n "$t" ] && [ -n "$e" ] || { echo "servo_pioneer_pan $scenario: did not converge (true: '$t', estimated: '$e')" >&2; exit 1; }
+  [ $((100 * e)) -le $((105 * t)) ] || { echo "servo_pioneer_pan $scenario: $e iterations against $t with true depth" >&2; exit 1; }
+done
+echo "3 passed, 0 failed"

@@ -8,7 +8,9 @@
 #include <random>
 #include <visp3/core/vpExponentialMap.h>
 #include <yawdepth/error.h>
+#include <visp3/robot/vpSimulatorPioneerPan.h>
 #include <yawdepth/servo/depth_provider.h>
+#include <yawdepth/servo/pioneer_pan.h>
 #include <yawdepth/servo/servo_simulation.h>
 #include <yawdepth/servo/yaw_helper.h>
 #include <yawdepth/simulation/scene.h>
@@ -160,6 +162,84 @@ TEST_CASE("depth provider: converges to the true depth on a side-view sequence",
     ++converged;
   }
   CHECK(converged >= 6);
+}
+
+TEST_CASE("depth provider: convergence is revoked when an estimate jumps, and comes back once it holds", "[servo]")
+{
+  const CameraModel camera = testCamera();
+  const YawRig rig(Eigen::Vector3d(-0.15, 0, 0));
+  SceneOptions so;
+  so.frames = 70;
+  so.step = 0.005;
+  so.yaw = M_PI / 2;
+  so.points = 12;
+  so.min_depth = 0.8;
+  so.max_depth = 2.0;
+  so.margin_px = 150;
+  so.noise = NoiseModel{0.2, 0.0003, 0.0002, 0.0002};
+  so.seed = 11;
+  const Scene scene = simulateScene(camera, rig, so);
+  auto frames = framesOf(scene);
+  // Two points seen in every frame, at the most different depths: from frame 30 on, the tracker
+  // follows the far one under the near one's id (it jumped to another corner).
+  const std::size_t last = scene.truth.size() - 1;
+  long near_id = -1, far_id = -1;
+  double near_z = 1e9, far_z = 0;
+  for (const Track &t : scene.tracks) {
+    if (t.observations.size() != scene.truth.size())
+      continue;
+    const double z = scene.cameraPoint(rig, t.id, last).z();
+    if (z < near_z) {
+      near_z = z;
+      near_id = t.id;
+    }
+    if (z > far_z) {
+      far_z = z;
+      far_id = t.id;
+    }
+  }
+  REQUIRE(near_id >= 0);
+  REQUIRE(far_z > 1.3 * near_z);
+  DepthProviderOptions o;
+  o.noise = NoiseModel{0.2, 0.0005, 0.0003, 0.0003};
+  DepthProvider p(camera, rig, o);
+  bool converged_before = false, revoked_after = false;
+  for (std::size_t r = 0; r < scene.measured.size(); ++r) {
+    auto obs = frames[scene.measured[r].frame];
+    if (r >= 30) {
+      vpImagePoint far_pixel;
+      for (const auto &ob : obs)
+        if (ob.first == far_id)
+          far_pixel = ob.second;
+      obs.erase(std::remove_if(obs.begin(), obs.end(), [&](const auto &ob) { return ob.first == far_id; }), obs.end());
+      for (auto &ob : obs)
+        if (ob.first == near_id)
+          ob.second = far_pixel;
+    }
+    p.update(scene.measured[r], obs);
+    if (r == 29)
+      converged_before = p.converged(near_id);
+    if (r >= 30 && p.info(near_id).revocations > 0 && !p.converged(near_id))
+      revoked_after = true;
+  }
+  CHECK(converged_before);
+  CHECK(revoked_after);
+  const FeatureDepth f = p.info(near_id);
+  INFO("near " << near_z << " far " << far_z << " depth " << f.depth << " sigma " << f.sigma);
+  CHECK(f.revocations >= 1);
+  // Back on the new point's depth once the estimate held still.
+  CHECK(f.converged);
+  CHECK(std::abs(f.depth - far_z) / far_z < 0.05);
+  // The points whose tracks stayed right were never revoked.
+  for (const Track &t : scene.tracks)
+    if (t.id != near_id && t.id != far_id)
+      CHECK(p.info(t.id).revocations == 0);
+  DepthProviderOptions bad;
+  bad.revoke_sigmas = 0;
+  CHECK_THROWS_AS(bad.validate(), Error);
+  bad = DepthProviderOptions();
+  bad.confirm_periods = 0;
+  CHECK_THROWS_AS(bad.validate(), Error);
 }
 
 TEST_CASE("depth provider: a 6-DoF camera (vpHomogeneousMatrix poses, an arm orbiting its target)", "[servo][6dof]")
@@ -384,6 +464,42 @@ TEST_CASE("yaw helper with memory: measures first, then explores unseen bearings
       b.parallax_floor = std::nan("");
     CHECK_THROWS_AS(YawHelper(camera, rig, o, b), Error);
   }
+}
+
+TEST_CASE("pioneer pan: the rig and odometry give vpSimulatorPioneerPan's camera pose", "[servo]")
+{
+  constexpr double kRoundOff = 1e-12;
+  vpSimulatorPioneerPan robot;
+  robot.setSamplingTime(0.04);
+  robot.setMaxTranslationVelocity(10);
+  robot.setMaxRotationVelocity(10);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  double x = 0, y = 0, theta = 0, q = 0; // the simulator's own integration, as odometry would do it
+  const YawRig rig = pioneerPanRig();
+  const vpHomogeneousMatrix oMw = pioneerPanWorld();
+  for (int k = 0; k < 200; ++k) {
+    vpColVector v(3);
+    v[0] = 0.5 * U(rng);
+    v[1] = 1.0 * U(rng);
+    v[2] = 1.5 * U(rng);
+    robot.setVelocity(vpRobot::ARTICULAR_FRAME, v);
+    x += 0.04 * v[0] * std::cos(theta);
+    y += 0.04 * v[0] * std::sin(theta);
+    theta += 0.04 * v[1];
+    q += 0.04 * v[2];
+    vpHomogeneousMatrix wMc_sim;
+    robot.getPosition(wMc_sim);
+    const vpHomogeneousMatrix expected = oMw * wMc_sim;
+    const vpHomogeneousMatrix got = wMc(rig, pioneerPanOdometry(x, y, theta, q));
+    for (unsigned i = 0; i < 3; ++i)
+      for (unsigned j = 0; j < 4; ++j)
+        REQUIRE(got[i][j] == Approx(expected[i][j]).margin(kRoundOff));
+  }
+  // The pan turns the camera about the vision frame's +Y (down): q > 0 looks right (+x).
+  const vpHomogeneousMatrix right = wMc(rig, pioneerPanOdometry(0, 0, 0, M_PI / 2));
+  CHECK(right[0][2] == Approx(1.0));
+  CHECK_THROWS_AS(pioneerPanOdometry(0, 0, std::nan(""), 0), Error);
 }
 
 TEST_CASE("pan robot: the camera Jacobian matches the kinematics", "[servo]")

@@ -45,6 +45,10 @@ void DepthProviderOptions::validate() const
     throw Error("depth provider: converged_relative_sigma must be finite and positive");
   if (!std::isfinite(release_factor) || release_factor < 1)
     throw Error("depth provider: release_factor must be at least 1");
+  if (!(std::isfinite(revoke_sigmas) && revoke_sigmas > 0))
+    throw Error("depth provider: revoke_sigmas must be finite and positive");
+  if (confirm_periods < 1)
+    throw Error("depth provider: confirm_periods must be at least 1");
   if (!finitePositive(min_depth) || !finitePositive(max_depth) || !(max_depth > min_depth))
     throw Error("depth provider: need 0 < min_depth < max_depth");
   if (!std::isfinite(min_translation) || min_translation < 0)
@@ -124,12 +128,34 @@ void DepthProvider::refresh(long id)
   f.estimate = std::numeric_limits<double>::quiet_NaN();
   f.estimate_sigma = std::numeric_limits<double>::quiet_NaN();
   bool use = false;
+  Consistency &c = consistency_[id];
   if (e.ok() && std::isfinite(e.c_P.z()) && e.c_P.z() > 0 && std::isfinite(e.sigmaZ())) {
     f.estimate = e.c_P.z();
     f.estimate_sigma = e.sigmaZ();
     const double rel = f.estimate_sigma / f.estimate;
     const double threshold = o_.converged_relative_sigma * (was_converged ? o_.release_factor : 1.0);
-    use = rel < threshold;
+    // The jump test: the last period's point, carried to this camera frame by the odometry.
+    const vpHomogeneousMatrix oMc = wMc(rig_, current_);
+    bool jumped = false;
+    if (c.has_prev) {
+      const vpColVector c_prev = oMc.inverse() * vpColVector({c.o_P_prev.x(), c.o_P_prev.y(), c.o_P_prev.z(), 1.0});
+      const double allowed = o_.revoke_sigmas * std::hypot(c.sigma_prev, f.estimate_sigma);
+      jumped = std::abs(f.estimate - c_prev[2]) > allowed;
+    }
+    const vpColVector o_P = oMc * vpColVector({e.c_P.x(), e.c_P.y(), e.c_P.z(), 1.0});
+    c.o_P_prev = Eigen::Vector3d(o_P[0], o_P[1], o_P[2]);
+    c.sigma_prev = f.estimate_sigma;
+    c.has_prev = true;
+    if (jumped) {
+      if (was_converged)
+        ++f.revocations;
+      c.wait = was_converged || c.wait > 0 ? o_.confirm_periods : 0;
+    } else if (c.wait > 0 && rel < threshold) {
+      --c.wait;
+    }
+    use = rel < threshold && !jumped && c.wait == 0;
+  } else {
+    c.has_prev = false;
   }
   f.converged = use;
   if (use) {

@@ -22,7 +22,12 @@
   - sigma(id): the 1-sigma uncertainty of depth(id) (m): the estimate's, or for the prior
     `prior_depth * prior_relative_sigma`.
   - status(id): the estimator's status word (ok, too_few_frames, degenerate, no_motion, ...).
-  - converged(id): whether depth(id) is the estimate (true) or the prior (false).
+  - converged(id): whether depth(id) is the estimate (true) or the prior (false). The estimate is
+    used once its relative sigma is below the threshold (the window estimator's sigma is consistent:
+    2-sigma coverage 0.93-0.97 in bench_accuracy), and revoked when it jumps between two periods by
+    more than `revoke_sigmas` combined sigmas; it is used again after `confirm_periods` periods
+    without a jump. Each feature is judged on its own sigma: with the window estimator the
+    features share the motion, so features seen as well converge together.
 
   The depth only matters when the interaction matrix is computed from the current features:
   use `task.setInteractionMatrixType(vpServo::CURRENT)` (or vpServo::MEAN). With vpServo::DESIRED
@@ -103,6 +108,12 @@ struct DepthProviderOptions {
   double prior_relative_sigma = 1.0;     //!< sigma(id) of the prior, relative to it (a guess: 100 %).
   double converged_relative_sigma = 0.10; //!< Use the estimate once sigma(Z)/Z is below this (10 %: IBVS tolerates such errors well).
   double release_factor = 2.0;           //!< Keep a converged estimate while sigma(Z)/Z < release_factor x the threshold.
+  /*! Revoke convergence when the estimate moves between two periods by more than this many
+      combined sigmas (sqrt(sigma_before^2 + sigma_now^2), the point carried through the odometry):
+      a consistent estimate does not jump; one that does (a restart, an outlier flipped) is not
+      trusted until it has held still again. */
+  double revoke_sigmas = 4.0;
+  int confirm_periods = 3;               //!< After a revocation, consistent periods needed before the estimate is used again (>= 1).
   double min_depth = 0.05;               //!< depth() never returns less (m); must be > 0.
   double max_depth = 100.0;              //!< depth() never returns more (m).
   double min_translation = 0.002;        //!< Feed the estimator once the camera moved this far (m).
@@ -131,6 +142,7 @@ struct FeatureDepth {
   Status status = Status::TooFewFrames; //!< The estimator's status.
   double estimate = std::numeric_limits<double>::quiet_NaN(); //!< The estimate at the current frame, converged or not (NaN unless status ok).
   double estimate_sigma = std::numeric_limits<double>::quiet_NaN(); //!< Its 1-sigma (m).
+  long revocations = 0; //!< Times convergence was revoked because the estimate jumped (see revoke_sigmas).
 };
 
 /*! \brief Depth of vpFeaturePoint's from the robot's odometry and the image motion (see the file). */
@@ -225,6 +237,13 @@ private:
   MotionSample last_fed_, current_;
   std::map<long, double> priors_;
   std::map<long, FeatureDepth> state_;
+  struct Consistency {                    // the last period's estimate, for the jump test
+    bool has_prev = false;
+    Eigen::Vector3d o_P_prev = Eigen::Vector3d::Zero(); // in the odometry world (m)
+    double sigma_prev = 0;                // its depth sigma (m)
+    int wait = 0;                         // periods still to hold still after a revocation
+  };
+  std::map<long, Consistency> consistency_;
 };
 
 } // namespace yawdepth
