@@ -44,7 +44,7 @@
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
 #include <yawdepth/refine/refine.h>
-#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/window/window_estimator.h>
 #include <yawdepth/simulation/scene.h>
 
 using namespace yawdepth;

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/window/window_estimator.h>
 #include <yawdepth/servo/yaw_helper.h>
 
 using namespace yawdepth;

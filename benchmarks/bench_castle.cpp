@@ -31,7 +31,7 @@
 
 #include <yawdepth/error.h>
 #include <yawdepth/features/klt_tracker.h>
-#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/window/window_estimator.h>
 
 using namespace yawdepth;
 

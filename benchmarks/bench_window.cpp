@@ -27,7 +27,7 @@
 
 #include <yawdepth/estimation/fused_estimator.h>
 #include <yawdepth/refine/refine.h>
-#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/window/window_estimator.h>
 #include <yawdepth/simulation/scene.h>
 
 using namespace yawdepth;

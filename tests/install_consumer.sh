@@ -9,6 +9,17 @@ cmake --install "$build" --prefix "$tmp/prefix" >/dev/null
 cmake -S "$src/tests/consumer" -B "$tmp/build" -DCMAKE_PREFIX_PATH="$tmp/prefix" -DCMAKE_BUILD_TYPE=Release \
   -DYAWDEPTH_EXAMPLES_DIR="$src/examples" >/dev/null
 cmake --build "$tmp/build" >/dev/null
+# A servo-only project: find_package(yawdepth COMPONENTS servo), no Ceres, apriltag or yaml-cpp.
+cmake -S "$src/tests/consumer_servo" -B "$tmp/build-servo" -DCMAKE_PREFIX_PATH="$tmp/prefix" \
+  -DCMAKE_BUILD_TYPE=Release -DYAWDEPTH_EXAMPLES_DIR="$src/examples" >"$tmp/servo-configure.log" ||
+  { cat "$tmp/servo-configure.log" >&2; exit 1; }
+cmake --build "$tmp/build-servo" >/dev/null
+# An unknown component is refused.
+mkdir -p "$tmp/bad"
+printf 'cmake_minimum_required(VERSION 3.16)\nproject(bad CXX)\nfind_package(yawdepth REQUIRED COMPONENTS nosuchmodule)\n' >"$tmp/bad/CMakeLists.txt"
+if cmake -S "$tmp/bad" -B "$tmp/build-bad" -DCMAKE_PREFIX_PATH="$tmp/prefix" >/dev/null 2>&1; then
+  echo "find_package(yawdepth COMPONENTS nosuchmodule) did not fail" >&2; exit 1
+fi
 "$tmp/build/consumer"
 test -x "$tmp/prefix/bin/yawdepth"
 "$tmp/prefix/bin/yawdepth" --help >/dev/null
@@ -22,11 +33,11 @@ for pose in 0 5; do
   [ $((100 * e)) -le $((105 * t)) ] || { echo "servo_ibvs_4pts pose $pose: $e iterations against $t with true depth" >&2; exit 1; }
 done
 # The Pioneer with a pan head (vpSimulatorPioneerPan), front and side: within 1.05x of true depth.
-pioneer() { "$tmp/build/servo_pioneer_pan" --quiet "$@" | tail -1 | sed -n 's/^converged iterations=\([0-9]*\).*/\1/p'; }
+pioneer() { "$tmp/build-servo/servo_pioneer_pan" --quiet "$@" | tail -1 | sed -n 's/^converged iterations=\([0-9]*\).*/\1/p'; }
 for scenario in front side; do
   t=$(pioneer --depth true --scenario "$scenario")
   e=$(pioneer --depth estimated --scenario "$scenario")
   [ -n "$t" ] && [ -n "$e" ] || { echo "servo_pioneer_pan $scenario: did not converge (true: '$t', estimated: '$e')" >&2; exit 1; }
   [ $((100 * e)) -le $((105 * t)) ] || { echo "servo_pioneer_pan $scenario: $e iterations against $t with true depth" >&2; exit 1; }
 done
-echo "3 passed, 0 failed"
+echo "5 passed, 0 failed"

@@ -10,11 +10,11 @@
 #include <random>
 #include <yawdepth/error.h>
 #include <yawdepth/refine/refine.h>
-#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/window/window_estimator.h>
 #include <yawdepth/simulation/scene.h>
 
 // The estimator's model with its analytic Jacobians (private to the module, header-only).
-#include "../modules/refine/src/window_model.h"
+#include "../modules/window/src/window_model.h"
 
 using namespace yawdepth;
 

@@ -5,7 +5,7 @@
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/refine/refine.h>
-#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/window/window_estimator.h>
 
 namespace yawdepth::cli {
 

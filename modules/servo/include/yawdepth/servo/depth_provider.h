@@ -72,7 +72,7 @@
 #include <yawdepth/estimation/fused_estimator.h>
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
-#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/window/window_estimator.h>
 
 namespace yawdepth {
 

@@ -9,7 +9,7 @@
 #include <limits>
 #include <string>
 #include <yawdepth/error.h>
-#include <yawdepth/refine/window_estimator.h>
+#include <yawdepth/window/window_estimator.h>
 
 namespace yawdepth {
 
