@@ -10,6 +10,9 @@
                        odometry (x, y, theta integrated from the measured v and wz) and pan reading
                        through yawdepth::pioneerPanOdometry(), and the noisy pixels.
 
+  --pose-api gives the provider the same odometry as a pose (DepthProvider::update(wMv, points, q),
+  the 6-DoF entry point) instead of a planar MotionSample.
+
   --scenario front: the square 1.4 m ahead, 0.15 m to the left, turned 15 degrees, the pan at 0.
   --scenario side:  the pan turned 60 degrees to the right, the square 1.1 m along the camera's axis
                     (the robot drives at 60 degrees to the line of sight: a side view).
@@ -57,7 +60,7 @@ void usage()
 {
   std::printf("usage: servo_pioneer_pan [--depth true|constant|estimated] [--scenario front|side]\n"
               "       [--constant-error E] [--seed N] [--sigma-px S] [--odom-noise R] [--pan-noise DEG]\n"
-              "       [--max-iterations N] [--quiet] [--verbose]\n");
+              "       [--max-iterations N] [--pose-api] [--quiet] [--verbose]\n");
 }
 
 struct Args {
@@ -66,6 +69,7 @@ struct Args {
   unsigned seed = 1;
   int max_iterations = 3000;
   bool quiet = false, verbose = false;
+  bool pose_api = false; // DepthProvider::update(wMv, points, yaw) instead of update(MotionSample, points)
 };
 
 Args parse(int argc, char **argv)
@@ -98,6 +102,8 @@ Args parse(int argc, char **argv)
       a.pan_noise_deg = std::stod(next());
     else if (o == "--max-iterations")
       a.max_iterations = std::stoi(next());
+    else if (o == "--pose-api")
+      a.pose_api = true;
     else if (o == "--quiet")
       a.quiet = true;
     else if (o == "--verbose")
@@ -224,7 +230,11 @@ int main(int argc, char **argv)
     // The features: x, y from the noisy pixels, Z from the chosen source.
     if (args.depth_mode == "estimated") {
       const double q_read = q_true + vpMath::rad(args.pan_noise_deg) * gauss(rng);
-      provider.update(yawdepth::pioneerPanOdometry(x_odo, y_odo, theta_odo, q_read), observed);
+      const yawdepth::MotionSample odometry = yawdepth::pioneerPanOdometry(x_odo, y_odo, theta_odo, q_read);
+      if (args.pose_api) // the same odometry as a pose (vision frame in the odometry world) and the pan reading
+        provider.update(yawdepth::wMv(odometry), observed, q_read);
+      else
+        provider.update(odometry, observed);
     }
     depth_error = depth_bias = 0.0;
     for (unsigned i = 0; i < 4; i++) {
