@@ -196,6 +196,40 @@ for m in fused window refine; do
   fi
 done
 
+# An observation no method can use (u = 1e308; v a million pixels off) is taken out and listed in
+# --outliers; its feature is estimated from the rest of its track, by every method.
+N="$W/noisy_fused"
+if [ -s "$N/tracks.csv" ]; then
+  awk -F, -v OFS=, 'NR == 1 { print; next } $2 == 3 && !a { $3 = "1e308"; a = 1 } $2 == 4 && !b { $4 = "-1e6"; b = 1 } { print }' \
+    "$N/tracks.csv" >"$N/tracks_bad.csv"
+  for m in exact paper fused window refine; do
+    run "$N.bad_$m" estimate --method "$m" --camera "$YML" --rig "$RIG" --motion "$N/motion.csv" \
+        --tracks "$N/tracks_bad.csv" --out "$N/bad_$m.csv" --outliers "$N/bad_out_$m.csv"
+    st=$(awk -F, '$1 == 3 || $1 == 4 { s = s $1 ":" $10 " " } END { print s }' "$N/bad_$m.csv" 2>/dev/null)
+    listed=$(awk -F, '($2 == 3 && $3 + 0 > 1e300) || ($2 == 4 && $4 + 0 < -1e5) { k++ } END { print k + 0 }' "$N/bad_out_$m.csv" 2>/dev/null)
+    if [ "$(rc_of "$N.bad_$m")" -eq 0 ] && [ "$st" = "3:ok 4:ok " ] && [ "$listed" -eq 2 ]; then
+      pass
+    else
+      fail "estimate $m with an unusable observation: exit $(rc_of "$N.bad_$m"), statuses '$st', listed $listed: $(first "$N.bad_$m.err")"
+    fi
+  done
+  # A noise model that is too tight for the data (no motion noise on dead-reckoned motion): fused
+  # rejects the observations and says so ("inconsistent"), never "too_few_frames" for long tracks.
+  run "$N.tight" estimate --method fused --camera "$YML" --rig "$RIG" --motion "$N/motion.csv" --tracks "$N/tracks.csv" \
+      --sigma-odom 0 --sigma-heading 0 --sigma-yaw 0
+  words=$(awk -F, 'NR > 1 { print $10 }' "$N.tight.out" | sort -u | paste -sd ' ')
+  long_few=$(awk -F, 'NR == FNR { if (FNR > 1) n[$2]++; next } FNR > 1 && $10 == "too_few_frames" && n[$1] >= 3 { k++ }
+                      END { print k + 0 }' "$N/tracks.csv" "$N.tight.out")
+  if [ "$(rc_of "$N.tight")" -eq 0 ] && [ "$long_few" -eq 0 ] && grep -q inconsistent "$N.tight.out" &&
+     [ ! -s "$N.tight.err" ]; then
+    pass
+  else
+    fail "estimate fused with a too tight noise model: exit $(rc_of "$N.tight"), statuses '$words', $long_few long tracks too_few_frames: $(first "$N.tight.err")"
+  fi
+else
+  fail "estimate: no noisy fused scene for the unusable-observation check"
+fi
+
 # ---------------------------------------------------------------------------
 # 2c. measure on rendered images: the paper's two images (chessboard) and an AprilTag board.
 PE="$W/paper_two"

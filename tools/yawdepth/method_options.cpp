@@ -2,6 +2,8 @@
 
 #include "commands.h"
 
+#include <cmath>
+
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/refine/refine.h>
@@ -72,9 +74,72 @@ NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
   return n;
 }
 
+namespace {
+
+/* An observation no estimator can use: not finite, more than an image size outside the image, or
+   outside what the lens model can undistort. */
+bool unusableObservation(const CameraModel &camera, const Observation &ob)
+{
+  if (!std::isfinite(ob.u) || !std::isfinite(ob.v))
+    return true;
+  if (camera.width() > 0 && camera.height() > 0) {
+    const double w = camera.width(), h = camera.height();
+    if (ob.u < -w || ob.u > 2 * w || ob.v < -h || ob.v > 2 * h)
+      return true;
+  }
+  Eigen::Vector2d m;
+  return !camera.undistort(Eigen::Vector2d(ob.u, ob.v), m);
+}
+
+} // namespace
+
 std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                                      const std::vector<Track> &tracks, const MethodArgs &args,
                                      std::vector<std::vector<bool>> &outliers, std::vector<MotionSample> *motion_estimate)
+{
+  // Observations that no method can use are taken out before estimation and reported as outliers:
+  // the feature is estimated from the rest (a track left with none keeps them all, and its method
+  // says why it failed).
+  std::vector<std::vector<bool>> unusable(tracks.size());
+  std::vector<Track> usable_tracks = tracks;
+  bool any_unusable = false;
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    unusable[i].assign(tracks[i].observations.size(), false);
+    Track kept;
+    kept.id = tracks[i].id;
+    for (std::size_t k = 0; k < tracks[i].observations.size(); ++k) {
+      unusable[i][k] = unusableObservation(camera, tracks[i].observations[k]);
+      if (!unusable[i][k])
+        kept.observations.push_back(tracks[i].observations[k]);
+    }
+    if (kept.observations.size() == tracks[i].observations.size() || kept.observations.empty()) {
+      unusable[i].assign(tracks[i].observations.size(), false);
+      continue;
+    }
+    any_unusable = true;
+    usable_tracks[i] = std::move(kept);
+  }
+  std::vector<PointEstimate> estimates =
+      runMethodOn(camera, rig, motion, any_unusable ? usable_tracks : tracks, args, outliers, motion_estimate);
+  if (any_unusable) { // the flags back onto the original observations
+    std::vector<std::vector<bool>> full(tracks.size());
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      full[i] = unusable[i];
+      std::size_t kept = 0;
+      for (std::size_t k = 0; k < tracks[i].observations.size(); ++k)
+        if (!unusable[i][k]) {
+          full[i][k] = i < outliers.size() && kept < outliers[i].size() && outliers[i][kept];
+          ++kept;
+        }
+    }
+    outliers = std::move(full);
+  }
+  return estimates;
+}
+
+std::vector<PointEstimate> runMethodOn(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                                       const std::vector<Track> &tracks, const MethodArgs &args,
+                                       std::vector<std::vector<bool>> &outliers, std::vector<MotionSample> *motion_estimate)
 {
   args.noise.validate();
   args.gates.validate();

@@ -65,6 +65,13 @@ std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &ri
                                      const std::vector<Track> &tracks, const MethodArgs &args,
                                      std::vector<std::vector<bool>> &outliers,
                                      std::vector<MotionSample> *motion_estimate = nullptr);
+/*! \brief runMethod() without taking out the observations no method can use (runMethod() does, and
+    reports them as outliers: not finite, more than an image size outside the image, or not
+    undistortable). */
+std::vector<PointEstimate> runMethodOn(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                                       const std::vector<Track> &tracks, const MethodArgs &args,
+                                       std::vector<std::vector<bool>> &outliers,
+                                       std::vector<MotionSample> *motion_estimate = nullptr);
 
 /*! \brief The observations flagged in `outliers`, as tracks (for --outliers). */
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers);

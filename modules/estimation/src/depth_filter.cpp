@@ -239,6 +239,7 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
     // the diffuse depth prior, whose linearisation cannot judge it.
     if (it == 0 && inliers_ >= 2 && !(nu.dot(S_inv * nu) <= o_.outlier_chi2)) {
       ++outliers_;
+      ++rejected_;
       if (++consecutive_outliers_ >= o_.max_consecutive_outliers)
         return restartAt(*m, *m_cov);
       predictOnly();
@@ -288,7 +289,8 @@ PointEstimate DepthFilter::estimate(const YawRig &rig) const
   e.frame = frame_;
   e.parallax_px = parallax_px_;
   if (!initialized_ || inliers_ < 2) {
-    e.status = Status::TooFewFrames;
+    // Enough observations, all rejected: say so, not "too few frames".
+    e.status = initialized_ && rejected_ > 0 ? Status::Inconsistent : Status::TooFewFrames;
     return e;
   }
   if (!(baseline_ >= o_.gates.min_baseline)) {

@@ -21,6 +21,8 @@ const char *toString(Status s)
     return "undistort_failed";
   case Status::Unavailable:
     return "unavailable";
+  case Status::Inconsistent:
+    return "inconsistent";
   }
   return "unknown";
 }
@@ -28,7 +30,7 @@ const char *toString(Status s)
 Status statusFromString(const std::string &word)
 {
   for (Status s : {Status::Ok, Status::Degenerate, Status::Behind, Status::NoMotion, Status::TooFewFrames,
-                   Status::UndistortFailed, Status::Unavailable})
+                   Status::UndistortFailed, Status::Unavailable, Status::Inconsistent})
     if (word == toString(s))
       return s;
   throw Error("unknown status word '" + word + "'");

@@ -152,6 +152,7 @@ private:
   Eigen::Vector4d s_ = Eigen::Vector4d::Zero();
   Eigen::Matrix4d P_ = Eigen::Matrix4d::Zero();
   int inliers_ = 0, outliers_ = 0, consecutive_outliers_ = 0;
+  long rejected_ = 0; // observations rejected since the filter was created (restarts included)
   // Geometry since the first observation: its bearing rotated into the current frame, and the
   // first optical centre in the current frame (for the parallax and baseline gates).
   Eigen::Vector3d anchor_bearing_ = Eigen::Vector3d::UnitZ();

@@ -36,7 +36,11 @@ enum class Status {
   NoMotion,        //!< "no_motion": the camera did not translate (baseline below the gate).
   TooFewFrames,    //!< "too_few_frames": the feature was seen in fewer than two frames.
   UndistortFailed, //!< "undistort_failed": a pixel lies outside the distortion model's valid range.
-  Unavailable      //!< "unavailable": the method is not built in (e.g. Ceres missing).
+  Unavailable,     //!< "unavailable": the method is not built in (e.g. Ceres missing).
+  /*! "inconsistent": seen in enough frames, but its observations disagree with each other under the
+      noise model (every one after the first rejected as an outlier): the noise model is too tight
+      for the data, or the track is not one point. */
+  Inconsistent
 };
 
 /*! \brief The status word used in files: "ok", "degenerate", "behind", "no_motion", ... */
