@@ -230,6 +230,26 @@ else
   fail "estimate: no noisy fused scene for the unusable-observation check"
 fi
 
+# A motion row that no motion can be (z = 1e6 m, a heading or yaw of 1e9 rad) is refused with the
+# row named, by estimate, measure and track; nothing is written.
+N="$W/noisy_fused"
+for col in z heading yaw; do
+  awk -F, -v OFS=, -v c="$col" 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == c) k = i; print; next }
+                               NR == 6 { $k = ($k ~ /./ && c == "z") ? "1e6" : "1e9" } { print }' \
+    "$N/motion.csv" >"$N/motion_jump_$col.csv"
+  run "$N.jump_$col" estimate --method exact --camera "$YML" --rig "$RIG" --motion "$N/motion_jump_$col.csv" \
+      --tracks "$N/tracks.csv" --out "$N/jump_$col.csv"
+  if [ "$(rc_of "$N.jump_$col")" -ne 0 ] && [ ! -e "$N/jump_$col.csv" ] && [ "$(lines_of "$N.jump_$col.err")" -eq 1 ] &&
+     grep -q "the row of frame" "$N.jump_$col.err"; then
+    pass
+  else
+    fail "estimate with a motion jump in $col: exit $(rc_of "$N.jump_$col"): $(first "$N.jump_$col.err")"
+  fi
+done
+run "$N.jump_track" track --camera "$YML" --rig "$RIG" --motion "$N/motion_jump_z.csv" --out "$N/jump_track.csv"
+[ "$(rc_of "$N.jump_track")" -ne 0 ] && [ ! -e "$N/jump_track.csv" ] && grep -q "the row of frame" "$N.jump_track.err" &&
+  pass || fail "track with a motion jump: exit $(rc_of "$N.jump_track"): $(first "$N.jump_track.err")"
+
 # ---------------------------------------------------------------------------
 # 2c. measure on rendered images: the paper's two images (chessboard) and an AprilTag board.
 PE="$W/paper_two"

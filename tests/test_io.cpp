@@ -153,6 +153,43 @@ TEST_CASE("motion log: fixture with images resolved against the CSV folder", "[i
   CHECK(m.indexOf(17) == -1);
 }
 
+TEST_CASE("motion log: steps no motion can make are refused, wraps and pauses are not", "[io][motion]")
+{
+  MotionLog log;
+  for (long k = 0; k < 20; ++k) {
+    MotionSample s;
+    s.frame = k;
+    s.z = 0.02 * k;
+    s.heading = std::remainder(3.0 + 0.05 * k, 2 * M_PI); // wraps from +pi to -pi on the way
+    s.yaw = 0.01 * k;
+    log.samples.push_back(s);
+  }
+  CHECK_NOTHROW(checkMotionSteps(log, "m.csv"));
+  // A robot that stands still, then drives 0.8 m in one step: below the 1 m floor.
+  MotionLog still = log;
+  for (MotionSample &s : still.samples)
+    s.z = 0;
+  still.samples[10].z = 0.8;
+  CHECK_NOTHROW(checkMotionSteps(still, "m.csv"));
+  const auto refused = [&](void (*edit)(MotionSample &), const char *word) {
+    MotionLog bad = log;
+    edit(bad.samples[7]);
+    try {
+      checkMotionSteps(bad, "m.csv");
+      FAIL("accepted");
+    } catch (const Error &e) {
+      const std::string what = e.what();
+      CHECK(what.find("m.csv: the row of frame 7") != std::string::npos);
+      CHECK(what.find(word) != std::string::npos);
+    }
+  };
+  refused([](MotionSample &s) { s.z = 1e6; }, "glitch");
+  refused([](MotionSample &s) { s.x = 25.0; }, "glitch"); // 1000 times the 2 cm median step is 20 m
+  refused([](MotionSample &s) { s.heading = 1e9; }, "heading");
+  refused([](MotionSample &s) { s.yaw = -20.0; }, "yaw");
+  refused([](MotionSample &s) { s.z = std::nan(""); }, "glitch");
+}
+
 TEST_CASE("motion log: round trip is exact to the bit", "[io][motion]")
 {
   TempDir dir;

@@ -55,6 +55,7 @@ Runner addEstimate(CLI::App &app)
     const RigFile rig_file = readRigFile(args->rig);
     const YawRig rig = rigOf(rig_file);
     MotionLog motion = readMotionCsv(args->motion, rig_file.yaw, args->input.limits());
+    checkMotionSteps(motion, args->motion);
     applyRigFile(rig_file, motion.samples);
     const std::vector<Track> tracks = readTracksCsv(args->tracks, args->input.limits());
     checkTracksAgainstMotion(tracks, motion, args->tracks);

@@ -74,6 +74,7 @@ Runner addMeasure(CLI::App &app)
     const RigFile rig_file = readRigFile(a->rig);
     const YawRig rig = rigOf(rig_file);
     MotionLog motion = readMotionCsv(a->motion, rig_file.yaw, a->input.limits());
+    checkMotionSteps(motion, a->motion);
     applyRigFile(rig_file, motion.samples);
     if (motion.images.empty())
       throw Error(a->motion + ": no 'image' column: measure needs the image of each frame");

@@ -96,6 +96,7 @@ Runner addTrack(CLI::App &app)
       rig_file = readRigFile(a->rig);
     const YawRig rig = rigOf(rig_file);
     MotionLog motion = readMotionCsv(a->motion, rig_file.yaw, a->input.limits());
+    checkMotionSteps(motion, a->motion);
     applyRigFile(rig_file, motion.samples);
     {
       std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <sstream>
+#include <vector>
 #include <tuple>
 #include <yawdepth/error.h>
 #include <yawdepth/io/files.h>
@@ -98,6 +100,50 @@ void writeTracksCsv(const std::string &path, const std::vector<Track> &tracks)
     out += '\n';
   }
   writeFileAtomically(path, out);
+}
+
+void checkMotionSteps(const MotionLog &motion, const std::string &motion_path)
+{
+  const std::vector<MotionSample> &m = motion.samples;
+  if (m.size() < 2)
+    return;
+  std::vector<double> steps;
+  steps.reserve(m.size() - 1);
+  for (std::size_t k = 1; k < m.size(); ++k)
+    steps.push_back((m[k].position() - m[k - 1].position()).norm());
+  std::vector<double> sorted; // the finite steps (a non-finite one is refused below)
+  for (double d : steps)
+    if (std::isfinite(d))
+      sorted.push_back(d);
+  double median = 0;
+  if (!sorted.empty()) {
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+    median = sorted[sorted.size() / 2];
+  }
+  constexpr double kMaxRatio = 1000, kMinJump = 1.0, kMinScale = 0.01;
+  const double limit = std::max(kMinJump, kMaxRatio * std::max(median, kMinScale));
+  for (std::size_t k = 1; k < m.size(); ++k) {
+    const std::string where = motion_path + ": the row of frame " + std::to_string(m[k].frame);
+    const double step = steps[k - 1];
+    if (!(step <= limit)) {
+      std::ostringstream msg;
+      msg << where << " is " << step << " m from the previous row, over " << limit
+          << " m (1000 times the log's median step of " << median << " m): a glitch in the log?";
+      throw Error(msg.str());
+    }
+    const double dyaw = std::abs(m[k].yaw - m[k - 1].yaw);
+    const double dheading = m[k].six_dof ? 0.0 : std::abs(m[k].heading - m[k - 1].heading);
+    // One wrap of the angle (+pi to -pi: a difference up to 2 pi + pi) is a reading's convention;
+    // beyond, the reading jumped.
+    constexpr double kMaxTurn = 3 * M_PI;
+    if (!(dyaw <= kMaxTurn) || !(dheading <= kMaxTurn)) {
+      std::ostringstream msg;
+      msg << where << " turns the " << (dyaw > kMaxTurn ? "yaw" : "heading") << " by "
+          << (dyaw > kMaxTurn ? dyaw : dheading)
+          << " rad from the previous row: more than a wrap of the angle plus half a turn, not a reading of one motion";
+      throw Error(msg.str());
+    }
+  }
 }
 
 } // namespace yawdepth

@@ -93,6 +93,20 @@ std::vector<Track> readTracksCsv(const std::string &path, const InputLimits &lim
 void checkTracksAgainstMotion(const std::vector<Track> &tracks, const MotionLog &motion,
                               const std::string &tracks_path);
 
+/*!
+  \brief Refuse a motion log with a step that no motion between two frames can be: throws
+  yawdepth::Error naming the first such row.
+
+  A step is refused when the vision frame moved more than 1 m and more than 1000 times the log's
+  median step (at least 1 cm: a log that mostly stands still), or when the heading or the yaw
+  reading changed by more than 3 pi (one wrap of the angle, +pi to -pi, plus half a turn: a rotation
+  of more than half a turn between two frames cannot be told from its opposite). Such a row is a
+  glitch of the log (a wrong unit, a corrupted number); estimating through it gives numbers that
+  look valid and are not.
+  \param motion The log. \param motion_path Its name, for the message.
+*/
+void checkMotionSteps(const MotionLog &motion, const std::string &motion_path);
+
 /*! \brief One output row: a feature id and its estimate. */
 struct PointRow {
   long id = 0;             //!< Feature id, as in the tracks file.
