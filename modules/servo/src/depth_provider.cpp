@@ -218,6 +218,8 @@ void DepthProvider::update(const MotionSample &odometry, const std::vector<std::
   for (auto it = last_seen_.begin(); it != last_seen_.end();) {
     if (frames_used_ - it->second > o_.max_missing_frames) {
       window_->forget(it->first);
+      consistency_.erase(it->first);
+      state_.erase(it->first); // forgotten: depth(id) is the prior again, and memory stays bounded
       it = last_seen_.erase(it);
     } else {
       ++it;
