@@ -464,6 +464,14 @@ TEST_CASE("yaw helper with memory: measures first, then explores unseen bearings
       b.parallax_floor = std::nan("");
     CHECK_THROWS_AS(YawHelper(camera, rig, o, b), Error);
   }
+  // A pan range no joint has would need an unbounded memory: refused.
+  YawHelperOptions wide = o;
+  wide.min_yaw = -1e9;
+  wide.max_yaw = 1e9;
+  CHECK_THROWS_AS(YawHelper(camera, rig, wide), Error);
+  YawExploreOptions fine;
+  fine.bin = 1e-4;
+  CHECK_NOTHROW(YawHelper(camera, rig, o, fine)); // 4 rad / 1e-4 rad: within the bound
 }
 
 TEST_CASE("pioneer pan: the rig and odometry give vpSimulatorPioneerPan's camera pose", "[servo]")

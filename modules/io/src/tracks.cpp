@@ -123,11 +123,11 @@ void checkMotionSteps(const MotionLog &motion, const std::string &motion_path)
   constexpr double kMaxRatio = 1000, kMinJump = 1.0, kMinScale = 0.01;
   const double limit = std::max(kMinJump, kMaxRatio * std::max(median, kMinScale));
   for (std::size_t k = 1; k < m.size(); ++k) {
-    const std::string where = motion_path + ": the row of frame " + std::to_string(m[k].frame);
+    const auto where = [&]() { return motion_path + ": the row of frame " + std::to_string(m[k].frame); };
     const double step = steps[k - 1];
     if (!(step <= limit)) {
       std::ostringstream msg;
-      msg << where << " is " << step << " m from the previous row, over " << limit
+      msg << where() << " is " << step << " m from the previous row, over " << limit
           << " m (1000 times the log's median step of " << median << " m): a glitch in the log?";
       throw Error(msg.str());
     }
@@ -138,7 +138,7 @@ void checkMotionSteps(const MotionLog &motion, const std::string &motion_path)
     constexpr double kMaxTurn = 3 * M_PI;
     if (!(dyaw <= kMaxTurn) || !(dheading <= kMaxTurn)) {
       std::ostringstream msg;
-      msg << where << " turns the " << (dyaw > kMaxTurn ? "yaw" : "heading") << " by "
+      msg << where() << " turns the " << (dyaw > kMaxTurn ? "yaw" : "heading") << " by "
           << (dyaw > kMaxTurn ? dyaw : dheading)
           << " rad from the previous row: more than a wrap of the angle plus half a turn, not a reading of one motion";
       throw Error(msg.str());

@@ -53,6 +53,12 @@ double parallaxRate(const CameraModel &camera, const Eigen::Vector3d &c_T, const
 
 namespace {
 
+/* The rate law: toward `target` at gain x the error, within +-max_rate. */
+double rateToward(const YawHelperOptions &o, double yaw, double target)
+{
+  return std::clamp(o.gain * (target - yaw), -o.max_rate, o.max_rate);
+}
+
 struct Candidate {
   double yaw = 0;
   double parallax = 0;    // translational flow now, panning toward the candidate (px/s)
@@ -122,7 +128,7 @@ Candidate evaluate(const Scene &sc, double target, const YawHelperOptions &o)
     if (sc.weights[i] > 0 && sc.in_view_now[i] && !inImage(camera, sc.valid_radius, sc.rig.cameraPoint(target, sc.v_points[i]), o.margin_px, &uv))
       c.keeps = false;
   }
-  const double rate0 = std::clamp(o.gain * (target - sc.yaw), -o.max_rate, o.max_rate);
+  const double rate0 = rateToward(o, sc.yaw, target);
   c.parallax = parallaxRate(camera, sc.rig.vRc(sc.yaw).transpose() * centreVelocity(sc.rig, sc.yaw, rate0, sc.v_velocity),
                             sc.features);
   // Played forward: the pan under the recommended rate law, the robot at its velocity.
@@ -131,7 +137,7 @@ Candidate evaluate(const Scene &sc, double target, const YawHelperOptions &o)
   std::vector<double> info(sc.v_points.size(), 0.0);
   double yaw = sc.yaw;
   for (int s = 1; s <= o.steps; ++s) {
-    const double rate = std::clamp(o.gain * (target - yaw), -o.max_rate, o.max_rate);
+    const double rate = rateToward(o, yaw, target);
     yaw = std::clamp(yaw + rate * dt, o.min_yaw, o.max_yaw);
     const Eigen::Vector3d v_origin = sc.v_velocity * (s * dt);
     const Eigen::Matrix3d cRv = sc.rig.vRc(yaw).transpose();
@@ -214,7 +220,7 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
   const bool measured = std::all_of(features.begin(), features.end(), [](const YawHelperFeature &f) { return f.weight == 0; });
   if (measured && std::isfinite(options.home_yaw)) { // nothing left to learn here: back to the home view
     r.target_yaw = std::clamp(options.home_yaw, lo, hi);
-    r.rate = std::clamp(options.gain * (r.target_yaw - yaw), -options.max_rate, options.max_rate);
+    r.rate = rateToward(options, yaw, r.target_yaw);
     r.parallax_target = r.parallax_now;
     r.information_target = now.information;
     r.mode = YawMode::Home;
@@ -251,7 +257,7 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
   if (best != &cands.front() && (now.keeps || !any_keeps) && score(now) >= best_score - options.switch_margin)
     best = &cands.front();
   r.target_yaw = best->yaw;
-  r.rate = std::clamp(options.gain * (r.target_yaw - yaw), -options.max_rate, options.max_rate);
+  r.rate = rateToward(options, yaw, r.target_yaw);
   r.parallax_target = best->parallax;
   r.information_target = best->information;
   r.feasible = any_keeps;
@@ -298,6 +304,10 @@ YawHelper::YawHelper(const CameraModel &camera, const YawRig &rig, const YawHelp
     throw Error("yaw helper: the camera's field of view does not span any bearing about the pan axis");
   bin_origin_ = options_.min_yaw + fov_left_;
   const double span = options_.max_yaw + fov_right_ - bin_origin_;
+  // A pan joint turns at most a few times around; the memory and each call's scan are bounded.
+  constexpr double kMaxBins = 1e5;
+  if (!(options_.max_yaw - options_.min_yaw <= 4 * M_PI) || !(span / explore_.bin <= kMaxBins))
+    throw Error("yaw helper: the pan range must be at most 4 pi and hold at most 100000 exploration bins");
   last_seen_.assign(static_cast<std::size_t>(std::ceil(span / explore_.bin)) + 1,
                     -std::numeric_limits<double>::infinity());
 }
@@ -347,9 +357,6 @@ YawRecommendation YawHelper::recommend(double t, double yaw, const Eigen::Vector
     if (r.mode == YawMode::Measure)
       return r;
   }
-  const auto rateTo = [&](double target) {
-    return std::clamp(options_.gain * (target - yaw), -options_.max_rate, options_.max_rate);
-  };
   if (explore_.enabled) {
     // The view with the most stale parallax within the joint's range; among about equal ones, the nearest.
     constexpr double kNearness = 0.05; // value traded per pi of pan travel
@@ -376,14 +383,14 @@ YawRecommendation YawHelper::recommend(double t, double yaw, const Eigen::Vector
     }
     if (best_stale >= explore_.min_stale && best_stale > 0) {
       r.target_yaw = best_yaw;
-      r.rate = rateTo(best_yaw);
+      r.rate = rateToward(options_, yaw, best_yaw);
       r.mode = YawMode::Explore;
       return r;
     }
   }
   if (std::isfinite(options_.home_yaw)) {
     r.target_yaw = options_.home_yaw;
-    r.rate = rateTo(options_.home_yaw);
+    r.rate = rateToward(options_, yaw, options_.home_yaw);
     r.mode = YawMode::Home;
     return r;
   }
