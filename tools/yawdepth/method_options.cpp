@@ -101,7 +101,7 @@ std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &ri
   // the feature is estimated from the rest (a track left with none keeps them all, and its method
   // says why it failed).
   std::vector<std::vector<bool>> unusable(tracks.size());
-  std::vector<Track> usable_tracks = tracks;
+  std::vector<Track> usable_tracks; // a copy only when some observation has to go
   bool any_unusable = false;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     unusable[i].assign(tracks[i].observations.size(), false);
@@ -116,6 +116,8 @@ std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &ri
       unusable[i].assign(tracks[i].observations.size(), false);
       continue;
     }
+    if (!any_unusable)
+      usable_tracks = tracks;
     any_unusable = true;
     usable_tracks[i] = std::move(kept);
   }
