@@ -3,6 +3,7 @@
   \brief Camera calibration: OpenCV's Brown model, ViSP's two models, diagnostics.
 */
 #include "board_pose.h"
+#include "text.h"
 
 #include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/camera/camera_file.h>
@@ -38,16 +39,10 @@ namespace yawdepth {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using calibration_detail::fixed;
+using calibration_detail::kDeg;
+using calibration_detail::num;
 
-std::string fmt(double v, int precision = 3)
-{
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
 
 std::string oneLine(std::string s)
 {
@@ -344,7 +339,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
     model = Distortion::K5;
 
   auto degenerateMessage = [&](double spread, std::size_t n) {
-    return "degenerate views: the board's orientation varies by only " + fmt(spread / kDeg, 1) + " deg over the " +
+    return "degenerate views: the board's orientation varies by only " + fixed(spread / kDeg, 1) + " deg over the " +
            std::to_string(n) + " views (all fronto-parallel or all tilted alike); the focal length cannot be "
            "told from the distance: tilt the board 20 to 45 degrees in different directions";
   };
@@ -567,18 +562,18 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
       result.models[pick].chosen = true;
       model = pick == 0 ? Distortion::K4 : pick == 1 ? Distortion::K5 : Distortion::K8;
       std::ostringstream why;
-      why << result.models[pick].name << ": expected error over the image " << fmt(result.models[pick].score_px, 4)
+      why << result.models[pick].name << ": expected error over the image " << fixed(result.models[pick].score_px, 4)
           << " px";
       bool first = true;
       for (std::size_t i = 0; i < result.models.size(); ++i)
         if (i != pick) {
           why << (first ? " against " : ", ")
-              << (result.models[i].inadmissible.empty() ? fmt(result.models[i].score_px, 4) : std::string("not usable"))
+              << (result.models[i].inadmissible.empty() ? fixed(result.models[i].score_px, 4) : std::string("not usable"))
               << " (" << result.models[i].coefficients << " coefficients)";
           first = false;
         }
       if (pick != best)
-        why << "; the simpler model is within " << fmt(100 * options.simpler_within, 0) << " % of the best";
+        why << "; the simpler model is within " << fixed(100 * options.simpler_within, 0) << " % of the best";
       result.model_reason = why.str();
     }
   } else {
@@ -658,7 +653,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
         result.views[i].used = false;
         result.views[i].outlier = true;
         result.notes.push_back(result.views[i].name + ": outlier view dropped (RMS " +
-                               fmt(result.views[i].rms_px) + " px against a median of " + fmt(median) + " px)");
+                               fixed(result.views[i].rms_px) + " px against a median of " + fixed(median) + " px)");
       }
     used = kept;
   }
@@ -707,11 +702,11 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
     result.notes.push_back("only " + std::to_string(result.views_used) +
                            " views used: 10 to 20 views give more reliable parameters");
   if (result.coverage < 0.6)
-    result.notes.push_back("the corners cover only " + fmt(100 * result.coverage, 0) +
+    result.notes.push_back("the corners cover only " + fixed(100 * result.coverage, 0) +
                            " % of the image: the distortion is poorly known where there are none (see the coverage picture)");
   for (const auto &v : result.views)
     if (v.outlier && v.used)
-      result.notes.push_back(v.name + ": outlier view (RMS " + fmt(v.rms_px) + " px); --drop-outliers recalibrates without it");
+      result.notes.push_back(v.name + ": outlier view (RMS " + fixed(v.rms_px) + " px); --drop-outliers recalibrates without it");
 
   // ViSP's two models, fitted by vpCalibration as ViSP's calibration tool does, from OpenCV's result.
   if (options.fit_visp) {
@@ -912,13 +907,13 @@ cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<Ca
     for (int cy = 0; cy < 6; ++cy)
       for (int cx = 0; cx < 8; ++cx) {
         const double s = calibration.uncertainty_grid[static_cast<std::size_t>(cy) * 8 + cx];
-        const std::string t = std::isfinite(s) ? fmt(s, s < 0.1 ? 3 : 2) : std::string("inf");
+        const std::string t = std::isfinite(s) ? fixed(s, s < 0.1 ? 3 : 2) : std::string("inf");
         const cv::Scalar col = !(s < 0.1) ? cv::Scalar(0, 0, 200) : s < 0.05 ? cv::Scalar(0, 140, 0) : cv::Scalar(0, 120, 220);
         cv::putText(img, t, cv::Point(cx * w / 8 + 4, (cy + 1) * h / 6 - 6), cv::FONT_HERSHEY_SIMPLEX, 0.8 * scale, col, 1,
                     cv::LINE_AA);
       }
   const std::string text = std::to_string(calibration.views_used) + " views, coverage " +
-                           fmt(100 * calibration.coverage, 0) + " % (shaded: no corner); per cell: projection 1-sigma (px)";
+                           fixed(100 * calibration.coverage, 0) + " % (shaded: no corner); per cell: projection 1-sigma (px)";
   cv::putText(img, text, cv::Point(8, static_cast<int>(20 * scale / 0.4)), cv::FONT_HERSHEY_SIMPLEX, scale,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return img;

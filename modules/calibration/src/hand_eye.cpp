@@ -6,6 +6,7 @@
 #include <yawdepth/calibration/hand_eye.h>
 
 #include "board_pose.h"
+#include "text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -23,7 +24,10 @@ namespace yawdepth {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using calibration_detail::fixed;
+using calibration_detail::kDeg;
+using calibration_detail::num;
+
 constexpr int kPoseParams = 12; // X: translation (3), rotation vector (3); Y: the same; then 6 per view
 
 using Iso = Eigen::Isometry3d;
@@ -41,7 +45,7 @@ Iso perturbed(const Iso &T0, const double *p)
   return T;
 }
 
-struct Problem {
+struct HandEyeProblem {
   const CameraModel *camera = nullptr;
   bool in_hand = true;
   std::vector<Iso> rMe;                               // per view: the measured hand pose
@@ -130,21 +134,7 @@ struct Problem {
   }
 };
 
-std::string num(double v)
-{
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
 
-std::string fixed(double v, int precision)
-{
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
 
 /* The best Y for a given X: the average over views of X cMo_i's board pose seen through A_i
    (Y_i = A_i^-1 X cMo_i), rotations averaged by their rotation vectors about the first. */
@@ -181,7 +171,7 @@ HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout
 
   HandEyeCalibration out;
   out.setup = options.setup;
-  Problem pb;
+  HandEyeProblem pb;
   pb.camera = &camera;
   std::vector<Iso> cMo0;
   std::vector<vpHomogeneousMatrix> visp_cMo, visp_B;

@@ -6,6 +6,7 @@
 #include <yawdepth/calibration/rig_calibration.h>
 
 #include "board_pose.h"
+#include "text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,26 +21,15 @@ namespace yawdepth {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using calibration_detail::fixed;
+using calibration_detail::kDeg;
+using calibration_detail::num;
+
 constexpr int kParams = 11;
 // Parameter layout.
 enum { P_AX = 0, P_AZ, P_TX, P_TZ, P_DELTA, P_PSI, P_ALPHA, P_GAMMA, P_BX, P_BY, P_BZ };
 
-std::string fmt(double v, int precision)
-{
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
 
-std::string num(double v)
-{
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
 
 Eigen::Matrix3d rotX(double a)
 {
@@ -72,7 +62,7 @@ Eigen::Isometry3d vMc(const Eigen::Vector3d &axis, double theta, const Eigen::Ve
   return M;
 }
 
-struct Problem {
+struct RigProblem {
   const CameraModel *camera = nullptr;
   std::vector<Eigen::Isometry3d> v0Mv;                   // vision frame of each view in the first one
   std::vector<double> readings;                          // yaw readings
@@ -150,7 +140,7 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
 {
   const std::map<long, Eigen::Vector3d> pts = calibration_detail::boardPoints(board);
 
-  Problem pb;
+  RigProblem pb;
   pb.camera = &camera;
   std::vector<Eigen::Isometry3d> cMb0; // per view, from its own pose estimate
   std::vector<MotionSample> samples;
@@ -187,11 +177,11 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
       ++out.distinct_yaws;
   out.yaw_span = yaws.back() - yaws.front();
   if (out.distinct_yaws < options.min_distinct_yaws || out.yaw_span < options.min_yaw_span)
-    throw Error("yaw readings span only " + fmt(out.yaw_span / kDeg, 1) + " deg over " +
+    throw Error("yaw readings span only " + fixed(out.yaw_span / kDeg, 1) + " deg over " +
                 std::to_string(out.distinct_yaws) + " distinct value(s) in the " + std::to_string(n) +
                 " usable views: the camera offset and the yaw axis need at least " +
                 std::to_string(options.min_distinct_yaws) + " distinct yaws spanning " +
-                fmt(options.min_yaw_span / kDeg, 0) + " deg");
+                fixed(options.min_yaw_span / kDeg, 0) + " deg");
 
   // Robot poses.
   const Eigen::Isometry3d wMv0 = isoWMV(samples.front());
@@ -399,7 +389,7 @@ std::string rigCalibrationYaml(const RigCalibration &rig)
   auto vec = [](const Eigen::Vector3d &v) { return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]"; };
   std::ostringstream s;
   s << "# yawdepth calibrate-rig: " << rig.views << " views, " << rig.points << " points, yaw readings spanning "
-    << fmt(rig.yaw_span / kDeg, 1) << " deg, reprojection RMS " << fmt(rig.rms_px, 3) << " px\n";
+    << fixed(rig.yaw_span / kDeg, 1) << " deg, reprojection RMS " << fixed(rig.rms_px, 3) << " px\n";
   s << "# camera_offset: optical centre in the vision frame at yaw 0 (m); its component along the\n"
        "# yaw axis is not observable and was kept at its initial value (sigma 0)\n";
   s << "camera_offset: " << vec(rig.camera_offset) << "\n";
