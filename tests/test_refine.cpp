@@ -530,6 +530,45 @@ TEST_CASE("depthCramerRao matches a brute-force Fisher information; joint <= per
   CHECK(std::isnan(depthCramerRao(camera, rig, s.truth, one, s.w_points, noise, true)[0]));
 }
 
+TEST_CASE("depthCramerRao on a long log whose points each see a few frames (the banded solve) matches brute force",
+          "[refine][crlb][long]")
+{
+  // A robot driving past a wall for 80 frames, each point seen for at most half of them: the motion's
+  // information is a band (pointCovariances' sparse Cholesky path), which must give the same
+  // bound as the inverse of the whole Fisher information.
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  const NoiseModel noise = issueNoise();
+  SceneOptions so;
+  so.frames = 80;
+  so.step = 0.05;
+  so.yaw = 60 * kDeg;
+  so.seed = 7;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  for (int i = 0; i < 30; ++i)
+    so.world_points.emplace_back(1.5 + 1.0 * U(rng), -0.2 + 0.4 * U(rng), 1.0 + 3.5 * U(rng));
+  const Scene s = simulateScene(camera, rig, so);
+  std::vector<Track> tracks;
+  std::vector<Eigen::Vector3d> points;
+  std::size_t longest = 0;
+  for (std::size_t i = 0; i < s.tracks.size(); ++i)
+    if (s.tracks[i].observations.size() >= 2) {
+      tracks.push_back(s.tracks[i]);
+      points.push_back(s.w_points[static_cast<std::size_t>(s.tracks[i].id)]);
+      longest = std::max(longest, s.tracks[i].observations.size());
+    }
+  REQUIRE(tracks.size() >= 12);
+  INFO("longest track " << longest << " frames");
+  REQUIRE(2 * longest < 80); // the band holds under half of the motion
+  const std::vector<double> joint = depthCramerRao(camera, rig, s.truth, tracks, points, noise, true);
+  const std::vector<double> brute = bruteForceCrlb(camera, rig, s.truth, tracks, points, noise);
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    REQUIRE(std::isfinite(joint[i]));
+    CHECK(joint[i] == Approx(brute[i]).epsilon(1e-4));
+  }
+}
+
 TEST_CASE("refine converges without initial estimates on a side-view scene", "[refine][init]")
 {
   if (unavailableChecked())

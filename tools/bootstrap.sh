@@ -45,9 +45,15 @@ stage() { echo "== bootstrap: $*" >&2; }
 # A developer's own tree (plain cmake) compiles file by file, as usual.
 unity=(-DCMAKE_UNITY_BUILD=ON)
 
-build() {
+configure() {
   cmake -S "$here" -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_EXPORT_COMPILE_COMMANDS=ON "${unity[@]}" >/dev/null
-  cmake --build "$build_dir" -j "$jobs"
+}
+
+compile() { cmake --build "$build_dir" -j "$jobs"; }
+
+build() {
+  configure
+  compile
 }
 
 demo() {
@@ -189,13 +195,18 @@ timed() {
 }
 
 # The whole suite. A failed build stops it (nothing to test); a failed test stage does not: every
-# stage runs, and the closing line counts them all. Two pairs of stages run side by side, because a
-# test stage leaves a core idle while its longest tests finish: the Release tests with the
-# sanitizer build, and the sanitizer tests with clang-tidy.
+# stage runs, and the closing line counts them all. Stages run side by side so that no core idles:
+# clang-tidy needs only the configured tree's compile commands, so it starts at once, at a lower
+# priority (nice), and takes the cores whenever a build or test stage leaves one idle (a link, the
+# last large file of a build, the longest tests); the Release tests run beside the sanitizer build.
 test_all() {
   local t0=$SECONDS rc_release=0 rc_asan_build=0 rc_asan_tests=0 rc_tidy=0
   install_missing
-  timed "Release build" build || { echo "0 passed, 1 failed (the Release build failed)"; return 1; }
+  configure
+  timed "clang-tidy" nice -n 10 bash -c "$(declare -p here build_dir jobs analyzed_modules); $(declare -f run_clang_tidy); run_clang_tidy" \
+    >"$build_dir/clang-tidy.out" 2>&1 &
+  local pid_tidy=$!
+  timed "Release build" compile || { wait "$pid_tidy" || true; echo "0 passed, 1 failed (the Release build failed)"; return 1; }
 
   timed "Release tests" run_tests >"$build_dir/release-tests.out" 2>&1 &
   local pid_release=$!
@@ -207,17 +218,15 @@ test_all() {
   count_ctest "$build_dir"
 
   if [ "$rc_asan_build" -eq 0 ]; then
-    timed "sanitizer tests" run_sanitized_tests >"$asan_dir/sanitizer-tests.out" 2>&1 &
-    local pid_asan=$!
-    timed "clang-tidy" run_clang_tidy || rc_tidy=$?
-    wait "$pid_asan" || rc_asan_tests=$?
+    timed "sanitizer tests" run_sanitized_tests >"$asan_dir/sanitizer-tests.out" 2>&1 || rc_asan_tests=$?
     cat "$asan_dir/sanitizer-tests.out"
     count_ctest "$asan_dir"
     if timed "fuzzing (${fuzz_seconds} s per target)" run_fuzzers; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
   else
     failed=$((failed + 2))
-    timed "clang-tidy" run_clang_tidy || rc_tidy=$?
   fi
+  wait "$pid_tidy" || rc_tidy=$?
+  cat "$build_dir/clang-tidy.out" >&2
   if [ "$rc_tidy" -eq 0 ]; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
   if timed "doxygen" run_doxygen; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
   echo "== bootstrap: the whole suite took $((SECONDS - t0)) s" >&2

@@ -154,6 +154,7 @@ Runner addMeasure(CLI::App &app)
     std::vector<std::vector<bool>> flags;
     MethodArgs method = a->method;
     method.noise = noiseForLog(a->method, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
+    method.progress = !a->quiet;
     std::vector<MotionSample> motion_estimate;
     const std::vector<PointEstimate> estimates =
         runMethod(camera, rig, motion.samples, tracks, method, flags, &motion_estimate);

@@ -3,6 +3,8 @@
 #include "commands.h"
 
 #include <cmath>
+#include <cstdio>
+#include <unistd.h>
 
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
@@ -64,6 +66,9 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
                   "refine and window: observations with a larger reprojection error are flagged as outliers (px)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option("--threads", args.threads, "refine: threads of the solver (Ceres)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
 }
 
 NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
@@ -90,6 +95,48 @@ bool unusableObservation(const CameraModel &camera, const Observation &ob)
   Eigen::Vector2d m;
   return !camera.undistort(Eigen::Vector2d(ob.u, ob.v), m);
 }
+
+/* refine's progress on a terminal: one line, rewritten at most once a second, from the first report
+   after 2 s (a short solve prints nothing); ended by a newline when the object goes. Not on a pipe
+   or a file: a caller capturing stderr gets one line per problem, not a progress bar. */
+class ProgressLine {
+public:
+  explicit ProgressLine(bool wanted) : active_(wanted && isatty(STDERR_FILENO)) {}
+  ~ProgressLine()
+  {
+    if (printed_)
+      std::fputc('\n', stderr);
+  }
+  ProgressLine(const ProgressLine &) = delete;
+  ProgressLine &operator=(const ProgressLine &) = delete;
+
+  std::function<void(const RefineProgress &)> callback()
+  {
+    if (!active_)
+      return {};
+    return [this](const RefineProgress &p) {
+      if (p.seconds < 2.0 || p.seconds < last_ + 1.0)
+        return;
+      last_ = p.seconds;
+      const char *stage = p.stage == RefineProgress::Stage::RobustSolve  ? "robust solve"
+                          : p.stage == RefineProgress::Stage::FinalSolve ? "final solve"
+                                                                         : "covariances";
+      if (p.stage == RefineProgress::Stage::Covariance)
+        std::fprintf(stderr, "\rrefine: %d points x %d frames, %s ... (%.0f s)%20s", p.points, p.frames, stage, p.seconds,
+                     "");
+      else
+        std::fprintf(stderr, "\rrefine: %d points x %d frames, %s, iteration %d, cost %.6g (%.0f s)%8s", p.points,
+                     p.frames, stage, p.iteration, p.cost, p.seconds, "");
+      std::fflush(stderr);
+      printed_ = true;
+    };
+  }
+
+private:
+  bool active_;
+  bool printed_ = false;
+  double last_ = 0;
+};
 
 } // namespace
 
@@ -179,6 +226,9 @@ std::vector<PointEstimate> runMethodOn(const CameraModel &camera, const YawRig &
     ro.gates = args.gates;
     ro.robust_threshold_px = args.robust_px;
     ro.outlier_threshold_px = args.outlier_px;
+    ro.threads = args.threads;
+    ProgressLine line(args.progress);
+    ro.progress = line.callback();
     RefineResult r = refineWindow(camera, rig, motion, tracks, estimates, ro);
     estimates = std::move(r.points);
     outliers = std::move(r.outliers);

@@ -20,6 +20,8 @@ struct MethodArgs {
   GateOptions gates;
   double robust_px = 1.0;
   double outlier_px = 2.0;
+  int threads = 1;      // refine: Ceres threads (--threads)
+  bool progress = true; // refine: a progress line on a terminal's stderr for solves over 2 s (off with --quiet)
 };
 
 /*! \brief Register the motion's noise options (--sigma-odom, --sigma-heading, --sigma-rot, --motion-noise,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <ceres/ceres.h>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -174,6 +175,30 @@ struct State {
   std::vector<std::array<double, 7>> frames;
 };
 
+/* RefineOptions::progress after every solver iteration. */
+class ProgressCallback : public ceres::IterationCallback {
+public:
+  ProgressCallback(const std::function<void(const RefineProgress &)> &report, const RefineProgress &base,
+                   std::chrono::steady_clock::time_point start)
+      : report_(report), base_(base), start_(start)
+  {
+  }
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary &summary) override
+  {
+    RefineProgress p = base_;
+    p.iteration = summary.iteration;
+    p.cost = summary.cost;
+    p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    report_(p);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+private:
+  const std::function<void(const RefineProgress &)> &report_;
+  RefineProgress base_;
+  std::chrono::steady_clock::time_point start_;
+};
+
 class Refiner {
 public:
   Refiner(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
@@ -212,6 +237,7 @@ private:
   Eigen::Vector3d t0v_;
   const YawRig &rig_;
   double t0_[3];
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   bool poses_free_ = false, yaws_free_ = false;
   Model model_; // the chain, mount, reference orientations and motion priors (refine_model.h)
   State state_;
@@ -548,6 +574,16 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
   so.parameter_tolerance = robust ? 1e-6 : 1e-8;
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
+  std::unique_ptr<ProgressCallback> callback;
+  if (o_.progress) {
+    RefineProgress base;
+    base.stage = robust ? RefineProgress::Stage::RobustSolve : RefineProgress::Stage::FinalSolve;
+    base.frames = static_cast<int>(motion_.size());
+    for (const TrackData &t : data_)
+      base.points += t.active ? 1 : 0;
+    callback = std::make_unique<ProgressCallback>(o_.progress, base, start_);
+    so.callbacks.push_back(callback.get());
+  }
   ceres::Solve(so, &problem, &summary);
   return summary;
 }
@@ -607,6 +643,15 @@ RefineResult Refiner::run()
   std::vector<Eigen::Matrix3d> cov;
   std::vector<int> index(data_.size(), -1);
   if (o_.compute_covariance) {
+    if (o_.progress) {
+      RefineProgress p;
+      p.stage = RefineProgress::Stage::Covariance;
+      p.frames = static_cast<int>(motion_.size());
+      for (const TrackData &t : data_)
+        p.points += t.active ? 1 : 0;
+      p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+      o_.progress(p);
+    }
     Model m = model_;
     for (const auto &f : state_.frames) {
       m.poses.push_back({f[0], f[1], f[2], f[3], model_.general ? f[4] : 0.0, model_.general ? f[5] : 0.0});

@@ -4,6 +4,8 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <limits>
 #include <numeric>
@@ -219,6 +221,64 @@ OdometryMeasurement measuredIncrement(const MotionSample &prev, const MotionSamp
 
 namespace {
 
+/* The motion's information S (symmetric, n x n) as it is summed: dense, or only its lower band
+   (S(i, j) for 0 <= i - j <= band) when every coupling is that near the diagonal, as in a long log
+   whose points each see a few frames (the motion columns are in frame order). Entries are added
+   for both (i, j) and (j, i); the band keeps the lower one. */
+class MotionInformation {
+public:
+  MotionInformation(int n, int band) : band_(band)
+  {
+    if (band_ < 0)
+      dense_ = Eigen::MatrixXd::Zero(n, n);
+    else
+      lower_ = Eigen::MatrixXd::Zero(band_ + 1, n);
+  }
+  bool banded() const { return band_ >= 0; }
+  void add(int i, int j, double v)
+  {
+    if (band_ < 0)
+      dense_(i, j) += v;
+    else if (i >= j)
+      lower_(i - j, j) += v;
+  }
+  /* The dense matrix (banded: filled from the band). Leaves this object empty. */
+  Eigen::MatrixXd takeDense()
+  {
+    if (band_ >= 0) {
+      const Eigen::Index n = lower_.cols();
+      dense_ = Eigen::MatrixXd::Zero(n, n);
+      for (Eigen::Index j = 0; j < n; ++j)
+        for (Eigen::Index d = 0; d <= band_ && j + d < n; ++d)
+          dense_(j + d, j) = dense_(j, j + d) = lower_(d, j);
+      lower_.resize(0, 0);
+    }
+    return std::move(dense_);
+  }
+  /* The lower triangle as a sparse matrix (banded only). */
+  Eigen::SparseMatrix<double> lowerSparse() const
+  {
+    const Eigen::Index n = lower_.cols();
+    Eigen::SparseMatrix<double> L(n, n);
+    L.reserve(Eigen::VectorXi::Constant(n, band_ + 1));
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (Eigen::Index d = 0; d <= band_ && j + d < n; ++d)
+        if (lower_(d, j) != 0.0)
+          L.insert(j + d, j) = lower_(d, j);
+    L.makeCompressed();
+    return L;
+  }
+
+private:
+  int band_;
+  Eigen::MatrixXd dense_, lower_;
+};
+
+/* The banded form from this many motion parameters on (about 60 frames), when the widest coupling
+   spans under half of them: its factorisation then costs at most what the dense one does, and its
+   memory grows with frames x band instead of frames^2. */
+constexpr int kBandedMinParameters = 300;
+
 template <int PD>
 void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &cov, std::vector<char> &ok)
 {
@@ -232,13 +292,13 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
   ok.assign(np, 0);
 
   // Motion-only information: the odometry and yaw priors.
-  Eigen::MatrixXd Hprior = Eigen::MatrixXd::Zero(nl, nl);
+  std::vector<Eigen::Triplet<double>> prior; // (i, j, value), summed
   if (m.poses_free && m.absolute) {
     for (int row = 0; row < m.rows(); ++row)
       for (int j = 0; j < PD; ++j) {
         const int i = m.poseIndex(row, j);
         if (i >= 0)
-          Hprior(i, i) += m.pose_priors[row].inv_sigma[j] * m.pose_priors[row].inv_sigma[j];
+          prior.emplace_back(i, i, m.pose_priors[row].inv_sigma[j] * m.pose_priors[row].inv_sigma[j]);
       }
   } else if (m.poses_free) {
     for (int row = 1; row < m.rows(); ++row) {
@@ -264,30 +324,82 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
       for (int a = 0; a < 2 * PD; ++a)
         for (int b = 0; b < 2 * PD; ++b)
           if (idx[a] >= 0 && idx[b] >= 0)
-            Hprior(idx[a], idx[b]) += JtJ(a, b);
+            prior.emplace_back(idx[a], idx[b], JtJ(a, b));
     }
   }
   if (m.yaws_free)
     for (int row = 0; row < m.rows(); ++row)
-      Hprior(m.yawIndex(row), m.yawIndex(row)) += m.inv_sigma_yaw * m.inv_sigma_yaw;
+      prior.emplace_back(m.yawIndex(row), m.yawIndex(row), m.inv_sigma_yaw * m.inv_sigma_yaw);
 
   // Observations grouped by point.
   std::vector<std::vector<int>> by_point(np);
   for (int i = 0; i < static_cast<int>(m.observations.size()); ++i)
     by_point[m.observations[i].point].push_back(i);
 
+  // Each point's information is kept over the motion columns it touches only (cols[p], sorted):
+  // Hpl[p] is 3 x |cols[p]|, and its Schur complement on the motion goes into S over those columns.
+  // A point seen in a few of many frames then costs what its own observations cost, not the size
+  // of the whole motion (with dense 3 x nl and nl x nl blocks per point, a long log's cost grew
+  // with points x frames^2).
   std::vector<Eigen::Matrix3d> Hpp(np, Eigen::Matrix3d::Zero());
   std::vector<Eigen::MatrixXd> Hpl(np);
+  std::vector<std::vector<int>> cols(np);
   std::vector<Eigen::Matrix3d> Hpp_inv(np, Eigen::Matrix3d::Constant(kNaN));
-  Eigen::MatrixXd Hll = Hprior;          // joint: every observation's motion information
-  Eigen::MatrixXd Hll_i(nl, nl);         // per point: that point's only
-  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(nl, nl);
+  std::vector<int> where(static_cast<std::size_t>(nl), -1); // global motion column -> position in cols[p]
+  // The motion columns in frame order (each row's pose, then its yaw): S's order, in which a point
+  // couples only the columns of the frames it sees and the priors only neighbouring frames.
+  std::vector<int> pos(static_cast<std::size_t>(nl), -1);
+  {
+    int next = 0;
+    for (int row = 0; row < m.rows(); ++row) {
+      for (int j = 0; j < PD; ++j)
+        if (const int c = m.poseIndex(row, j); c >= 0)
+          pos[static_cast<std::size_t>(c)] = next++;
+      if (const int c = m.yawIndex(row); c >= 0)
+        pos[static_cast<std::size_t>(c)] = next++;
+    }
+    if (next != nl || std::count(pos.begin(), pos.end(), -1) > 0)
+      std::iota(pos.begin(), pos.end(), 0);
+  }
+  int band = 0; // the widest coupling between two motion columns, in that order
+  for (const auto &t : prior)
+    band = std::max(band, std::abs(pos[static_cast<std::size_t>(t.row())] - pos[static_cast<std::size_t>(t.col())]));
+  for (int p = 0; p < np; ++p) {
+    std::vector<int> &cp = cols[p];
+    for (int oi : by_point[p])
+      for (int c : motionColumns<PD>(m, m.anchor_row[p], m.observations[oi].row))
+        if (c >= 0)
+          cp.push_back(c);
+    std::sort(cp.begin(), cp.end());
+    cp.erase(std::unique(cp.begin(), cp.end()), cp.end());
+    int lo = nl, hi = -1;
+    for (int c : cp) {
+      lo = std::min(lo, pos[static_cast<std::size_t>(c)]);
+      hi = std::max(hi, pos[static_cast<std::size_t>(c)]);
+    }
+    band = std::max(band, hi - lo);
+  }
+  // joint: S = Hprior + the sum over points of (Hll_p - schur_p); per point: Hprior, dense.
+  MotionInformation S(nl, joint && nl >= kBandedMinParameters && 2 * band < nl ? band : -1);
+  for (const auto &t : prior)
+    S.add(pos[static_cast<std::size_t>(t.row())], pos[static_cast<std::size_t>(t.col())], t.value());
+  Eigen::MatrixXd Hprior; // per point: in the motion's own order (S was dense, so pos is unused there)
+  if (!joint) {
+    S = MotionInformation(nl, -1);
+    for (const auto &t : prior)
+      S.add(t.row(), t.col(), t.value());
+    Hprior = S.takeDense();
+  }
   std::vector<Eigen::MatrixXd> Sigma_ll_point(joint ? 0 : np);
 
   for (int p = 0; p < np; ++p) {
-    Hpl[p] = Eigen::MatrixXd::Zero(3, nl);
-    Hll_i.setZero();
     const int ra = m.anchor_row[p];
+    const std::vector<int> &cp = cols[p];
+    const int k = static_cast<int>(cp.size());
+    for (int i = 0; i < k; ++i)
+      where[static_cast<std::size_t>(cp[i])] = i;
+    Hpl[p] = Eigen::MatrixXd::Zero(3, k);
+    Eigen::MatrixXd Hll_p = Eigen::MatrixXd::Zero(k, k);
     for (int oi : by_point[p]) {
       const ModelObservation &o = m.observations[oi];
       Eigen::Matrix<double, 2, kLocal> J = Eigen::Matrix<double, 2, kLocal>::Zero();
@@ -306,17 +418,22 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
         J.row(1) = r[1].derivatives().transpose();
       }
       const std::array<int, kLocal> col = motionColumns<PD>(m, ra, o.row);
+      std::array<int, kLocal> loc;
+      for (int b = 0; b < kLocal; ++b)
+        loc[b] = col[b] >= 0 ? where[static_cast<std::size_t>(col[b])] : -1;
       const Eigen::Matrix<double, kLocal, kLocal> JtJ = J.transpose() * J;
       Hpp[p] += JtJ.template topLeftCorner<3, 3>();
       for (int b = 3; b < kLocal; ++b) {
-        if (col[b] < 0)
+        if (loc[b] < 0)
           continue;
-        Hpl[p].col(col[b]) += JtJ.template block<3, 1>(0, b);
+        Hpl[p].col(loc[b]) += JtJ.template block<3, 1>(0, b);
         for (int a = 3; a < kLocal; ++a)
-          if (col[a] >= 0)
-            Hll_i(col[a], col[b]) += JtJ(a, b);
+          if (loc[a] >= 0)
+            Hll_p(loc[a], loc[b]) += JtJ(a, b);
       }
     }
+    for (int c : cp)
+      where[static_cast<std::size_t>(c)] = -1;
     // A numerically singular point information: no estimate for that point.
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(Hpp[p]);
     const Eigen::Vector3d &ev = es.eigenvalues();
@@ -324,29 +441,43 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
       continue;
     ok[p] = 1;
     Hpp_inv[p] = es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-    const Eigen::MatrixXd schur = Hpl[p].transpose() * Hpp_inv[p] * Hpl[p];
+    const Eigen::MatrixXd reduced = Hll_p - Hpl[p].transpose() * Hpp_inv[p] * Hpl[p];
     if (joint) {
-      Hll += Hll_i;
-      S -= schur;
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i < k; ++i)
+          S.add(pos[static_cast<std::size_t>(cp[i])], pos[static_cast<std::size_t>(cp[j])], reduced(i, j));
     } else if (nl > 0) {
-      Eigen::MatrixXd Si = Hprior + Hll_i - schur;
+      Eigen::MatrixXd Si = Hprior;
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i < k; ++i)
+          Si(cp[i], cp[j]) += reduced(i, j);
       Si = 0.5 * (Si + Si.transpose());
       Sigma_ll_point[p] = Si.llt().solve(Eigen::MatrixXd::Identity(nl, nl));
     }
   }
+  // The motion's covariance: dense, S^-1 whole; banded, S's sparse Cholesky factor L (natural
+  // order: the band has no fill outside itself), and each point's B S^-1 B^T = |L^-1 B^T|^2 below.
   Eigen::MatrixXd Sigma_ll;
-  if (joint && nl > 0) {
-    S += Hll;
-    S = 0.5 * (S + S.transpose());
-    Eigen::LLT<Eigen::MatrixXd> llt(S);
-    if (llt.info() == Eigen::Success)
-      Sigma_ll = llt.solve(Eigen::MatrixXd::Identity(nl, nl));
-    else
-      Sigma_ll = S.completeOrthogonalDecomposition().pseudoInverse();
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> sparse_llt;
+  bool use_sparse = false;
+  if (joint && nl > 0 && S.banded()) {
+    sparse_llt.compute(S.lowerSparse());
+    use_sparse = sparse_llt.info() == Eigen::Success;
+  }
+  if (joint && nl > 0 && !use_sparse) {
+    Eigen::MatrixXd Sd = S.takeDense();
+    Sd = 0.5 * (Sd + Sd.transpose());
+    Eigen::LLT<Eigen::MatrixXd> llt(Sd);
+    if (llt.info() == Eigen::Success) {
+      Sigma_ll = Eigen::MatrixXd::Identity(nl, nl);
+      llt.solveInPlace(Sigma_ll);
+    } else
+      Sigma_ll = Sd.completeOrthogonalDecomposition().pseudoInverse();
   }
 
   // Each point's camera-frame position at its report row, c_P = q / rho, and its covariance
-  // G_p Hpp^-1 G_p^T + B Sigma_ll B^T with B = G_l - G_p Hpp^-1 Hpl.
+  // G_p Hpp^-1 G_p^T + B Sigma_ll B^T with B = G_l - G_p Hpp^-1 Hpl, over the point's motion
+  // columns and its report row's.
   for (int p = 0; p < np; ++p) {
     if (!ok[p])
       continue;
@@ -359,16 +490,39 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
       const AD c = q[i] / x.x[2];
       G.row(i) = c.derivatives().transpose();
     }
-    const std::array<int, kLocal> col = motionColumns<PD>(m, ra, rk);
     const Eigen::Matrix3d Gp = G.template leftCols<3>();
     Eigen::Matrix3d C = Gp * Hpp_inv[p] * Gp.transpose();
     if (nl > 0) {
-      Eigen::MatrixXd B = -(Gp * Hpp_inv[p]) * Hpl[p];
+      // B's columns: the point's own, then its report row's that it does not already touch.
+      const std::array<int, kLocal> col = motionColumns<PD>(m, ra, rk);
+      std::vector<int> cb = cols[p];
+      for (int b = 3; b < kLocal; ++b)
+        if (col[b] >= 0 && !std::binary_search(cols[p].begin(), cols[p].end(), col[b]))
+          cb.push_back(col[b]);
+      const int kb = static_cast<int>(cb.size());
+      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3, kb);
+      B.leftCols(static_cast<Eigen::Index>(cols[p].size())) = -(Gp * Hpp_inv[p]) * Hpl[p];
       for (int b = 3; b < kLocal; ++b)
         if (col[b] >= 0)
-          B.col(col[b]) += G.col(b);
-      const Eigen::MatrixXd &Sll = joint ? Sigma_ll : Sigma_ll_point[p];
-      C += B * Sll * B.transpose();
+          B.col(std::find(cb.begin(), cb.end(), col[b]) - cb.begin()) += G.col(b);
+      if (use_sparse) {
+        Eigen::MatrixXd Bt = Eigen::MatrixXd::Zero(nl, 3);
+        for (int i = 0; i < kb; ++i)
+          Bt.row(pos[static_cast<std::size_t>(cb[i])]) = B.col(i).transpose();
+        if (sparse_llt.permutationP().size() > 0) // none with the natural order; kept general
+          Bt = sparse_llt.permutationP() * Bt;
+        sparse_llt.matrixL().solveInPlace(Bt);
+        C += Bt.transpose() * Bt;
+      } else {
+        // joint: Sigma_ll is in S's (frame) order; per point: in the motion's own.
+        const Eigen::MatrixXd &Sll = joint ? Sigma_ll : Sigma_ll_point[p];
+        auto at = [&](int c) { return joint ? pos[static_cast<std::size_t>(c)] : c; };
+        Eigen::MatrixXd Ssub(kb, kb);
+        for (int j = 0; j < kb; ++j)
+          for (int i = 0; i < kb; ++i)
+            Ssub(i, j) = Sll(at(cb[i]), at(cb[j]));
+        C += B * Ssub * B.transpose();
+      }
     }
     cov[p] = 0.5 * (C + C.transpose());
     if (!cov[p].allFinite())

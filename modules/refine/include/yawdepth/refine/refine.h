@@ -45,12 +45,29 @@
   is false and refineWindow() returns status `unavailable` for every point.
 */
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/estimation/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {
+
+/*! \brief Where a refineWindow() call is, for a progress line on long solves (RefineOptions::progress). */
+struct RefineProgress {
+  /*! \brief The step under way. */
+  enum class Stage {
+    RobustSolve, //!< the Cauchy-loss solve (iteration and cost are the solver's)
+    FinalSolve,  //!< the least-squares solve on the inliers
+    Covariance   //!< every point's covariance (called once, before it starts)
+  };
+  Stage stage = Stage::RobustSolve; //!< the step under way
+  int iteration = 0;                //!< solver iteration within the step (0: its start)
+  double cost = 0;                  //!< the solver's cost at that iteration (0 for Covariance)
+  double seconds = 0;               //!< wall-clock time since refineWindow() started (s)
+  int points = 0;                   //!< points taking part in the solve
+  int frames = 0;                   //!< motion-log rows
+};
 
 /*! \brief Options of refineWindow(). */
 struct RefineOptions {
@@ -60,7 +77,10 @@ struct RefineOptions {
   double outlier_threshold_px = 2.0; //!< Observations with a larger reprojection error are flagged (px).
   int max_iterations = 50;           //!< Ceres iterations per solve.
   bool compute_covariance = true;    //!< Compute each point's covariance (sigma_zc).
-  int threads = 1;                   //!< Ceres threads.
+  int threads = 1;                   //!< Ceres threads (the Jacobians and the linear solves).
+  /*! Called as refine goes: after each solver iteration and before the covariances, on the
+      calling thread; empty (the default): not called. The library itself never prints. */
+  std::function<void(const RefineProgress &)> progress;
 };
 
 /*! \brief Result of refineWindow(). */
