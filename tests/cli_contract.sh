@@ -196,6 +196,19 @@ for m in fused window refine; do
   fi
 done
 
+# refine --threads: the same points with 2 solver threads as with 1 (to the printed digits, within
+# the solver's tolerance); 0 threads is refused. No progress line when stderr is not a terminal.
+N="$W/noisy_refine"
+run "$N.t2" estimate --method refine --threads 2 --camera "$YML" --rig "$RIG" --motion "$N/motion.csv" --tracks "$N/tracks.csv"
+res=$(compare_points "$N.t2.out" "$N/points.csv" 1e-6 0.9)
+if [ "$(rc_of "$N.t2")" -eq 0 ] && [ ! -s "$N.t2.err" ]; then
+  case $res in OK*) pass ;; *) fail "refine --threads 2 differs from 1 thread: $(echo "$res" | head -n 2 | tr '\n' ';')" ;; esac
+else
+  fail "refine --threads 2: exit $(rc_of "$N.t2"), stderr: $(first "$N.t2.err")"
+fi
+run "$N.t0" estimate --method refine --threads 0 --camera "$YML" --rig "$RIG" --motion "$N/motion.csv" --tracks "$N/tracks.csv"
+[ "$(rc_of "$N.t0")" -ne 0 ] && grep -q -- '--threads' "$N.t0.err" && pass || fail "refine --threads 0 accepted"
+
 # An observation no method can use (u = 1e308; v a million pixels off) is taken out and listed in
 # --outliers; its feature is estimated from the rest of its track, by every method.
 N="$W/noisy_fused"

@@ -560,9 +560,18 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
 
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_SCHUR;
-  const int motion_parameters = model_.motionParameters();
-  if (motion_parameters > 400 && ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE))
-    so.linear_solver_type = ceres::SPARSE_SCHUR;
+  // (model_ holds the chain and priors, not the rows: count the blocks of the problem itself.)
+  const int motion_parameters = static_cast<int>(state_.frames.size()) * blockSize();
+  // Over 400 motion parameters (80 frames), the reduced system of a log whose points each see a
+  // part of it is sparse: a sparse Cholesky (SuiteSparse when Ceres has it, else Eigen's, which
+  // Debian's Ceres has) instead of a dense one whose cost grows with frames^3.
+  if (motion_parameters > 400)
+    for (const auto library : {ceres::SUITE_SPARSE, ceres::EIGEN_SPARSE, ceres::CX_SPARSE})
+      if (ceres::IsSparseLinearAlgebraLibraryTypeAvailable(library)) {
+        so.linear_solver_type = ceres::SPARSE_SCHUR;
+        so.sparse_linear_algebra_library_type = library;
+        break;
+      }
   so.linear_solver_ordering = ordering;
   so.max_num_iterations = o_.max_iterations;
   so.num_threads = std::max(1, o_.threads);
