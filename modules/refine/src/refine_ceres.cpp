@@ -563,9 +563,18 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
   // (model_ holds the chain and priors, not the rows: count the blocks of the problem itself.)
   const int motion_parameters = static_cast<int>(state_.frames.size()) * blockSize();
   // Over 400 motion parameters (80 frames), the reduced system of a log whose points each see a
-  // part of it is sparse: a sparse Cholesky (SuiteSparse when Ceres has it, else Eigen's, which
-  // Debian's Ceres has) instead of a dense one whose cost grows with frames^3.
-  if (motion_parameters > 400)
+  // part of it is sparse: a sparse Cholesky (SuiteSparse when Ceres has it, else Eigen's) instead of
+  // a dense one whose cost grows with frames^3. When the points span most of the log on average,
+  // the reduced system is dense anyway and the dense Cholesky is the faster (measured: 1000 points
+  // in 100 frames, 10.2 s against 11.7 s).
+  long span_sum = 0, spans = 0;
+  for (const TrackData &t : data_)
+    if (t.active && !t.rows.empty()) {
+      span_sum += *std::max_element(t.rows.begin(), t.rows.end()) - *std::min_element(t.rows.begin(), t.rows.end()) + 1;
+      ++spans;
+    }
+  const bool sparse_reduced = spans > 0 && 2 * span_sum < spans * static_cast<long>(state_.frames.size());
+  if (motion_parameters > 400 && sparse_reduced)
     for (const auto library : {ceres::SUITE_SPARSE, ceres::EIGEN_SPARSE, ceres::CX_SPARSE})
       if (ceres::IsSparseLinearAlgebraLibraryTypeAvailable(library)) {
         so.linear_solver_type = ceres::SPARSE_SCHUR;
