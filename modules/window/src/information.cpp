@@ -379,16 +379,17 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
     }
     band = std::max(band, hi - lo);
   }
-  // joint: S = Hprior + the sum over points of (Hll_p - schur_p); per point: Hprior, dense.
-  MotionInformation S(nl, joint && nl >= kBandedMinParameters && 2 * band < nl ? band : -1);
-  for (const auto &t : prior)
-    S.add(pos[static_cast<std::size_t>(t.row())], pos[static_cast<std::size_t>(t.col())], t.value());
-  Eigen::MatrixXd Hprior; // per point: in the motion's own order (S was dense, so pos is unused there)
-  if (!joint) {
-    S = MotionInformation(nl, -1);
+  // joint: S = Hprior + the sum over points of (Hll_p - schur_p), in frame order; per point:
+  // Hprior alone, dense, in the motion's own order.
+  MotionInformation S(joint ? nl : 0, joint && nl >= kBandedMinParameters && 2 * band < nl ? band : -1);
+  Eigen::MatrixXd Hprior;
+  if (joint)
     for (const auto &t : prior)
-      S.add(t.row(), t.col(), t.value());
-    Hprior = S.takeDense();
+      S.add(pos[static_cast<std::size_t>(t.row())], pos[static_cast<std::size_t>(t.col())], t.value());
+  else {
+    Hprior = Eigen::MatrixXd::Zero(nl, nl);
+    for (const auto &t : prior)
+      Hprior(t.row(), t.col()) += t.value();
   }
   std::vector<Eigen::MatrixXd> Sigma_ll_point(joint ? 0 : np);
 
