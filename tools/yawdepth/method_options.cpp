@@ -96,8 +96,8 @@ bool unusableObservation(const CameraModel &camera, const Observation &ob)
   return !camera.undistort(Eigen::Vector2d(ob.u, ob.v), m);
 }
 
-/* refine's progress on a terminal: one line, rewritten at most once a second, from the first report
-   after 2 s (a short solve prints nothing); ended by a newline when the object goes. Not on a pipe
+/* refine's progress on a terminal: one line, rewritten at most once a second and at each new stage,
+   from the first report after 2 s (a short solve prints nothing); ended by a newline when the object goes. Not on a pipe
    or a file: a caller capturing stderr gets one line per problem, not a progress bar. */
 class ProgressLine {
 public:
@@ -115,9 +115,10 @@ public:
     if (!active_)
       return {};
     return [this](const RefineProgress &p) {
-      if (p.seconds < 2.0 || p.seconds < last_ + 1.0)
-        return;
+      if (p.seconds < 2.0 || (p.seconds < last_ + 1.0 && p.stage == stage_))
+        return; // a new stage is shown at once, the same one at most once a second
       last_ = p.seconds;
+      stage_ = p.stage;
       const char *stage = p.stage == RefineProgress::Stage::RobustSolve  ? "robust solve"
                           : p.stage == RefineProgress::Stage::FinalSolve ? "final solve"
                                                                          : "covariances";
@@ -136,6 +137,7 @@ private:
   bool active_;
   bool printed_ = false;
   double last_ = 0;
+  RefineProgress::Stage stage_ = RefineProgress::Stage::RobustSolve;
 };
 
 } // namespace

@@ -226,6 +226,7 @@ private:
   bool anchorFromCamera(const TrackData &t, int row, const Eigen::Vector3d &c_P, std::array<double, 3> &p) const;
   ceres::Solver::Summary solve(bool robust, bool &solved);
   void flagOutliers();
+  RefineProgress progressAt(RefineProgress::Stage stage) const;
   Eigen::Vector3d cameraPoint(const TrackData &t, int row) const;
   double pixelError(const TrackData &t, std::size_t j) const;
 
@@ -594,16 +595,25 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
   so.minimizer_progress_to_stdout = false;
   std::unique_ptr<ProgressCallback> callback;
   if (o_.progress) {
-    RefineProgress base;
-    base.stage = robust ? RefineProgress::Stage::RobustSolve : RefineProgress::Stage::FinalSolve;
-    base.frames = static_cast<int>(motion_.size());
-    for (const TrackData &t : data_)
-      base.points += t.active ? 1 : 0;
-    callback = std::make_unique<ProgressCallback>(o_.progress, base, start_);
+    callback = std::make_unique<ProgressCallback>(
+        o_.progress, progressAt(robust ? RefineProgress::Stage::RobustSolve : RefineProgress::Stage::FinalSolve),
+        start_);
     so.callbacks.push_back(callback.get());
   }
   ceres::Solve(so, &problem, &summary);
   return summary;
+}
+
+/* A progress report at the start of a stage: the problem's size and the time so far. */
+RefineProgress Refiner::progressAt(RefineProgress::Stage stage) const
+{
+  RefineProgress p;
+  p.stage = stage;
+  p.frames = static_cast<int>(motion_.size());
+  for (const TrackData &t : data_)
+    p.points += t.active ? 1 : 0;
+  p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  return p;
 }
 
 void Refiner::flagOutliers()
@@ -661,15 +671,8 @@ RefineResult Refiner::run()
   std::vector<Eigen::Matrix3d> cov;
   std::vector<int> index(data_.size(), -1);
   if (o_.compute_covariance) {
-    if (o_.progress) {
-      RefineProgress p;
-      p.stage = RefineProgress::Stage::Covariance;
-      p.frames = static_cast<int>(motion_.size());
-      for (const TrackData &t : data_)
-        p.points += t.active ? 1 : 0;
-      p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-      o_.progress(p);
-    }
+    if (o_.progress)
+      o_.progress(progressAt(RefineProgress::Stage::Covariance));
     Model m = model_;
     for (const auto &f : state_.frames) {
       m.poses.push_back({f[0], f[1], f[2], f[3], model_.general ? f[4] : 0.0, model_.general ? f[5] : 0.0});
