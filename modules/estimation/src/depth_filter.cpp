@@ -68,6 +68,51 @@ bool predict(const IncrementModel &inc, const Vec11 &w, Eigen::Vector4d &s, Mat4
 
 } // namespace
 
+void composeIncrementNoise(Eigen::Matrix<double, 6, 6> &cov, Eigen::Matrix3d &R, const Eigen::Vector3d &d,
+                           const Eigen::Matrix3d &dR, const Eigen::Matrix<double, 6, 6> &Q)
+{
+  Eigen::Matrix3d Sd;
+  Sd << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Identity();
+  A.topRightCorner<3, 3>() = -R * Sd;
+  A.bottomRightCorner<3, 3>() = dR.transpose();
+  Eigen::Matrix<double, 6, 6> B = Eigen::Matrix<double, 6, 6>::Identity();
+  B.topLeftCorner<3, 3>() = R;
+  cov = A * cov * A.transpose() + B * Q * B.transpose();
+  cov = 0.5 * (cov + cov.transpose());
+  R = R * dR;
+}
+
+double inverseDepthInterval(double r)
+{
+  if (!(r >= 0) || !std::isfinite(r))
+    return std::numeric_limits<double>::quiet_NaN();
+  if (r == 0)
+    return 0.0;
+  // P(c) = P(|1/u - 1| <= c) for u = rho / rho_hat ~ N(1, r^2), increasing in c, with the limit
+  // Phi(1/r) as c grows (negative inverse depths are never inside).
+  const double target = std::erf(2.0 / std::sqrt(2.0)); // 0.9545
+  auto Phi = [](double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); };
+  auto P = [&](double c) {
+    const double near = c < 1.0 ? Phi(c / ((1.0 - c) * r)) : 1.0;
+    return near - Phi(-c / ((1.0 + c) * r));
+  };
+  if (!(Phi(1.0 / r) > target))
+    return std::numeric_limits<double>::infinity();
+  double lo = 0.0, hi = 2.0 * r;
+  while (P(hi) < target) {
+    lo = hi;
+    hi *= 2.0;
+    if (!(hi < 1e12))
+      return std::numeric_limits<double>::infinity();
+  }
+  for (int i = 0; i < 60 && hi - lo > 1e-12 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (P(mid) < target ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 IncrementModel IncrementModel::between(const YawRig &rig, const MotionSample &prev, const MotionSample &cur)
 {
   IncrementPerturbation<AD8> p;
@@ -317,6 +362,23 @@ PointEstimate DepthFilter::estimate(const YawRig &rig) const
   Eigen::Matrix3d J;
   J << Z, 0, -s_(0) * Z, 0, Z, -s_(1) * Z, 0, 0, -Z;
   e.c_cov = J * P_.topLeftCorner<3, 3>() * J.transpose();
+  // The observations are close to linear in inverse depth, so the depth's belief is read as
+  // Gaussian in rho = 1/Z with sigma(rho) = rho sigma(lambda); Z = 1/rho is then skewed toward far
+  // depths, and sigma_Z = Z sigma(lambda) would leave the far tail outside zc + 2 sigma_Z (a 2-sigma
+  // coverage of 0.89 at sigma(lambda) = 0.3). The reported sigma is widened so that zc +- 2 sigma
+  // holds the depth with a Gaussian's 2-sigma probability.
+  const double r = std::sqrt(P_(2, 2));
+  const double c = inverseDepthInterval(r);
+  if (!std::isfinite(c)) { // that interval has no far end: the depth is not bounded
+    e.status = Status::Degenerate;
+    e.c_P = Eigen::Vector3d::Zero();
+    e.c_cov = Eigen::Matrix3d::Zero();
+    return e;
+  }
+  if (r > 0) {
+    const double k = c / (2.0 * r);
+    e.c_cov *= k * k;
+  }
   // Vision frame with the filter's estimate of the current yaw (reading + estimated error).
   e.v_P = rig.visionPoint(yaw_ + s_(3), e.c_P);
   return e;

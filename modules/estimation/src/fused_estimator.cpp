@@ -1,5 +1,7 @@
 #include <yawdepth/estimation/fused_estimator.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
 #include <string>
 #include <yawdepth/error.h>
 
@@ -12,6 +14,10 @@ FusedEstimator::FusedEstimator(const CameraModel &camera, const YawRig &rig, con
     throw Error("fused: sigma_px must be finite and non-negative");
   if (o_.max_missing_frames < 0)
     throw Error("fused: max_missing_frames must be non-negative");
+  if (!(o_.key_log_depth_sigma > 0))
+    throw Error("fused: key_log_depth_sigma must be positive");
+  if (!(o_.key_information_gain >= 0) || !std::isfinite(o_.key_information_gain))
+    throw Error("fused: key_information_gain must be finite and non-negative");
   DepthFilter check(o_.filter, camera.kx(), camera.ky()); // validates the filter options
 }
 
@@ -26,7 +32,7 @@ std::vector<long> FusedEstimator::ids() const
 const DepthFilter *FusedEstimator::filter(long id) const
 {
   const auto it = features_.find(id);
-  return it == features_.end() ? nullptr : &it->second.filter;
+  return it == features_.end() ? nullptr : &it->second.current;
 }
 
 PointEstimate FusedEstimator::estimate(long id) const
@@ -38,7 +44,53 @@ PointEstimate FusedEstimator::estimate(long id) const
     e.frame = last_.frame;
     return e;
   }
-  return it->second.filter.estimate(rig_);
+  return it->second.current.estimate(rig_);
+}
+
+void FusedEstimator::setKey(Feature &f, long frame)
+{
+  dropKey(f.key_frame);
+  f.key = f.current;
+  f.key_frame = frame;
+  Key &k = keys_[frame];
+  if (k.users++ == 0) {
+    k = Key();
+    k.users = 1;
+    k.row = last_;
+  }
+}
+
+void FusedEstimator::dropKey(long frame)
+{
+  const auto it = keys_.find(frame);
+  if (it != keys_.end() && --it->second.users <= 0)
+    keys_.erase(it);
+}
+
+/* Carry every key's composed motion noise over the increment last_ -> row (composeIncrementNoise). */
+void FusedEstimator::advanceKeys(const MotionSample &row)
+{
+  if (o_.filter.noise.motion_noise == MotionNoise::Absolute || keys_.empty())
+    return; // pose errors do not accumulate: the prior of any increment is that of two poses
+  const Eigen::Matrix3d Rp = last_.rotation();
+  const Eigen::Vector3d d = Rp.transpose() * (row.position() - last_.position());
+  const Eigen::Matrix3d dR = Rp.transpose() * row.rotation();
+  const bool six_dof = last_.six_dof || row.six_dof;
+  const double st = incrementTranslationSigma(o_.filter.noise, d.norm());
+  const Eigen::Vector3d sr = incrementRotationSigma(o_.filter.noise, six_dof, d.norm(), Eigen::AngleAxisd(dR).angle());
+  Eigen::Matrix<double, 6, 1> q;
+  q << st * st, st * st, st * st, sr.cwiseAbs2();
+  const Eigen::Matrix<double, 6, 6> Q = q.asDiagonal();
+  for (auto &kv : keys_)
+    composeIncrementNoise(kv.second.cov, kv.second.R, d, dR, Q);
+}
+
+IncrementPrior FusedEstimator::keyPrior(const Key &k, const DepthFilter &filter) const
+{
+  IncrementPrior p = filter.defaultPrior(k.inc.six_dof, k.inc.distance, k.inc.angle);
+  if (o_.filter.noise.motion_noise == MotionNoise::Increment)
+    p.cov.topLeftCorner<6, 6>() = k.cov;
+  return p;
 }
 
 std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const MotionSample &row,
@@ -71,23 +123,19 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
     results[i].undistorted = obs[i].ok;
   }
 
-  auto start = [&](const Obs &o) {
-    Feature f{DepthFilter(o_.filter, camera_.kx(), camera_.ky()), row.frame};
-    f.filter.initialize(row.frame, row.yaw, o.m, o.cov);
-    features_[o.id] = std::move(f);
+  if (started_)
+    advanceKeys(row);
+  else
+    started_ = true;
+  last_ = row;
+
+  // A feature (re)starts at an observation: that frame is its key.
+  auto restart = [&](Feature &f, const Obs &o) {
+    f.current.initialize(row.frame, row.yaw, o.m, o.cov);
+    f.consecutive_outliers = 0;
+    setKey(f, row.frame);
   };
 
-  if (!started_) {
-    started_ = true;
-    last_ = row;
-    for (const Obs &o : obs)
-      if (o.ok)
-        start(o);
-    return results;
-  }
-
-  // The increment is computed once and shared by every feature's filter.
-  const IncrementModel inc = IncrementModel::between(rig_, last_, row);
   std::map<long, std::size_t> observed;
   for (std::size_t i = 0; i < obs.size(); ++i)
     if (obs[i].ok)
@@ -96,22 +144,51 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
     Feature &f = it->second;
     const auto o = observed.find(it->first);
     if (o != observed.end()) {
-      const std::size_t i = o->second;
-      results[i].update = f.filter.step(inc, &obs[i].m, &obs[i].cov);
+      const Obs &ob = obs[o->second];
+      observed.erase(o);
+      Key &k = keys_.at(f.key_frame);
+      if (k.inc_frame != row.frame) {
+        k.inc = IncrementModel::between(rig_, k.row, row);
+        k.inc_frame = row.frame;
+      }
+      const IncrementPrior prior = keyPrior(k, f.key);
+      f.current = f.key;
+      const DepthFilter::Update u = f.current.step(k.inc, &ob.m, &ob.cov, &prior);
+      results[o->second].update = u;
       f.last_seen = row.frame;
-    } else {
-      f.filter.step(inc);
+      if (u == DepthFilter::Update::Outlier) {
+        if (++f.consecutive_outliers >= o_.filter.max_consecutive_outliers) {
+          restart(f, ob);
+          results[o->second].update = DepthFilter::Update::Restarted;
+        }
+      } else if (u == DepthFilter::Update::Restarted) {
+        f.consecutive_outliers = 0;
+        setKey(f, row.frame);
+      } else {
+        f.consecutive_outliers = 0;
+        // A new key once the depth is resolved and the step added enough information to it.
+        const double sc = f.current.logDepthSigma(), sk = f.key.logDepthSigma();
+        if (sc <= o_.key_log_depth_sigma && (f.key.inliers() < 2 || sc * sc * (1.0 + o_.key_information_gain) <= sk * sk))
+          setKey(f, row.frame);
+      }
     }
-    if (!f.filter.initialized() || row.frame - f.last_seen > o_.max_missing_frames)
+    if (row.frame - f.last_seen > o_.max_missing_frames) {
+      dropKey(f.key_frame);
       it = features_.erase(it);
-    else
+    } else {
       ++it;
+    }
   }
   // New features.
-  for (const Obs &o : obs)
-    if (o.ok && features_.find(o.id) == features_.end())
-      start(o);
-  last_ = row;
+  for (const auto &kv : observed) {
+    const Obs &o = obs[kv.second];
+    Feature f{DepthFilter(o_.filter, camera_.kx(), camera_.ky()), DepthFilter(o_.filter, camera_.kx(), camera_.ky())};
+    f.key_frame = -1;
+    f.last_seen = row.frame;
+    f.current.initialize(row.frame, row.yaw, o.m, o.cov);
+    setKey(f, row.frame);
+    features_.emplace(kv.first, std::move(f));
+  }
   return results;
 }
 

@@ -57,19 +57,6 @@ void checkObservedFrames(const std::vector<MotionSample> &motion, const Track &t
   }
 }
 
-std::vector<IncrementModel> incrementsOf(const YawRig &rig, const std::vector<MotionSample> &motion)
-{
-  std::vector<IncrementModel> inc;
-  inc.reserve(motion.size());
-  for (std::size_t i = 0; i + 1 < motion.size(); ++i)
-    inc.push_back(IncrementModel::between(rig, motion[i], motion[i + 1]));
-  return inc;
-}
-
-} // namespace
-
-namespace {
-
 /* The log-depth state is positive by construction; image motion that only a point behind the
    camera explains is caught by the exact two-view form on the widest pair of observations. Only
    when the filter itself did not resolve the depth well: near the focus of expansion that sign
@@ -99,80 +86,6 @@ PointEstimate checkBehind(const CameraModel &camera, const YawRig &rig, const st
 }
 
 } // namespace
-
-PointEstimate runDepthFilter(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                             const std::vector<IncrementModel> &increments, const Track &track,
-                             const TrackEstimatorOptions &options, DepthFilter *filter_out,
-                             std::vector<bool> *outliers)
-{
-  if (outliers)
-    outliers->assign(track.observations.size(), false);
-  checkObservedFrames(motion, track);
-  if (increments.size() + 1 != motion.size())
-    throw Error("depth filter: increments do not match the motion log");
-  PointEstimate none;
-  none.frame = track.observations.empty() ? 0 : track.observations.back().frame;
-  if (track.observations.size() < 2) {
-    none.status = Status::TooFewFrames;
-    return none;
-  }
-  DepthFilter::Options fo = options.filter;
-  fo.noise = options.two_view.noise;
-  fo.gates = options.two_view.gates;
-  DepthFilter filter(fo, camera.kx(), camera.ky());
-  const double s2 = options.two_view.noise.sigma_px * options.two_view.noise.sigma_px;
-  auto undistort = [&](const Observation &o, Eigen::Vector2d &m, Eigen::Matrix2d &cov) {
-    Eigen::Matrix2d J;
-    if (!camera.undistort(Eigen::Vector2d(o.u, o.v), m, &J))
-      return false;
-    cov = s2 * J * J.transpose();
-    // A floor of round-off size keeps the update well defined for sigma_px = 0.
-    cov += 1e-24 * Eigen::Matrix2d::Identity();
-    return true;
-  };
-  const auto &obs = track.observations;
-  std::size_t next = 0;
-  long row = indexOfFrame(motion, obs.front().frame);
-  Eigen::Vector2d m;
-  Eigen::Matrix2d cov;
-  // Start at the first observation that can be undistorted.
-  while (next < obs.size() && !undistort(obs[next], m, cov))
-    ++next;
-  if (next == obs.size()) {
-    none.status = Status::UndistortFailed;
-    return none;
-  }
-  row = indexOfFrame(motion, obs[next].frame);
-  filter.initialize(obs[next].frame, motion[row].yaw, m, cov);
-  ++next;
-  const long last_row = indexOfFrame(motion, obs.back().frame);
-  for (; row < last_row; ++row) {
-    const IncrementModel &inc = increments[static_cast<std::size_t>(row)];
-    if (next < obs.size() && obs[next].frame == inc.frame_cur) {
-      const bool ok = undistort(obs[next], m, cov);
-      ++next;
-      if (ok) {
-        if (!filter.initialized())
-          filter.initialize(inc.frame_cur, inc.yaw_cur, m, cov);
-        else if (filter.step(inc, &m, &cov) == DepthFilter::Update::Outlier && outliers)
-          (*outliers)[next - 1] = true;
-        continue;
-      }
-    }
-    if (filter.initialized())
-      filter.step(inc);
-  }
-  PointEstimate e;
-  if (filter.initialized())
-    e = filter.estimate(rig);
-  else
-    e.status = Status::Behind;
-  e.frame = obs.back().frame;
-  e = checkBehind(camera, rig, motion, track, filter, options, e);
-  if (filter_out)
-    *filter_out = filter;
-  return e;
-}
 
 std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRig &rig,
                                           const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
@@ -254,8 +167,8 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
 PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                             const Track &track, const TrackEstimatorOptions &options)
 {
-  if (options.method == Method::Fused)
-    return runDepthFilter(camera, rig, motion, incrementsOf(rig, motion), track, options);
+  if (options.method == Method::Fused) // one implementation: the frame-by-frame FusedEstimator
+    return estimateTracks(camera, rig, motion, std::vector<Track>{track}, options).front();
   const auto &obs = track.observations;
   PointEstimate none;
   none.frame = obs.empty() ? 0 : obs.back().frame;

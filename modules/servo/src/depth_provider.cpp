@@ -96,17 +96,14 @@ PointEstimate DepthProvider::estimate(long id) const
   PointEstimate e = window ? window_->estimate(id) : fused_.estimate(id);
   if (!e.ok() || !have_fed_)
     return e;
-  // Carry the estimate from its frame (the last one given to the estimator for fused; the feature's
-  // last observed frame for window) to the current period, through the odometry.
-  const MotionSample *from = &last_fed_;
-  if (window) {
-    const auto it = fed_rows_.find(e.frame);
-    if (it == fed_rows_.end()) { // older than the rows kept: not usable for the current frame
-      e.status = Status::TooFewFrames;
-      return e;
-    }
-    from = &it->second;
+  // Carry the estimate from its frame (the feature's last observed frame) to the current period,
+  // through the odometry.
+  const auto it = fed_rows_.find(e.frame);
+  if (it == fed_rows_.end()) { // older than the rows kept: not usable for the current frame
+    e.status = Status::TooFewFrames;
+    return e;
   }
+  const MotionSample *from = &it->second;
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
   fromVisp(curMprev(rig_, *from, current_), R, t);
@@ -193,15 +190,17 @@ void DepthProvider::update(const MotionSample &odometry, const std::vector<std::
     obs.reserve(points.size());
     for (const auto &p : points)
       obs.push_back(FrameObservation{p.first, p.second.get_u(), p.second.get_v()});
-    if (o_.method == DepthMethod::Window) {
+    const bool window = o_.method == DepthMethod::Window;
+    if (window)
       window_->addFrame(row, obs);
-      fed_rows_[row.frame] = odometry;
-      // A feature's estimate is kept at its last observed frame while it is in the window.
-      while (!fed_rows_.empty() && fed_rows_.begin()->first <= row.frame - o_.window)
-        fed_rows_.erase(fed_rows_.begin());
-    } else {
+    else
       fused_.addFrame(row, obs);
-    }
+    fed_rows_[row.frame] = odometry;
+    // A feature's estimate is kept at its last observed frame while the estimator keeps it: in the
+    // window, or up to max_missing_frames for fused.
+    const long keep = window ? o_.window : static_cast<long>(o_.max_missing_frames) + 1;
+    while (!fed_rows_.empty() && fed_rows_.begin()->first <= row.frame - keep)
+      fed_rows_.erase(fed_rows_.begin());
     last_fed_ = odometry;
     have_fed_ = true;
     skipped_ = 0;

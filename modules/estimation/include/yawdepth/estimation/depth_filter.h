@@ -68,6 +68,31 @@ struct IncrementPrior {
   Eigen::Matrix<double, 7, 7> cov = Eigen::Matrix<double, 7, 7>::Zero();  //!< prior covariance of the increment noise
 };
 
+/*!
+  \brief Carry a composed motion's noise over one more increment (dead reckoning, first order).
+
+  A motion \f$ [R | t] \f$ from a key frame to the current one, perturbed as IncrementPerturbation
+  (translation \f$ e \f$ added in the key's frame, rotation \f$ r \f$ on the right), with covariance
+  `cov` of \f$ (e, r) \f$, followed by one increment \f$ [\Delta R | d] \f$ (d in the current frame)
+  whose own perturbation \f$ (e', r') \f$ has covariance Q, is perturbed by
+  \f[ e'' = e - R [d]_\times r + R e', \qquad r'' = \Delta R^T r + r' \f]
+  \param cov In: the covariance up to the current frame; out: up to the next one.
+  \param R In: the current frame's rotation in the key's; out: the next frame's (R dR).
+  \param d, dR The increment (m; rotation). \param Q The increment's 6x6 noise covariance.
+*/
+void composeIncrementNoise(Eigen::Matrix<double, 6, 6> &cov, Eigen::Matrix3d &R, const Eigen::Vector3d &d,
+                           const Eigen::Matrix3d &dR, const Eigen::Matrix<double, 6, 6> &Q);
+
+/*!
+  \brief Relative half-width c of the depth interval \f$ [\hat Z (1 - c), \hat Z (1 + c)] \f$ that holds
+  the depth with a Gaussian's 2-sigma probability (95.45 %) when the inverse depth is Gaussian with
+  relative sigma r: \f$ \rho / \hat\rho \sim N(1, r^2) \f$. About 2r for small r, more for larger r
+  (the far tail of Z = 1/rho is long): 0.61 at r = 0.2, 1.05 at r = 0.3. DepthFilter reports
+  \f$ \sigma_Z = c \hat Z / 2 \f$. Infinity when no interval does (r above about 0.59: the
+  inverse depth's own 2-sigma range reaches zero); NaN for a negative or non-finite r.
+*/
+double inverseDepthInterval(double r);
+
 /*! \brief Options of DepthFilter. */
 struct DepthFilterOptions {
   NoiseModel noise;                     //!< Odometry and yaw noise (pixel noise comes with each observation).
@@ -79,7 +104,9 @@ struct DepthFilterOptions {
   double converged_relative_sigma = 0.05; //!< converged() when sigma(Z)/Z falls below this.
   int max_iterations = 10;              //!< Iterated-EKF iterations per update at most (1 = plain EKF); stops when converged.
   /*! Above this 1-sigma of log-depth the estimate is `degenerate`: the depth is not resolved
-      (1.0: uncertain by a factor e = 2.7 either way; typical of features near the focus of expansion). */
+      (1.0: uncertain by a factor e = 2.7 either way; typical of features near the focus of expansion).
+      Whatever this value, an estimate whose depth has no bounded 2-sigma interval (see
+      inverseDepthInterval(): above about 0.59) is `degenerate`. */
   double max_log_depth_sigma = 1.0;
 };
 

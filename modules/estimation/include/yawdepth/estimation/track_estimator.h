@@ -67,14 +67,4 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
                                           const TrackEstimatorOptions &options = TrackEstimatorOptions(),
                                           std::vector<std::vector<bool>> *outliers = nullptr);
 
-/*!
-  \brief Run a DepthFilter along one track with precomputed increments (`increments[i]` goes from
-  motion row i to row i+1). Observations are undistorted with the camera; the pixel noise is
-  `options.two_view.noise.sigma_px` mapped through the undistortion Jacobian.
-*/
-PointEstimate runDepthFilter(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                             const std::vector<IncrementModel> &increments, const Track &track,
-                             const TrackEstimatorOptions &options, DepthFilter *filter_out = nullptr,
-                             std::vector<bool> *outliers = nullptr);
-
 } // namespace yawdepth

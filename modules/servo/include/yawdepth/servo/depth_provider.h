@@ -230,7 +230,7 @@ private:
   Options o_;
   FusedEstimator fused_;
   std::unique_ptr<WindowEstimator> window_;
-  std::map<long, MotionSample> fed_rows_; // the rows given to the window estimator, by its frame number
+  std::map<long, MotionSample> fed_rows_; // the rows given to the estimator, by its frame number (as long as it may keep a feature)
   std::map<long, long> last_seen_;        // estimator frame at which each id was last given
   long period_ = 0, frames_used_ = 0, skipped_ = 0;
   bool have_fed_ = false;
