@@ -322,12 +322,6 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
   return Update::Inlier;
 }
 
-bool DepthFilter::converged() const
-{
-  const PointEstimate e = estimate(YawRig());
-  return e.ok() && e.sigmaZ() < o_.converged_relative_sigma * e.c_P.z();
-}
-
 PointEstimate DepthFilter::estimate(const YawRig &rig) const
 {
   PointEstimate e;

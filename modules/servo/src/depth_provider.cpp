@@ -20,7 +20,6 @@ FusedOptions fusedOptions(const DepthProviderOptions &o)
   f.max_missing_frames = o.max_missing_frames;
   f.filter.noise = o.noise;
   f.filter.prior_depth = o.initial_depth > 0 ? o.initial_depth : o.prior_depth;
-  f.filter.converged_relative_sigma = o.converged_relative_sigma;
   return f;
 }
 

@@ -107,19 +107,14 @@ CameraModel ServoSimOptions::defaultCamera() { return CameraModel::brown(600, 60
 
 namespace {
 
-// Point the camera (heading fixed) at `target` plus `offset` rad of yaw, the pan found by a fixed point.
+// Point the camera (heading and axle fixed) at `target` plus `offset` rad of yaw. The optical centre
+// moves with the pan (it is off the pan axis), so the pan is found by a fixed-point iteration.
 void aimPan(UnicyclePanRobot &robot, const Eigen::Vector3d &target, double offset)
 {
   for (int it = 0; it < 20; ++it) {
     const vpHomogeneousMatrix M = robot.wMc();
-    const Eigen::Vector3d c(M[0][3], M[1][3], M[2][3]);
-    const Eigen::Vector3d d = target - c;
-    const double psi = std::atan2(d.x(), d.z()) + offset;
-    const Eigen::Vector3d axle(robot.x, 0, robot.z);
-    robot.pan = psi - robot.heading;
-    // keep the axle where it is: pan only
-    robot.x = axle.x();
-    robot.z = axle.z();
+    const Eigen::Vector3d d = target - Eigen::Vector3d(M[0][3], M[1][3], M[2][3]);
+    robot.pan = std::atan2(d.x(), d.z()) + offset - robot.heading;
   }
 }
 

@@ -101,7 +101,6 @@ struct DepthFilterOptions {
   double prior_log_depth_sigma = 3.0;   //!< Prior sigma of log Z: diffuse (a factor e^3 = 20 per sigma).
   double outlier_chi2 = 13.8155;        //!< Innovation gate (chi-square, 2 dof; 99.9 %).
   int max_consecutive_outliers = 3;     //!< Restart after this many rejections in a row.
-  double converged_relative_sigma = 0.05; //!< converged() when sigma(Z)/Z falls below this.
   int max_iterations = 10;              //!< Iterated-EKF iterations per update at most (1 = plain EKF); stops when converged.
   /*! Above this 1-sigma of log-depth the estimate is `degenerate`: the depth is not resolved
       (1.0: uncertain by a factor e = 2.7 either way; typical of features near the focus of expansion).
@@ -154,8 +153,6 @@ public:
   /*! \brief The point at the filter's current frame, with status (see the class description). */
   PointEstimate estimate(const YawRig &rig) const;
 
-  /*! \brief sigma(Z)/Z below Options::converged_relative_sigma, with a valid estimate. */
-  bool converged() const;
   /*! \brief Current depth estimate exp(-lambda) (m). */
   double depth() const { return std::exp(-s_(2)); }
   /*! \brief 1-sigma of log-depth: the relative depth uncertainty. */
