@@ -470,3 +470,40 @@ TEST_CASE("fused: honest sigma on a finely sampled log (key frames)", "[fused][m
   REQUIRE(n >= 40);
   CHECK(double(within2) / n >= kMinCoverage);
 }
+
+TEST_CASE("fused key frames: one per feature at most, released with the feature", "[fused]")
+{
+  // Fine steps: no feature resolves its depth, so each keeps the frame it started at.
+  const CameraModel camera = paperCamera();
+  SceneOptions so;
+  so.frames = 60;
+  so.step = 0.00005;
+  so.yaw = 1.0;
+  so.points = 8;
+  so.noise = NoiseModel();
+  so.seed = 3;
+  const Scene scene = simulateScene(camera, kRig, so);
+  FusedOptions fo;
+  fo.max_missing_frames = 5;
+  FusedEstimator fused(camera, kRig, fo);
+  std::size_t most = 0;
+  for (std::size_t k = 0; k < scene.measured.size(); ++k) {
+    std::vector<FrameObservation> obs;
+    for (const Track &t : scene.tracks)
+      for (const Observation &o : t.observations)
+        if (o.frame == scene.measured[k].frame && (k < 30 || t.id % 2 == 0)) // odd ids vanish at frame 30
+          obs.push_back({t.id, o.u, o.v});
+    fused.addFrame(scene.measured[k], obs);
+    REQUIRE(fused.keyFrames() <= fused.ids().size());
+    most = std::max(most, fused.keyFrames());
+  }
+  CHECK(most >= 1);
+  for (long id : fused.ids()) {
+    REQUIRE(fused.filter(id) != nullptr);
+    CHECK(id % 2 == 0); // the vanished ones were dropped after max_missing_frames
+  }
+  for (long id : fused.ids())
+    fused.remove(id);
+  CHECK(fused.ids().empty());
+  CHECK(fused.keyFrames() == 0);
+}

@@ -47,6 +47,15 @@ PointEstimate FusedEstimator::estimate(long id) const
   return it->second.current.estimate(rig_);
 }
 
+void FusedEstimator::remove(long id)
+{
+  const auto it = features_.find(id);
+  if (it == features_.end())
+    return;
+  dropKey(it->second.key_frame);
+  features_.erase(it);
+}
+
 void FusedEstimator::setKey(Feature &f, long frame)
 {
   dropKey(f.key_frame);
@@ -144,8 +153,9 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
     Feature &f = it->second;
     const auto o = observed.find(it->first);
     if (o != observed.end()) {
-      const Obs &ob = obs[o->second];
-      observed.erase(o);
+      const std::size_t i = o->second;
+      const Obs &ob = obs[i];
+      observed.erase(o); // what is left in `observed` afterwards are the new features
       Key &k = keys_.at(f.key_frame);
       if (k.inc_frame != row.frame) {
         k.inc = IncrementModel::between(rig_, k.row, row);
@@ -154,12 +164,12 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
       const IncrementPrior prior = keyPrior(k, f.key);
       f.current = f.key;
       const DepthFilter::Update u = f.current.step(k.inc, &ob.m, &ob.cov, &prior);
-      results[o->second].update = u;
+      results[i].update = u;
       f.last_seen = row.frame;
       if (u == DepthFilter::Update::Outlier) {
         if (++f.consecutive_outliers >= o_.filter.max_consecutive_outliers) {
           restart(f, ob);
-          results[o->second].update = DepthFilter::Update::Restarted;
+          results[i].update = DepthFilter::Update::Restarted;
         }
       } else if (u == DepthFilter::Update::Restarted) {
         f.consecutive_outliers = 0;

@@ -88,9 +88,11 @@ public:
   /*! \brief The feature's filter at its last observation, or nullptr. */
   const DepthFilter *filter(long id) const;
   /*! \brief Forget a feature. */
-  void remove(long id) { features_.erase(id); }
+  void remove(long id);
   /*! \brief Ids currently tracked. */
   std::vector<long> ids() const;
+  /*! \brief Distinct key frames held (each carries its composed motion noise; at most one per feature). */
+  std::size_t keyFrames() const { return keys_.size(); }
   /*! \brief Frame of the last addFrame(). */
   long frame() const { return last_.frame; }
 
