@@ -45,7 +45,8 @@ struct FusedOptions {
   double sigma_px = 0.3;        //!< pixel noise of the observations (px)
   int max_missing_frames = 30;  //!< drop a feature not observed for this many frames
   /*! A step whose 1-sigma of log-depth is at most this becomes the feature's new key (see the
-      file's description); infinity: every frame is a key (a plain filter). */
+      file's description); infinity, with key_information_gain 0: a key at every step that does not
+      lose information, close to a plain filter. */
   double key_log_depth_sigma = 0.2;
   /*! A resolved feature's step becomes its new key when it added at least this share to the key's
       information on log-depth (0: every step that does not lose information). */
@@ -83,7 +84,8 @@ public:
   */
   std::vector<ObservationResult> addFrame(const MotionSample &row, const std::vector<FrameObservation> &observations);
 
-  /*! \brief Current estimate of a feature (status too_few_frames when unknown). */
+  /*! \brief A feature's estimate at its last observation (PointEstimate::frame; status too_few_frames
+      when unknown). */
   PointEstimate estimate(long id) const;
   /*! \brief The feature's filter at its last observation, or nullptr. */
   const DepthFilter *filter(long id) const;
