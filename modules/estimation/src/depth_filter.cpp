@@ -71,10 +71,8 @@ bool predict(const IncrementModel &inc, const Vec11 &w, Eigen::Vector4d &s, Mat4
 void composeIncrementNoise(Eigen::Matrix<double, 6, 6> &cov, Eigen::Matrix3d &R, const Eigen::Vector3d &d,
                            const Eigen::Matrix3d &dR, const Eigen::Matrix<double, 6, 6> &Q)
 {
-  Eigen::Matrix3d Sd;
-  Sd << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
   Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Identity();
-  A.topRightCorner<3, 3>() = -R * Sd;
+  A.topRightCorner<3, 3>() = -R * skew(d);
   A.bottomRightCorner<3, 3>() = dR.transpose();
   Eigen::Matrix<double, 6, 6> B = Eigen::Matrix<double, 6, 6>::Identity();
   B.topLeftCorner<3, 3>() = R;

@@ -26,12 +26,6 @@ using refine_detail::WhitenedObservation;
 
 constexpr int kFrameDim = 7;
 
-inline Eigen::Matrix3d skew(const Eigen::Vector3d &v)
-{
-  Eigen::Matrix3d S;
-  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return S;
-}
 
 /*! Right Jacobian of SO(3): Exp(w + e) = Exp(w) Exp(Jr(w) e) to first order in e. */
 inline Eigen::Matrix3d rightJacobianSO3(const Eigen::Vector3d &w)

@@ -67,6 +67,14 @@ template <typename T> Eigen::Matrix<T, 3, 3> expSO3(const Eigen::Matrix<T, 3, 1>
   return R;
 }
 
+/*! \brief The cross-product matrix: \f$ [v]_\times w = v \times w \f$. */
+inline Eigen::Matrix3d skew(const Eigen::Vector3d &v)
+{
+  Eigen::Matrix3d S;
+  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return S;
+}
+
 /*! \brief The rotation vector (theta-u) of a rotation matrix, the inverse of expSO3() for angles below pi. */
 Eigen::Vector3d logSO3(const Eigen::Matrix3d &R);
 
