@@ -40,11 +40,10 @@
 #include <opencv2/core.hpp>
 
 #include <yawdepth/camera/camera_model.h>
-#include <yawdepth/estimation/track_estimator.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/pipeline/pipeline.h>
 #include <yawdepth/refine/refine.h>
-#include <yawdepth/window/window_estimator.h>
 #include <yawdepth/simulation/scene.h>
 
 using namespace yawdepth;
@@ -407,9 +406,7 @@ int main(int argc, char **argv)
   std::printf("refine: %s\n", refine_ok ? "available (Ceres)" : "unavailable (built without Ceres)");
   std::fflush(stdout);
 
-  TrackEstimatorOptions opt;
-  RefineOptions ropt;
-  WindowOptions wopt;
+  PipelineOptions opt; // every method through the one entry point, as the command line runs them
 
   const auto t_start = Clock::now();
   std::vector<CleanStats> clean(specs.size());
@@ -424,11 +421,8 @@ int main(int argc, char **argv)
     const CameraModel &camera = arm ? arm_camera : paper_camera;
     const YawRig &rig = arm ? arm_rig : paper_rig;
     const NoiseModel &noise = arm ? arm_noise : paper_noise;
-    opt.two_view.noise = noise;
-    opt.filter.noise = noise;
-    ropt.noise = noise;
-    wopt.noise = noise;
-    wopt.window = window;
+    opt.noise = noise;
+    opt.window = window;
     SceneOptions so;
     so.frames = frames;
     so.step = 0.02;
@@ -475,25 +469,25 @@ int main(int argc, char **argv)
             sig[m][i] = est[i].sigmaZ();
           }
       };
-      opt.method = Method::Paper;
-      take(kPaper, estimateTracks(camera, rig, scene.measured, scene.tracks, opt));
-      opt.method = Method::Exact;
-      take(kExact, estimateTracks(camera, rig, scene.measured, scene.tracks, opt));
-      opt.method = Method::Fused;
+      auto estimate = [&](Method m, const std::vector<Track> &tracks) {
+        opt.method = m;
+        return estimatePoints(camera, rig, scene.measured, tracks, opt);
+      };
+      take(kPaper, estimate(Method::Paper, scene.tracks).points);
+      take(kExact, estimate(Method::Exact, scene.tracks).points);
       auto t0 = Clock::now();
-      const std::vector<PointEstimate> fused = estimateTracks(camera, rig, scene.measured, scene.tracks, opt);
+      take(kFused, estimate(Method::Fused, scene.tracks).points);
       fused_ms += msSince(t0);
       for (const Track &tr : scene.tracks)
         fused_obs += static_cast<long>(tr.observations.size());
-      take(kFused, fused);
       t0 = Clock::now();
-      take(kWindow, windowTracks(camera, rig, scene.measured, scene.tracks, wopt));
+      take(kWindow, estimate(Method::Window, scene.tracks).points);
       window_ms += msSince(t0);
       window_frames += static_cast<long>(scene.measured.size());
       if (refine_ok) {
         try {
           t0 = Clock::now();
-          const RefineResult rr = refineWindow(camera, rig, scene.measured, scene.tracks, fused, ropt);
+          const PipelineResult rr = estimate(Method::Refine, scene.tracks);
           (arm ? refine_arm_ms : refine_ms).push_back(msSince(t0));
           take(kRefine, rr.points);
         } catch (const std::exception &e) {
@@ -539,17 +533,16 @@ int main(int argc, char **argv)
           corrupt(tracks, outlier_fraction, camera.width(), camera.height(), rng);
       for (const auto &c : corrupted)
         os.corrupted += std::count(c.begin(), c.end(), true);
-      opt.method = Method::Fused;
-      std::vector<std::vector<bool>> fused_flags;
-      const std::vector<PointEstimate> fused_o = estimateTracks(camera, rig, scene.measured, tracks, opt, &fused_flags);
-      countFlags(fused_flags, corrupted, os.tp[0], os.fp[0]);
-      std::vector<std::vector<bool>> window_flags;
-      const std::vector<PointEstimate> window_o = windowTracks(camera, rig, scene.measured, tracks, wopt, &window_flags);
-      countFlags(window_flags, corrupted, os.tp[2], os.fp[2]);
+      const PipelineResult fused_r = estimate(Method::Fused, tracks);
+      const std::vector<PointEstimate> &fused_o = fused_r.points;
+      countFlags(fused_r.outliers, corrupted, os.tp[0], os.fp[0]);
+      const PipelineResult window_r = estimate(Method::Window, tracks);
+      const std::vector<PointEstimate> &window_o = window_r.points;
+      countFlags(window_r.outliers, corrupted, os.tp[2], os.fp[2]);
       std::vector<PointEstimate> refine_o(n);
       if (refine_ok) {
         try {
-          const RefineResult rr = refineWindow(camera, rig, scene.measured, tracks, fused_o, ropt);
+          const PipelineResult rr = estimate(Method::Refine, tracks);
           refine_o = rr.points;
           countFlags(rr.outliers, corrupted, os.tp[1], os.fp[1]);
         } catch (const std::exception &e) {
@@ -677,23 +670,24 @@ int main(int argc, char **argv)
       std::sort(t.begin(), t.end());
       const double median =
           t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
-      std::printf("  refineWindow, 30 points x 10 frames, default RefineOptions (%zu runs): min %.2f ms, median %.2f ms\n",
+      std::printf("  refine (estimatePoints: fused start + refineWindow), 30 points x 10 frames, default options (%zu runs): "
+                  "min %.2f ms, median %.2f ms\n",
                   t.size(), t.front(), median);
       if (!refine_arm_ms.empty()) {
         std::vector<double> ta = refine_arm_ms;
         std::sort(ta.begin(), ta.end());
-        std::printf("  refineWindow on the arm scenes (6-DoF chain, %zu runs): min %.2f ms, median %.2f ms\n", ta.size(),
+        std::printf("  refine on the arm scenes (6-DoF chain, %zu runs): min %.2f ms, median %.2f ms\n", ta.size(),
                     ta.front(), ta[ta.size() / 2]);
       }
     } else {
-      std::printf("  refineWindow: refine: unavailable\n");
+      std::printf("  refine: unavailable\n");
     }
-    std::printf("  fused (estimateTracks, Method::Fused): %.2f us per feature update (%ld observations)\n",
+    std::printf("  fused (estimatePoints, Method::Fused): %.2f us per feature update (%ld observations)\n",
                 fused_obs ? 1e3 * fused_ms / fused_obs : NAN, fused_obs);
-    std::printf("  window (windowTracks, 30 points): %.3f ms per frame (%ld frames; see bench_window for the cost table)\n",
+    std::printf("  window (estimatePoints, Method::Window, 30 points): %.3f ms per frame (%ld frames; see bench_window for the cost table)\n",
                 window_frames ? window_ms / window_frames : NAN, window_frames);
     if (refine_errors)
-      std::printf("  refineWindow threw %ld times (counted as not ok)\n", refine_errors);
+      std::printf("  refine threw %ld times (counted as not ok)\n", refine_errors);
     std::printf("\nTotal run time: %.1f s (%ld trials x %zu scenes, clean and with outliers)\n", total_s, trials,
                 specs.size());
   }

@@ -93,7 +93,7 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
     measured.yaw = yaw + noise.sigma_yaw * gauss(rng);
     // Observations of the targets in view.
     const vpHomogeneousMatrix cMw = wMc(rig, truth).inverse();
-    std::vector<FrameObservation> obs;
+    std::vector<FeatureObservation> obs;
     std::vector<YawHelperFeature> helper;
     for (int i = 0; i < n; ++i) {
       const vpColVector P = cMw * vpColVector({points[i].x(), points[i].y(), points[i].z(), 1.0});
@@ -103,7 +103,7 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
       if (uv.x() < 0 || uv.y() < 0 || uv.x() > camera.width() - 1 || uv.y() > camera.height() - 1)
         continue;
       const double u = uv.x() + noise.sigma_px * gauss(rng), v = uv.y() + noise.sigma_px * gauss(rng);
-      obs.push_back(FrameObservation{i, u, v});
+      obs.push_back(FeatureObservation{i, u, v});
     }
     est.addFrame(measured, obs);
     int done = 0;
@@ -119,7 +119,7 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
     log.push_back(measured);
     const vpHomogeneousMatrix cMw_measured = wMc(rig, measured).inverse();
     std::vector<bool> in_view(n, false);
-    for (const FrameObservation &o : obs) {
+    for (const FeatureObservation &o : obs) {
       in_view[static_cast<std::size_t>(o.id)] = true;
       const PointEstimate e = est.estimate(o.id);
       Eigen::Vector2d m;

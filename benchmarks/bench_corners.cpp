@@ -59,7 +59,7 @@ struct ImageSet {
 };
 
 
-struct Method {
+struct CornerMethod {
   std::string name;
   bool yawdepth = false;
   CornerRefinement refinement = CornerRefinement::Gradient;
@@ -67,7 +67,7 @@ struct Method {
 };
 
 /*! yawdepth's corners, put back in the board's row-major order (board ids are row-major). */
-Corners yawdepthCorners(const cv::Mat &gray, const ImageSet &set, const Method &m) {
+Corners yawdepthCorners(const cv::Mat &gray, const ImageSet &set, const CornerMethod &m) {
   DetectorOptions o;
   o.refinement = m.refinement;
   o.subpixel_window = m.window;
@@ -156,7 +156,7 @@ bool loadSet(ImageSet &s, const std::vector<std::string> &paths) {
   return true;
 }
 
-void runChessboardSet(const ImageSet &s, const std::vector<Method> &methods) {
+void runChessboardSet(const ImageSet &s, const std::vector<CornerMethod> &methods) {
   if (s.images.empty())
     return;
   const std::size_t nm = methods.size();
@@ -164,7 +164,7 @@ void runChessboardSet(const ImageSet &s, const std::vector<Method> &methods) {
   for (std::size_t i = 0; i < s.images.size(); ++i) {
     const cv::Mat &g = s.images[i];
     for (std::size_t m = 0; m < nm; ++m) {
-      const Method &me = methods[m];
+      const CornerMethod &me = methods[m];
       if (me.yawdepth)
         corners[m][i] = yawdepthCorners(g, s, me);
       else if (me.window > 0)
@@ -274,7 +274,7 @@ void runChessboardSet(const ImageSet &s, const std::vector<Method> &methods) {
       CalibrationView v;
       v.name = s.names[i];
       for (std::size_t k = 0; k < c.size(); ++k)
-        v.features.push_back(DetectedFeature{static_cast<long>(k), c[k].x, c[k].y});
+        v.features.push_back(FeatureObservation{static_cast<long>(k), c[k].x, c[k].y});
       views.push_back(v);
     }
     CameraCalibrationOptions o;
@@ -628,7 +628,7 @@ void runAprilTagSet(const std::string &path) {
 } // namespace
 
 int main(int argc, char **argv) {
-  std::string franka = "../shared/data/franka-eye-in-hand";
+  std::string franka = YAWDEPTH_TEST_DATA_DIR "/franka-eye-in-hand"; // the real photos the tests use
   int renders = 12;
   std::string visp_images = "/usr/share/visp-images-data/ViSP-images";
   std::vector<std::string> extra;
@@ -647,7 +647,7 @@ int main(int argc, char **argv) {
       return 2;
     }
   }
-  std::vector<Method> methods = {
+  std::vector<CornerMethod> methods = {
       {"cornerSubPix 11x11", false, CornerRefinement::OpenCV, 5},
       {"SB+ACCURACY", false, CornerRefinement::None, 0},
       {"yawdepth gradient", true, CornerRefinement::Gradient, 0},

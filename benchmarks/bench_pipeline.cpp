@@ -78,9 +78,9 @@ int main(int argc, char **argv)
       const auto t0 = Clock::now();
       const FrameDetection d = detector.detect(images[k], k);
       const auto t1 = Clock::now();
-      std::vector<FrameObservation> obs;
+      std::vector<FeatureObservation> obs;
       obs.reserve(d.features.size());
-      for (const DetectedFeature &f : d.features)
+      for (const FeatureObservation &f : d.features)
         obs.push_back({f.id, f.u, f.v});
       fused.addFrame(motion[k], obs);
       const auto t2 = Clock::now();

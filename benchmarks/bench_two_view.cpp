@@ -18,7 +18,7 @@
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/estimation/depth_filter.h>
 #include <yawdepth/estimation/two_view.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 #include <yawdepth/simulation/scene.h>
 

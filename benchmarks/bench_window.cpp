@@ -52,16 +52,16 @@ double median(std::vector<double> v)
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
-/* Frames of a scene as FrameObservation lists, by motion-log row. */
-std::vector<std::vector<FrameObservation>> framesOf(const Scene &s)
+/* Frames of a scene as FeatureObservation lists, by motion-log row. */
+std::vector<std::vector<FeatureObservation>> framesOf(const Scene &s)
 {
   std::map<long, std::size_t> row;
   for (std::size_t k = 0; k < s.measured.size(); ++k)
     row[s.measured[k].frame] = k;
-  std::vector<std::vector<FrameObservation>> out(s.measured.size());
+  std::vector<std::vector<FeatureObservation>> out(s.measured.size());
   for (const Track &t : s.tracks)
     for (const Observation &ob : t.observations) {
-      FrameObservation fo;
+      FeatureObservation fo;
       fo.id = t.id;
       fo.u = ob.u;
       fo.v = ob.v;
@@ -116,11 +116,11 @@ void costTable(bool quick, std::uint64_t seed)
         w.addFrame(s.measured[k], frames[k]);
         auto t1 = Clock::now();
         double sum = 0;
-        for (const FrameObservation &ob : frames[k])
+        for (const FeatureObservation &ob : frames[k])
           sum += w.estimate(ob.id).c_P.z();
         auto t2 = Clock::now();
         f.addFrame(s.measured[k], frames[k]);
-        for (const FrameObservation &ob : frames[k])
+        for (const FeatureObservation &ob : frames[k])
           sum += f.estimate(ob.id).c_P.z();
         auto t3 = Clock::now();
         if (!std::isfinite(sum) && k > static_cast<std::size_t>(K) + 2)

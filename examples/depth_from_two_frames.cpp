@@ -19,7 +19,7 @@
 
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/estimation/two_view.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 int main()

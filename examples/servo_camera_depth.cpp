@@ -76,7 +76,7 @@ int main(int argc, char **argv)
       }
       const yawdepth::FrameDetection det = detector.detect(image, log.samples[k].frame);
       std::vector<std::pair<long, vpImagePoint>> points;
-      for (const yawdepth::DetectedFeature &f : det.features)
+      for (const yawdepth::FeatureObservation &f : det.features)
         if (f.id % 5 != 0) // corners only (id 5t is the tag's centre)
           points.emplace_back(f.id, vpImagePoint(f.v, f.u));
       depth.update(log.samples[k], points);

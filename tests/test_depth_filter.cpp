@@ -488,7 +488,7 @@ TEST_CASE("fused key frames: one per feature at most, released with the feature"
   FusedEstimator fused(camera, kRig, fo);
   std::size_t most = 0;
   for (std::size_t k = 0; k < scene.measured.size(); ++k) {
-    std::vector<FrameObservation> obs;
+    std::vector<FeatureObservation> obs;
     for (const Track &t : scene.tracks)
       for (const Observation &o : t.observations)
         if (o.frame == scene.measured[k].frame && (k < 30 || t.id % 2 == 0)) // odd ids vanish at frame 30

@@ -745,12 +745,12 @@ TEST_CASE("klt: tracks follow a textured plane, ids stable, the true motion's ep
   KltOptions o;
   o.max_features = 150;
   KltTracker tracker(scene.camera, o);
-  const std::vector<DetectedFeature> f1 = tracker.track(im1);
+  const std::vector<FeatureObservation> f1 = tracker.track(im1);
   REQUIRE(f1.size() >= 100);
   CHECK(tracker.lastStats().detected == static_cast<int>(f1.size()));
   // The ids are distinct, and the features at least min_distance apart.
-  std::map<long, DetectedFeature> by_id;
-  for (const DetectedFeature &f : f1)
+  std::map<long, FeatureObservation> by_id;
+  for (const FeatureObservation &f : f1)
     by_id[f.id] = f;
   CHECK(by_id.size() == f1.size());
   double closest = 1e9;
@@ -762,13 +762,13 @@ TEST_CASE("klt: tracks follow a textured plane, ids stable, the true motion's ep
   m.cMp = c2Mc1;
   m.sigma_rot = 0.001;
   m.sigma_trans = 0.001;
-  const std::vector<DetectedFeature> f2 = tracker.track(im2, &m);
+  const std::vector<FeatureObservation> f2 = tracker.track(im2, &m);
   const KltStats st = tracker.lastStats();
   CHECK(st.lost_epipolar == 0);
   CHECK(st.tracked >= static_cast<int>(0.9 * f1.size()));
   int checked = 0;
   double worst = 0;
-  for (const DetectedFeature &f : f2) {
+  for (const FeatureObservation &f : f2) {
     const auto it = by_id.find(f.id);
     if (it == by_id.end())
       continue; // a new feature

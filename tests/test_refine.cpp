@@ -14,7 +14,7 @@
 
 // The model's templated residuals (private to the module, header-only, no Ceres): the same
 // templates the solver instantiates with ceres::Jet and the information matrix with Eigen's AutoDiff.
-#include "../modules/window/src/refine_model.h"
+#include "refine_model.h"
 #include <Eigen/LU>
 #include <unsupported/Eigen/AutoDiff>
 

@@ -5,6 +5,8 @@
 #include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/estimation/two_view.h>
 
+#include "two_view_detail.h" // private to yawdepth::estimation
+
 using namespace yawdepth;
 
 namespace {

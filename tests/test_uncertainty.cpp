@@ -7,6 +7,8 @@
 #include <random>
 #include <yawdepth/estimation/two_view.h>
 
+#include "two_view_detail.h" // private to yawdepth::estimation
+
 using namespace yawdepth;
 
 namespace {

@@ -14,7 +14,7 @@
 #include <yawdepth/simulation/scene.h>
 
 // The estimator's model with its analytic Jacobians (private to the module, header-only).
-#include "../modules/window/src/window_model.h"
+#include "window_model.h"
 
 using namespace yawdepth;
 
@@ -78,12 +78,12 @@ struct Stats {
 };
 
 /* Every frame's observations, for feeding a WindowEstimator by hand. */
-std::vector<std::vector<FrameObservation>> byFrame(const Scene &s, const std::vector<Track> &tracks)
+std::vector<std::vector<FeatureObservation>> byFrame(const Scene &s, const std::vector<Track> &tracks)
 {
-  std::vector<std::vector<FrameObservation>> out(s.measured.size());
+  std::vector<std::vector<FeatureObservation>> out(s.measured.size());
   for (const Track &t : tracks)
     for (const Observation &ob : t.observations)
-      out[rowOf(s, ob.frame)].push_back(FrameObservation{t.id, ob.u, ob.v});
+      out[rowOf(s, ob.frame)].push_back(FeatureObservation{t.id, ob.u, ob.v});
   return out;
 }
 
@@ -336,7 +336,7 @@ TEST_CASE("window: features appear and vanish, frames without motion or without 
   WindowEstimator est(camera, rig, o);
   for (std::size_t k = 0; k < s.measured.size(); ++k) {
     // Frame 8 carries no feature; frame 20 repeats frame 19's row (the robot stood still).
-    std::vector<FrameObservation> obs = k == 8 ? std::vector<FrameObservation>() : frames[k];
+    std::vector<FeatureObservation> obs = k == 8 ? std::vector<FeatureObservation>() : frames[k];
     MotionSample row = s.measured[k];
     if (k == 20) {
       const long f = row.frame;
@@ -372,7 +372,7 @@ TEST_CASE("window: features appear and vanish, frames without motion or without 
   CHECK(est.estimate(123456).status == Status::TooFewFrames);
   MotionSample next = s.measured.back();
   next.frame += 1;
-  est.addFrame(next, {FrameObservation{777, 320, 240}});
+  est.addFrame(next, {FeatureObservation{777, 320, 240}});
   CHECK(est.estimate(777).status == Status::TooFewFrames);
   est.forget(20);
   CHECK(est.estimate(20).status == Status::TooFewFrames);
@@ -485,12 +485,12 @@ TEST_CASE("window rejects bad input", "[window]")
   CHECK_THROWS_AS(est.addFrame(a, {}), Error); // not increasing
   MotionSample b = a;
   b.frame = 6;
-  CHECK_THROWS_AS(est.addFrame(b, {FrameObservation{1, 10, 10}, FrameObservation{1, 20, 20}}), Error);
+  CHECK_THROWS_AS(est.addFrame(b, {FeatureObservation{1, 10, 10}, FeatureObservation{1, 20, 20}}), Error);
   MotionSample c = MotionSample::fromPose(7, vpHomogeneousMatrix());
   CHECK_THROWS_AS(est.addFrame(c, {}), Error); // 6-DoF after planar
   MotionSample d = a;
   d.frame = 8;
-  const auto res = est.addFrame(d, {FrameObservation{2, std::nan(""), 10}, FrameObservation{3, 1e9, 1e9}});
+  const auto res = est.addFrame(d, {FeatureObservation{2, std::nan(""), 10}, FeatureObservation{3, 1e9, 1e9}});
   REQUIRE(res.size() == 2);
   CHECK_FALSE(res[0].undistorted);
   CHECK_FALSE(res[1].undistorted);

@@ -3,6 +3,7 @@
 #include <iostream>
 #include <yawdepth/estimation/two_view.h>
 #include <yawdepth/io/files.h>
+#include <yawdepth/pipeline/pipeline.h>
 
 int main()
 {
@@ -16,5 +17,14 @@ int main()
   const yawdepth::PointEstimate e =
       yawdepth::estimateExact(camera, rig, prev, cur, Eigen::Vector2d(320, 240), Eigen::Vector2d(354, 240));
   std::cout << yawdepth::toString(e.status) << " zc=" << e.c_P.z() << "\n";
-  return e.ok() && std::abs(e.c_P.z() - 1.0) < 1e-9 ? 0 : 1;
+  // The same point as a track, through the one entry point (every method by name).
+  yawdepth::Track track;
+  track.observations = {{0, 320, 240}, {1, 354, 240}};
+  yawdepth::PipelineOptions options;
+  options.method = yawdepth::methodFromString("exact");
+  const yawdepth::PipelineResult r = yawdepth::estimatePoints(camera, rig, {prev, cur}, {track}, options);
+  std::cout << "estimatePoints: " << yawdepth::toString(r.points[0].status) << " zc=" << r.points[0].c_P.z() << "\n";
+  return e.ok() && std::abs(e.c_P.z() - 1.0) < 1e-9 && r.points[0].ok() && std::abs(r.points[0].c_P.z() - 1.0) < 1e-9
+             ? 0
+             : 1;
 }

@@ -126,7 +126,7 @@ Runner addMeasure(CLI::App &app)
         }
         const cv::Mat image = readGrayImage(motion.images[i], camera);
         FrameDetection d = detector.detect(image, frame);
-        for (const DetectedFeature &f : d.features) // the gray level at each feature, for --ply
+        for (const FeatureObservation &f : d.features) // the gray level at each feature, for --ply
           gray[{frame, f.id}] = grayLevelAt(image, f.u, f.v);
         if (d.found)
           ++found;

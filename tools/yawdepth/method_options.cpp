@@ -7,13 +7,11 @@
 #include <unistd.h>
 
 #include <yawdepth/error.h>
-#include <yawdepth/estimation/track_estimator.h>
-#include <yawdepth/refine/refine.h>
-#include <yawdepth/window/window_estimator.h>
+#include <yawdepth/pipeline/pipeline.h>
 
 namespace yawdepth::cli {
 
-std::string bestMethod() { return refineAvailable() ? "refine" : "fused"; }
+std::string bestMethod() { return toString(yawdepth::bestMethod()); }
 
 void addMotionNoiseOptions(CLI::App *sub, MethodArgs &args)
 {
@@ -81,21 +79,6 @@ NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
 
 namespace {
 
-/* An observation no estimator can use: not finite, more than an image size outside the image, or
-   outside what the lens model can undistort. */
-bool unusableObservation(const CameraModel &camera, const Observation &ob)
-{
-  if (!std::isfinite(ob.u) || !std::isfinite(ob.v))
-    return true;
-  if (camera.width() > 0 && camera.height() > 0) {
-    const double w = camera.width(), h = camera.height();
-    if (ob.u < -w || ob.u > 2 * w || ob.v < -h || ob.v > 2 * h)
-      return true;
-  }
-  Eigen::Vector2d m;
-  return !camera.undistort(Eigen::Vector2d(ob.u, ob.v), m);
-}
-
 /* refine's progress on a terminal: one line, rewritten at most once a second and at each new stage,
    from the first report after 2 s (a short solve prints nothing); ended by a newline when the object goes. Not on a pipe
    or a file: a caller capturing stderr gets one line per problem, not a progress bar. */
@@ -146,100 +129,20 @@ std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &ri
                                      const std::vector<Track> &tracks, const MethodArgs &args,
                                      std::vector<std::vector<bool>> &outliers, std::vector<MotionSample> *motion_estimate)
 {
-  // Observations that no method can use are taken out before estimation and reported as outliers:
-  // the feature is estimated from the rest (a track left with none keeps them all, and its method
-  // says why it failed).
-  std::vector<std::vector<bool>> unusable(tracks.size());
-  std::vector<Track> usable_tracks; // a copy only when some observation has to go
-  bool any_unusable = false;
-  for (std::size_t i = 0; i < tracks.size(); ++i) {
-    unusable[i].assign(tracks[i].observations.size(), false);
-    Track kept;
-    kept.id = tracks[i].id;
-    for (std::size_t k = 0; k < tracks[i].observations.size(); ++k) {
-      unusable[i][k] = unusableObservation(camera, tracks[i].observations[k]);
-      if (!unusable[i][k])
-        kept.observations.push_back(tracks[i].observations[k]);
-    }
-    if (kept.observations.size() == tracks[i].observations.size() || kept.observations.empty()) {
-      unusable[i].assign(tracks[i].observations.size(), false);
-      continue;
-    }
-    if (!any_unusable)
-      usable_tracks = tracks;
-    any_unusable = true;
-    usable_tracks[i] = std::move(kept);
-  }
-  std::vector<PointEstimate> estimates =
-      runMethodOn(camera, rig, motion, any_unusable ? usable_tracks : tracks, args, outliers, motion_estimate);
-  if (any_unusable) { // the flags back onto the original observations
-    std::vector<std::vector<bool>> full(tracks.size());
-    for (std::size_t i = 0; i < tracks.size(); ++i) {
-      full[i] = unusable[i];
-      std::size_t kept = 0;
-      for (std::size_t k = 0; k < tracks[i].observations.size(); ++k)
-        if (!unusable[i][k]) {
-          full[i][k] = i < outliers.size() && kept < outliers[i].size() && outliers[i][kept];
-          ++kept;
-        }
-    }
-    outliers = std::move(full);
-  }
-  return estimates;
-}
-
-std::vector<PointEstimate> runMethodOn(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                                       const std::vector<Track> &tracks, const MethodArgs &args,
-                                       std::vector<std::vector<bool>> &outliers, std::vector<MotionSample> *motion_estimate)
-{
-  args.noise.validate();
-  args.gates.validate();
-  const bool refine = args.method == "refine", window = args.method == "window";
-  if (refine && !refineAvailable())
-    throw Error("method refine is unavailable: this yawdepth was built without Ceres");
-  // fused and refine weigh every observation by the pixel noise: zero (or a denormal) would give
-  // infinite weights and NaN uncertainties, not an answer.
-  constexpr double kMinSigmaPx = 1e-6;
-  if ((refine || window || args.method == "fused") && !(args.noise.sigma_px >= kMinSigmaPx))
-    throw Error("--sigma-px " + std::to_string(args.noise.sigma_px) + ": methods fused, window and refine need a pixel "
-                "noise of at least 1e-6 px (they weigh every observation by it)");
-  if ((refine || window) && !(args.robust_px >= kMinSigmaPx))
-    throw Error("--robust-threshold-px must be at least 1e-6 px for " + args.method + " (the scale of its robust loss)");
-  if (window && !(args.outlier_px >= kMinSigmaPx))
-    throw Error("--outlier-threshold-px must be at least 1e-6 px for window");
-  if (window) {
-    WindowOptions wo;
-    wo.noise = args.noise;
-    wo.gates = args.gates;
-    wo.robust_threshold_px = args.robust_px;
-    wo.outlier_threshold_px = args.outlier_px;
-    if (motion_estimate)
-      *motion_estimate = motion;
-    return windowTracks(camera, rig, motion, tracks, wo, &outliers);
-  }
-  TrackEstimatorOptions options;
-  options.method = refine ? Method::Fused : methodFromString(args.method);
-  options.two_view.noise = args.noise;
-  options.two_view.gates = args.gates;
-  std::vector<PointEstimate> estimates = estimateTracks(camera, rig, motion, tracks, options, &outliers);
-  if (refine) {
-    RefineOptions ro;
-    ro.noise = args.noise;
-    ro.gates = args.gates;
-    ro.robust_threshold_px = args.robust_px;
-    ro.outlier_threshold_px = args.outlier_px;
-    ro.threads = args.threads;
-    ProgressLine line(args.progress);
-    ro.progress = line.callback();
-    RefineResult r = refineWindow(camera, rig, motion, tracks, estimates, ro);
-    estimates = std::move(r.points);
-    outliers = std::move(r.outliers);
-    if (motion_estimate)
-      *motion_estimate = std::move(r.motion);
-  } else if (motion_estimate) {
-    *motion_estimate = motion;
-  }
-  return estimates;
+  PipelineOptions po;
+  po.method = methodFromString(args.method);
+  po.noise = args.noise;
+  po.gates = args.gates;
+  po.robust_threshold_px = args.robust_px;
+  po.outlier_threshold_px = args.outlier_px;
+  po.threads = args.threads;
+  ProgressLine line(args.progress && po.method == Method::Refine);
+  po.progress = line.callback();
+  PipelineResult r = estimatePoints(camera, rig, motion, tracks, po);
+  outliers = std::move(r.outliers);
+  if (motion_estimate)
+    *motion_estimate = std::move(r.motion);
+  return std::move(r.points);
 }
 
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers)

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/features/klt_tracker.h>
 #include <yawdepth/geometry/rig.h>
 #include <yawdepth/io/files.h>
@@ -39,12 +39,6 @@ NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column);
 /*! \brief The best method this build has: refine with Ceres, else fused. */
 std::string bestMethod();
 
-/*!
-  \brief Run the chosen method on every track (same order).
-  \param outliers Receives, per track and observation, whether it was rejected as an outlier.
-  \param motion_estimate When given, receives the motion log as the method estimated it (refine's
-  refined rows; the measured rows for the other methods): where each point's frame is in the world.
-*/
 /*! \brief KLT tracking options of `track` and `measure --features klt`. */
 struct KltArgs {
   KltOptions klt;
@@ -63,18 +57,17 @@ std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const
                              const NoiseModel &noise, const KltArgs &args, bool quiet,
                              std::map<std::pair<long, long>, int> *gray = nullptr);
 
+/*!
+  \brief Run the chosen method on every track (same order), through yawdepth::estimatePoints(): unusable
+  observations out and flagged, refine started from fused, a progress line for long refine solves.
+  \param outliers Receives, per track and observation, whether it was rejected as an outlier.
+  \param motion_estimate When given, receives the motion log as the method estimated it (refine's
+  refined rows; the measured rows for the other methods): where each point's frame is in the world.
+*/
 std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                                      const std::vector<Track> &tracks, const MethodArgs &args,
                                      std::vector<std::vector<bool>> &outliers,
                                      std::vector<MotionSample> *motion_estimate = nullptr);
-/*! \brief runMethod() without taking out the observations no method can use (runMethod() does, and
-    reports them as outliers: not finite, more than an image size outside the image, or not
-    undistortable). */
-std::vector<PointEstimate> runMethodOn(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                                       const std::vector<Track> &tracks, const MethodArgs &args,
-                                       std::vector<std::vector<bool>> &outliers,
-                                       std::vector<MotionSample> *motion_estimate = nullptr);
-
 /*! \brief The observations flagged in `outliers`, as tracks (for --outliers). */
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers);
 

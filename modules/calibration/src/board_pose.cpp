@@ -17,7 +17,7 @@ std::map<long, Eigen::Vector3d> boardPoints(const BoardLayout &board)
 }
 
 bool boardPoseByPnP(const CameraModel &camera, const std::map<long, Eigen::Vector3d> &points,
-                    const std::vector<DetectedFeature> &features, int min_points, Eigen::Isometry3d &cMb,
+                    const std::vector<FeatureObservation> &features, int min_points, Eigen::Isometry3d &cMb,
                     std::vector<Eigen::Vector3d> &P, std::vector<Eigen::Vector2d> &uv)
 {
   std::vector<cv::Point3d> obj;

@@ -22,7 +22,7 @@ std::map<long, Eigen::Vector3d> boardPoints(const BoardLayout &board);
    the observed pixels uv; and the board's pose in the camera cMb by PnP (IPPE, then iterative) on
    them. False (cMb untouched) with fewer than `min_points` such features or when PnP fails. */
 bool boardPoseByPnP(const CameraModel &camera, const std::map<long, Eigen::Vector3d> &points,
-                    const std::vector<DetectedFeature> &features, int min_points, Eigen::Isometry3d &cMb,
+                    const std::vector<FeatureObservation> &features, int min_points, Eigen::Isometry3d &cMb,
                     std::vector<Eigen::Vector3d> &P, std::vector<Eigen::Vector2d> &uv);
 
 } // namespace calibration_detail

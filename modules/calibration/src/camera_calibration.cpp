@@ -7,7 +7,7 @@
 
 #include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/camera/camera_file.h>
-#include <yawdepth/camera/quiet_visp.h>
+#include "quiet_visp.h"
 
 #include <algorithm>
 #include <cerrno>

@@ -16,7 +16,7 @@
 #include <Eigen/Dense>
 #include <visp3/core/vpPoseVector.h>
 #include <visp3/vision/vpHandEyeCalibration.h>
-#include <yawdepth/camera/quiet_visp.h>
+#include "quiet_visp.h"
 #include <yawdepth/error.h>
 #include <yawdepth/geometry/rig.h>
 

@@ -4,7 +4,7 @@
 */
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/core/files.h>
-#include <yawdepth/camera/quiet_visp.h>
+#include "quiet_visp.h"
 
 #include <algorithm>
 #include <cctype>

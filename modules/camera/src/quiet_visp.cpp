@@ -1,4 +1,4 @@
-#include <yawdepth/camera/quiet_visp.h>
+#include "quiet_visp.h"
 
 #include <cstdio>
 #include <fcntl.h>

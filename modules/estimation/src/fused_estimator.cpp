@@ -103,7 +103,7 @@ IncrementPrior FusedEstimator::keyPrior(const Key &k, const DepthFilter &filter)
 }
 
 std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const MotionSample &row,
-                                                                        const std::vector<FrameObservation> &observations)
+                                                                        const std::vector<FeatureObservation> &observations)
 {
   if (started_ && row.frame <= last_.frame)
     throw Error("fused: frame " + std::to_string(row.frame) + " does not follow frame " + std::to_string(last_.frame));
@@ -117,7 +117,7 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
   std::vector<Obs> obs;
   obs.reserve(observations.size());
   const double s2 = o_.sigma_px * o_.sigma_px;
-  for (const FrameObservation &fo : observations) {
+  for (const FeatureObservation &fo : observations) {
     Obs o{fo.id, Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity(), false};
     Eigen::Matrix2d J;
     if (std::isfinite(fo.u) && std::isfinite(fo.v) && camera_.undistort(Eigen::Vector2d(fo.u, fo.v), o.m, &J)) {

@@ -8,36 +8,13 @@
 
 namespace yawdepth {
 
-const char *toString(Method m)
-{
-  switch (m) {
-  case Method::Paper:
-    return "paper";
-  case Method::Exact:
-    return "exact";
-  case Method::Fused:
-    return "fused";
-  }
-  return "unknown";
-}
-
-Method methodFromString(const std::string &word)
-{
-  for (Method m : {Method::Paper, Method::Exact, Method::Fused})
-    if (word == toString(m))
-      return m;
-  throw Error("unknown method '" + word + "' (expected paper, exact or fused)");
-}
-
 namespace {
 
-long indexOfFrame(const std::vector<MotionSample> &motion, long frame)
+void checkMethod(Method m)
 {
-  const auto it = std::lower_bound(motion.begin(), motion.end(), frame,
-                                   [](const MotionSample &s, long f) { return s.frame < f; });
-  if (it == motion.end() || it->frame != frame)
-    return -1;
-  return static_cast<long>(it - motion.begin());
+  if (m == Method::Window || m == Method::Refine)
+    throw Error(std::string("estimateTracks: method ") + toString(m) +
+                " is above the estimation module: run it through yawdepth::estimatePoints (yawdepth/pipeline/pipeline.h)");
 }
 
 } // namespace
@@ -48,7 +25,7 @@ void checkObservedFrames(const std::vector<MotionSample> &motion, const Track &t
 {
   long last = std::numeric_limits<long>::min();
   for (const Observation &o : track.observations) {
-    if (indexOfFrame(motion, o.frame) < 0)
+    if (rowOfFrame(motion, o.frame) < 0)
       throw Error("feature " + std::to_string(track.id) + " is observed in frame " + std::to_string(o.frame) +
                   ", which the motion log does not have");
     if (o.frame <= last)
@@ -71,7 +48,7 @@ PointEstimate checkBehind(const CameraModel &camera, const YawRig &rig, const st
   const auto &obs = track.observations;
   TwoViewOptions tv = options.two_view;
   tv.compute_covariance = false;
-  const long first_row = indexOfFrame(motion, obs.front().frame), last_row = indexOfFrame(motion, obs.back().frame);
+  const long first_row = rowOfFrame(motion, obs.front().frame), last_row = rowOfFrame(motion, obs.back().frame);
   tv.increments = static_cast<int>(last_row - first_row);
   const PointEstimate wide =
       estimateExact(camera, rig, motion[first_row], motion[last_row], Eigen::Vector2d(obs.front().u, obs.front().v),
@@ -92,6 +69,7 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
                                           const TrackEstimatorOptions &options,
                                           std::vector<std::vector<bool>> *outliers)
 {
+  checkMethod(options.method);
   std::vector<PointEstimate> out;
   out.reserve(tracks.size());
   if (outliers)
@@ -128,9 +106,9 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
     fo.sigma_px = options.two_view.noise.sigma_px;
     fo.max_missing_frames = std::numeric_limits<int>::max() / 2; // tracks are dropped at their last frame
     FusedEstimator fused(camera, rig, fo);
-    for (long r = indexOfFrame(motion, first); r <= indexOfFrame(motion, last); ++r) {
+    for (long r = rowOfFrame(motion, first); r <= rowOfFrame(motion, last); ++r) {
       const MotionSample &row = motion[static_cast<std::size_t>(r)];
-      std::vector<FrameObservation> fobs;
+      std::vector<FeatureObservation> fobs;
       const auto bf = by_frame.find(row.frame);
       if (bf != by_frame.end())
         for (const auto &[ti, k] : bf->second)
@@ -167,6 +145,7 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
 PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                             const Track &track, const TrackEstimatorOptions &options)
 {
+  checkMethod(options.method);
   if (options.method == Method::Fused) // one implementation: the frame-by-frame FusedEstimator
     return estimateTracks(camera, rig, motion, std::vector<Track>{track}, options).front();
   const auto &obs = track.observations;
@@ -177,7 +156,7 @@ PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const 
     return none;
   }
   const Observation &o_prev = obs[obs.size() - 2], &o_cur = obs.back();
-  const long i_prev = indexOfFrame(motion, o_prev.frame), i_cur = indexOfFrame(motion, o_cur.frame);
+  const long i_prev = rowOfFrame(motion, o_prev.frame), i_cur = rowOfFrame(motion, o_cur.frame);
   if (i_prev < 0 || i_cur < 0)
     throw Error("feature " + std::to_string(track.id) + " is observed in frame " +
                 std::to_string(i_prev < 0 ? o_prev.frame : o_cur.frame) + ", which the motion log does not have");
@@ -193,6 +172,8 @@ PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const 
   case Method::Exact:
     return estimateExact(camera, rig, motion[i_prev], motion[i_cur], uv_prev, uv_cur, tv);
   case Method::Fused:
+  case Method::Window:
+  case Method::Refine:
     break;
   }
   throw Error("unknown method");

@@ -1,5 +1,7 @@
 #include <yawdepth/estimation/two_view.h>
 
+#include "two_view_detail.h"
+
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <cmath>

@@ -606,7 +606,7 @@ FrameDetection PatternDetector::Impl::detectChessboard(const cv::Mat &gray, long
     for (int C = 0; C < cols; ++C) {
       const cv::Point2d p = boardPixel(m, R, C);
       const long id = static_cast<long>(R) * cols + C;
-      out.features.push_back(DetectedFeature{id, p.x, p.y});
+      out.features.push_back(FeatureObservation{id, p.x, p.y});
       current[id] = p;
       int r = 0, c = 0;
       detOf(m, R, C, r, c);
@@ -676,16 +676,16 @@ FrameDetection PatternDetector::Impl::detectAprilTag(const cv::Mat &gray, long f
       centre = camera.project(x);
     else if (diagonals(c, x))
       centre = x;
-    out.features.push_back(DetectedFeature{aprilTagFeatureId(tag), centre.x(), centre.y()});
+    out.features.push_back(FeatureObservation{aprilTagFeatureId(tag), centre.x(), centre.y()});
     for (int k = 0; k < 4; ++k)
-      out.features.push_back(DetectedFeature{aprilTagFeatureId(tag, k), c[k].x(), c[k].y()});
+      out.features.push_back(FeatureObservation{aprilTagFeatureId(tag, k), c[k].x(), c[k].y()});
   }
   if (out.features.empty()) {
     out.reason = "AprilTags of family " + pattern.family + " found but none usable (duplicate or unreadable ids)";
     return out;
   }
   std::sort(out.features.begin(), out.features.end(),
-            [](const DetectedFeature &a, const DetectedFeature &b) { return a.id < b.id; });
+            [](const FeatureObservation &a, const FeatureObservation &b) { return a.id < b.id; });
   out.found = true;
   return out;
 }
@@ -695,7 +695,7 @@ std::vector<Track> PatternDetector::toTracks(const std::vector<FrameDetection> &
   for (const FrameDetection &f : frames) {
     if (!f.found)
       continue;
-    for (const DetectedFeature &d : f.features) {
+    for (const FeatureObservation &d : f.features) {
       Track &t = by_id[d.id];
       t.id = d.id;
       t.observations.push_back(Observation{f.frame, d.u, d.v});

@@ -83,7 +83,7 @@ double KltTracker::epipolarDistance(const Eigen::Vector2d &uv_prev, const Eigen:
   return std::hypot(d.x() * camera_.kx(), d.y() * camera_.ky());
 }
 
-std::vector<DetectedFeature> KltTracker::track(const cv::Mat &image, const KltMotion *motion)
+std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const KltMotion *motion)
 {
   if (image.empty() || image.type() != CV_8UC1)
     throw Error("klt: the image must be 8-bit gray");
@@ -172,10 +172,10 @@ std::vector<DetectedFeature> KltTracker::track(const cv::Mat &image, const KltMo
   points_ = std::move(kept);
   ids_ = std::move(kept_ids);
   previous_ = image.clone();
-  std::vector<DetectedFeature> out;
+  std::vector<FeatureObservation> out;
   out.reserve(points_.size());
   for (std::size_t i = 0; i < points_.size(); ++i)
-    out.push_back(DetectedFeature{ids_[i], points_[i].x, points_[i].y});
+    out.push_back(FeatureObservation{ids_[i], points_[i].x, points_[i].y});
   return out;
 }
 
@@ -223,7 +223,7 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
     } else {
       d.features = tracker.track(image, nullptr);
     }
-    for (const DetectedFeature &f : d.features)
+    for (const FeatureObservation &f : d.features)
       out.gray[{s.frame, f.id}] = grayLevelAt(image, f.u, f.v);
     const KltStats &st = tracker.lastStats();
     out.totals.tracked += st.tracked;

@@ -1,5 +1,6 @@
 #include <yawdepth/error.h>
 #include <yawdepth/geometry/rig.h>
+#include <algorithm>
 
 namespace yawdepth {
 
@@ -53,6 +54,15 @@ vpHomogeneousMatrix YawRig::vMc(double yaw) const
 vpHomogeneousMatrix YawRig::cMv(double yaw) const
 {
   return toVisp(v_R0_.transpose() * rotY(yaw).transpose(), -(v_R0_.transpose() * v_t0_));
+}
+
+long rowOfFrame(const std::vector<MotionSample> &motion, long frame)
+{
+  const auto it = std::lower_bound(motion.begin(), motion.end(), frame,
+                                   [](const MotionSample &s, long f) { return s.frame < f; });
+  if (it == motion.end() || it->frame != frame)
+    return -1;
+  return static_cast<long>(it - motion.begin());
 }
 
 Eigen::Vector3d logSO3(const Eigen::Matrix3d &R)

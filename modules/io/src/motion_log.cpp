@@ -17,11 +17,7 @@ using io_detail::throwError;
 
 long MotionLog::indexOf(long frame) const
 {
-  const auto it = std::lower_bound(samples.begin(), samples.end(), frame,
-                                   [](const MotionSample &s, long f) { return s.frame < f; });
-  if (it == samples.end() || it->frame != frame)
-    return -1;
-  return static_cast<long>(it - samples.begin());
+  return rowOfFrame(samples, frame);
 }
 
 const MotionSample *MotionLog::find(long frame) const

@@ -26,11 +26,10 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
     if (!(truth[i].frame > truth[i - 1].frame))
       throw Error("depthCramerRao: motion-log frames must be strictly increasing");
   auto rowOf = [&](long frame) {
-    const auto it = std::lower_bound(truth.begin(), truth.end(), frame,
-                                     [](const MotionSample &s, long f) { return s.frame < f; });
-    if (it == truth.end() || it->frame != frame)
+    const long row = rowOfFrame(truth, frame);
+    if (row < 0)
       throw Error("depthCramerRao: frame " + std::to_string(frame) + " is not in the motion log");
-    return static_cast<int>(it - truth.begin());
+    return static_cast<int>(row);
   };
 
   Model m;

@@ -247,11 +247,10 @@ private:
 
 int Refiner::rowOf(long frame) const
 {
-  const auto it = std::lower_bound(motion_.begin(), motion_.end(), frame,
-                                   [](const MotionSample &s, long f) { return s.frame < f; });
-  if (it == motion_.end() || it->frame != frame)
+  const long row = rowOfFrame(motion_, frame);
+  if (row < 0)
     throw Error("refine: frame " + std::to_string(frame) + " is not in the motion log");
-  return static_cast<int>(it - motion_.begin());
+  return static_cast<int>(row);
 }
 
 /* The camera's world rotation and centre at a row, with the current state. */
@@ -444,10 +443,8 @@ void Refiner::initialise()
     };
     std::array<double, 3> p;
     if (!initial_.empty() && initial_[i].ok() && initial_[i].c_P.allFinite()) {
-      const auto it = std::lower_bound(motion_.begin(), motion_.end(), initial_[i].frame,
-                                       [](const MotionSample &s, long f) { return s.frame < f; });
-      if (it != motion_.end() && it->frame == initial_[i].frame &&
-          anchorFromCamera(t, static_cast<int>(it - motion_.begin()), initial_[i].c_P, p))
+      const long row = rowOfFrame(motion_, initial_[i].frame);
+      if (row >= 0 && anchorFromCamera(t, static_cast<int>(row), initial_[i].c_P, p))
         consider(p);
     }
     const std::size_t n = t.rows.size();

@@ -33,11 +33,10 @@ namespace {
 
 const MotionSample &sampleOf(const std::vector<MotionSample> &motion, long frame)
 {
-  const auto it = std::lower_bound(motion.begin(), motion.end(), frame,
-                                   [](const MotionSample &s, long f) { return s.frame < f; });
-  if (it == motion.end() || it->frame != frame)
+  const long row = rowOfFrame(motion, frame);
+  if (row < 0)
     throw Error("report: frame " + std::to_string(frame) + " is not in the motion log");
-  return *it;
+  return motion[static_cast<std::size_t>(row)];
 }
 
 /* Neighbour pairs of the pattern: (horizontal, vertical). */

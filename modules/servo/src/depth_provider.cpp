@@ -185,10 +185,10 @@ void DepthProvider::update(const MotionSample &odometry, const std::vector<std::
   if (feed) {
     MotionSample row = odometry;
     row.frame = ++frames_used_;
-    std::vector<FrameObservation> obs;
+    std::vector<FeatureObservation> obs;
     obs.reserve(points.size());
     for (const auto &p : points)
-      obs.push_back(FrameObservation{p.first, p.second.get_u(), p.second.get_v()});
+      obs.push_back(FeatureObservation{p.first, p.second.get_u(), p.second.get_v()});
     const bool window = o_.method == DepthMethod::Window;
     if (window)
       window_->addFrame(row, obs);

@@ -10,7 +10,7 @@
 #include <array>
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {

@@ -1109,7 +1109,7 @@ struct WindowEstimator::Impl {
   }
 
   // ---- A frame.
-  std::vector<ObservationResult> addFrame(const MotionSample &row, const std::vector<FrameObservation> &observations)
+  std::vector<ObservationResult> addFrame(const MotionSample &row, const std::vector<FeatureObservation> &observations)
   {
     if (started) {
       if (!(row.frame > frames.back().row.frame))
@@ -1176,7 +1176,7 @@ struct WindowEstimator::Impl {
 
     std::vector<ObservationResult> results;
     const double s2 = o.noise.sigma_px;
-    for (const FrameObservation &fo : observations) {
+    for (const FeatureObservation &fo : observations) {
       ObservationResult res;
       res.id = fo.id;
       Eigen::Vector2d m;
@@ -1292,7 +1292,7 @@ WindowEstimator::WindowEstimator(WindowEstimator &&) noexcept = default;
 WindowEstimator &WindowEstimator::operator=(WindowEstimator &&) noexcept = default;
 
 std::vector<WindowEstimator::ObservationResult> WindowEstimator::addFrame(const MotionSample &row,
-                                                                          const std::vector<FrameObservation> &obs)
+                                                                          const std::vector<FeatureObservation> &obs)
 {
   return impl_->addFrame(row, obs);
 }
@@ -1383,7 +1383,7 @@ std::vector<PointEstimate> windowTracks(const CameraModel &camera, const YawRig 
     if (!(motion[i].frame > motion[i - 1].frame))
       throw Error("window estimator: motion-log frames must be strictly increasing");
   std::map<long, std::size_t> track_of;
-  std::map<long, std::vector<FrameObservation>> by_frame;
+  std::map<long, std::vector<FeatureObservation>> by_frame;
   std::set<long> logged;
   for (const MotionSample &s : motion)
     logged.insert(s.frame);
@@ -1394,7 +1394,7 @@ std::vector<PointEstimate> windowTracks(const CameraModel &camera, const YawRig 
       if (!logged.count(ob.frame))
         throw Error("window estimator: frame " + std::to_string(ob.frame) + " of feature " +
                     std::to_string(tracks[t].id) + " is not in the motion log");
-      FrameObservation fo;
+      FeatureObservation fo;
       fo.id = tracks[t].id;
       fo.u = ob.u;
       fo.v = ob.v;
@@ -1422,7 +1422,7 @@ std::vector<PointEstimate> windowTracks(const CameraModel &camera, const YawRig 
   };
   for (const MotionSample &row : motion) {
     const auto it = by_frame.find(row.frame);
-    est.addFrame(row, it == by_frame.end() ? std::vector<FrameObservation>() : it->second);
+    est.addFrame(row, it == by_frame.end() ? std::vector<FeatureObservation>() : it->second);
   }
   // Estimates of features that left the state were kept when they left; the others are read now.
   for (std::size_t t = 0; t < tracks.size(); ++t)

@@ -21,13 +21,13 @@ namespace yawdepth {
 /*! \brief The features detected in one calibration image. */
 struct CalibrationView {
   std::string name;                       //!< image name (for messages)
-  std::vector<DetectedFeature> features;  //!< observed (distorted) pixels with board feature ids
+  std::vector<FeatureObservation> features;  //!< observed (distorted) pixels with board feature ids
 };
 
 /*! \brief Detection over a set of calibration images. */
 struct CalibrationDetections {
-  /*! image width (px); all images must share the size */
-  int width = 0, height = 0;              //!< image height (px)
+  int width = 0;                          //!< image width (px); all images must share the size
+  int height = 0;                         //!< image height (px)
   std::vector<CalibrationView> views;     //!< the images where the pattern was found
   std::vector<std::string> failures;      //!< "NAME: reason" for every image where it was not
   std::vector<std::string> warnings;      //!< "NAME: warning" (FrameDetection::warnings, features not on the board)

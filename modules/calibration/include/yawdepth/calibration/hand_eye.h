@@ -47,7 +47,7 @@ HandEyeSetup handEyeSetupFromString(const std::string &word);
 /*! \brief One image of the hand-eye calibration. */
 struct HandEyeView {
   vpHomogeneousMatrix rMe;               //!< the hand's pose in the base when the image was taken
-  std::vector<DetectedFeature> features; //!< the board's features detected in the image
+  std::vector<FeatureObservation> features; //!< the board's features detected in the image
   std::string name;                      //!< for messages (the image's path)
 };
 

@@ -37,7 +37,7 @@ namespace yawdepth {
 /*! \brief One image of the rig calibration: its motion-log row (yaw = the reading) and features. */
 struct RigView {
   MotionSample sample;                   //!< the image's motion-log row (yaw = the reading)
-  std::vector<DetectedFeature> features; //!< the board's features detected in the image
+  std::vector<FeatureObservation> features; //!< the board's features detected in the image
 };
 
 /*! \brief Options of calibrateRig(). */
@@ -71,18 +71,15 @@ struct RigCalibration {
   Eigen::Vector3d camera_offset_sigma = Eigen::Vector3d::Zero(); //!< 1-sigma of camera_offset (m)
   Eigen::Vector3d yaw_axis = Eigen::Vector3d::UnitY();           //!< unit yaw axis in the vision frame
   Eigen::Vector3d yaw_axis_sigma = Eigen::Vector3d::Zero();      //!< 1-sigma of yaw_axis
-  /*! yaw offset: true yaw = reading + yaw_offset (rad) */
-  double yaw_offset = 0, yaw_offset_sigma = 0; //!< 1-sigma of yaw_offset (rad)
+  double yaw_offset = 0;       //!< yaw offset: true yaw = reading + yaw_offset (rad)
+  double yaw_offset_sigma = 0; //!< 1-sigma of yaw_offset (rad)
   YawZeroSource yaw_zero = YawZeroSource::Fixed; //!< how yaw_offset was obtained
   Eigen::Isometry3d v0Mb = Eigen::Isometry3d::Identity(); //!< board pose in the first view's vision frame
   double rms_px = 0;               //!< RMS reprojection error (px, per coordinate pair)
   std::vector<double> view_rms_px; //!< per view
-  /*! number of views used */
-  int views = 0, points = 0, iterations = 0; //!< Levenberg–Marquardt iterations
-  /*!
-    \var points
-    number of features used, over every view
-  */
+  int views = 0;                   //!< number of views used
+  int points = 0;                  //!< number of features used, over every view
+  int iterations = 0;              //!< Levenberg–Marquardt iterations
   double yaw_span = 0;             //!< span of the yaw readings (rad)
   int distinct_yaws = 0;           //!< number of distinct yaw readings (0.2 deg apart)
   double baseline = 0;             //!< largest robot translation between views (m)

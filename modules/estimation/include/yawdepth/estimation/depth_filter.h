@@ -32,7 +32,7 @@
 */
 #include <Eigen/Core>
 #include <array>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {
@@ -49,8 +49,8 @@ struct IncrementModel {
   std::array<Eigen::Matrix3d, 8> dR;               //!< dR/d(input) for each noisy input, in the order above
   std::array<Eigen::Vector3d, 8> dt;               //!< dt/d(input) for each noisy input, in the order above
   bool six_dof = false; //!< from a 6-DoF log: the rotation is noisy about every axis, not only the heading
-  /*! frame number of the earlier row */
-  long frame_prev = 0, frame_cur = 0; //!< frame number of the later row
+  long frame_prev = 0; //!< frame number of the earlier row
+  long frame_cur = 0;  //!< frame number of the later row
   double yaw_cur = 0; //!< yaw reading of the later frame (rad)
   double distance = 0; //!< the vision frame's measured travel over the increment (m)
   double angle = 0;    //!< the vision frame's measured rotation over the increment (rad)

@@ -34,7 +34,7 @@
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/estimation/depth_filter.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {
@@ -51,13 +51,6 @@ struct FusedOptions {
   /*! A resolved feature's step becomes its new key when it added at least this share to the key's
       information on log-depth (0: every step that does not lose information). */
   double key_information_gain = 0.1;
-};
-
-/*! \brief One observation of a frame: feature id and observed (distorted) pixel. */
-struct FrameObservation {
-  long id = 0;         //!< feature id
-  /*! observed pixel: column (px) */
-  double u = 0, v = 0; //!< observed pixel: row (px)
 };
 
 /*! \brief Many DepthFilters advanced together frame by frame. */
@@ -82,7 +75,7 @@ public:
     \brief Add the next frame: its motion-log row and its observations (at most one per id).
     The first call starts the filters; later rows must have increasing frame numbers.
   */
-  std::vector<ObservationResult> addFrame(const MotionSample &row, const std::vector<FrameObservation> &observations);
+  std::vector<ObservationResult> addFrame(const MotionSample &row, const std::vector<FeatureObservation> &observations);
 
   /*! \brief A feature's estimate at its last observation (PointEstimate::frame; status too_few_frames
       when unknown). */

@@ -1,35 +1,26 @@
 #pragma once
 /*!
   \file track_estimator.h
-  \brief One entry point for every method: a feature's track and the motion log in, a point out.
+  \brief The per-feature methods (paper, exact, fused) on whole tracks: a feature's track and the
+  motion log in, a point out.
 
-  This is the interface the CLI, the servo depth provider and the benchmarks share.
+  The entry point for every method, window and refine included, with the outlier flags and the
+  motion as estimated, is yawdepth::estimatePoints() (yawdepth/pipeline/pipeline.h), which the
+  command line and the benchmarks use.
 */
 #include <string>
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/estimation/depth_filter.h>
 #include <yawdepth/estimation/two_view.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {
 
-/*! \brief Estimation methods (the `--method` words of `yawdepth estimate`). */
-enum class Method {
-  Paper, //!< "paper": eq. (5)-(7) on the last increment, as published.
-  Exact, //!< "exact": finite-increment two-view form on the last increment, rotation compensated.
-  Fused  //!< "fused": recursive inverse-depth filter over every frame (DepthFilter).
-};
-
-/*! \brief "paper", "exact", "fused". */
-const char *toString(Method m);
-/*! \brief Parse a method word; throws yawdepth::Error for an unknown one. */
-Method methodFromString(const std::string &word);
-
 /*! \brief Options of estimateTrack(). */
 struct TrackEstimatorOptions {
-  Method method = Method::Exact; //!< the estimation method
+  Method method = Method::Exact; //!< paper, exact or fused (window and refine throw: see yawdepth::estimatePoints)
   TwoViewOptions two_view;      //!< paper / exact (its noise and gates are also used by fused)
   DepthFilter::Options filter;  //!< fused: prior, outlier gate, convergence (noise and gates come from two_view)
 };

@@ -17,7 +17,7 @@
 */
 #include <Eigen/Core>
 #include <yawdepth/camera/camera_model.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {
@@ -29,18 +29,6 @@ struct TwoViewOptions {
   bool compute_covariance = true;   //!< Set false to skip the covariance (faster; c_cov stays NaN).
   int increments = 1;               //!< Motion-log rows between the two frames (odometry noise scales with it).
 };
-
-/*!
-  \brief Exact depth at the current frame from the u-row, for known rotation and translation:
-  \f[ Z_{cur} = \frac{t_1 r_3 - t_3 r_1}{x_{cur} r_3 - r_1} \f]
-  For a pure translation (\f$ R = I,\ t = -(dX_c, dY_c, dZ_c) \f$) this is method.md's
-  \f$ Z_k = (x_{k-1} dZ_c - dX_c)/(x_k - x_{k-1}) \f$, the finite-increment form of eq. (5).
-*/
-double exactDepthURow(const Eigen::Vector2d &m_prev, const Eigen::Vector2d &m_cur, const Eigen::Matrix3d &R,
-                      const Eigen::Vector3d &t);
-/*! \brief Same from the v-row: \f$ Z_{cur} = (t_2 r_3 - t_3 r_2)/(y_{cur} r_3 - r_2) \f$. */
-double exactDepthVRow(const Eigen::Vector2d &m_prev, const Eigen::Vector2d &m_cur, const Eigen::Matrix3d &R,
-                      const Eigen::Vector3d &t);
 
 /*!
   \brief The paper's eq. (5) for one point from the current normalised point, its pixel motion and
@@ -100,22 +88,5 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
 PointEstimate estimatePaper(const CameraModel &camera, const YawRig &rig, const MotionSample &prev,
                             const MotionSample &cur, const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv_cur,
                             const TwoViewOptions &options = TwoViewOptions());
-
-/*! \brief Number of noisy inputs of the two-view estimators (see twoViewInputVariances()). */
-constexpr int kTwoViewInputs = 12;
-
-/*!
-  \brief The diagonal input covariance used by the two-view estimators, in the order
-  (u_prev, v_prev, u_cur, v_cur, d_x, d_y, d_z, rot_x, rot_y, rot_z, yaw_prev, yaw_cur) (the
-  increment's perturbations of yawdepth::IncrementPerturbation; rot_y is a planar log's heading).
-  \param noise The noise model. \param increments Motion-log rows between the two frames (the
-  odometry's variances grow with it, unless the noise is per pose: MotionNoise::Absolute).
-  \param six_dof whether the increment comes from a 6-DoF log (see incrementRotationSigma()).
-  \param distance, angle the vision frame's travel (m) and rotation (rad) between the two frames,
-  shared equally by the increments, for the noise model's per-metre and per-radian terms.
-*/
-Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel &noise, int increments,
-                                                              bool six_dof = false, double distance = 0.0,
-                                                              double angle = 0.0);
 
 } // namespace yawdepth

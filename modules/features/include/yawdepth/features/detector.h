@@ -9,24 +9,17 @@
 #include <vector>
 #include <opencv2/core.hpp>
 #include <yawdepth/camera/camera_model.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/features/pattern.h>
 
 namespace yawdepth {
-
-/*! \brief One detected feature: its id and observed (distorted) pixel. */
-struct DetectedFeature {
-  long id = 0;         //!< feature id (pattern.h)
-  /*! observed pixel: column (px) */
-  double u = 0, v = 0; //!< observed pixel: row (px)
-};
 
 /*! \brief Detection result of one image. */
 struct FrameDetection {
   long frame = 0;             //!< frame number given to detect()
   bool found = false;         //!< false: no usable pattern; `reason` says why
   std::string reason;         //!< e.g. "chessboard 5x4 not found", "image unreadable"
-  std::vector<DetectedFeature> features; //!< the detected features (empty when not found)
+  std::vector<FeatureObservation> features; //!< the detected features (empty when not found)
   /*! Features kept but less sure, one line each: e.g. "corner 17: sub-pixel refinement failed,
       the detector's estimate kept", or AprilTag ids of the board seen twice and dropped. */
   std::vector<std::string> warnings;

@@ -35,7 +35,7 @@
 #include <opencv2/core.hpp>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <yawdepth/camera/camera_model.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/geometry/rig.h>
 
@@ -92,7 +92,7 @@ public:
     \param motion The camera's motion since the previous image, for the epipolar gate; nullptr: no gate.
     \return The features in this image: id and observed (distorted) pixel.
   */
-  std::vector<DetectedFeature> track(const cv::Mat &image, const KltMotion *motion = nullptr);
+  std::vector<FeatureObservation> track(const cv::Mat &image, const KltMotion *motion = nullptr);
   /*! \brief What the last track() call did. */
   const KltStats &lastStats() const { return stats_; }
   /*!

@@ -43,8 +43,8 @@ struct PatternSpec {
   /*! \brief The kind of pattern. */
   enum class Kind { Chessboard, AprilTag };
   Kind kind = Kind::Chessboard; //!< the kind of pattern
-  /*! chessboard inner corners along a row */
-  int cols = 0, rows = 0;  //!< chessboard inner corners along a column
+  int cols = 0;            //!< chessboard inner corners along a row
+  int rows = 0;            //!< chessboard inner corners along a column
   double square = 0;       //!< chessboard square size (m)
   std::string family;      //!< AprilTag family name, e.g. "36h11"
   double tag_size = 0;     //!< AprilTag size (m), outer edge of the black border
@@ -97,8 +97,8 @@ inline long aprilTagFeatureId(int tag_id, int corner = -1) { return 5L * tag_id 
 */
 struct BoardLayout {
   PatternSpec pattern;        //!< the pattern
-  /*! AprilTag grid: number of tags along a row */
-  int tags_x = 1, tags_y = 1; //!< AprilTag grid: number of tags along a column
+  int tags_x = 1;             //!< AprilTag grid: number of tags along a row
+  int tags_y = 1;             //!< AprilTag grid: number of tags along a column
   double gap = 0;             //!< AprilTag spacing between tags (m)
   int first_tag_id = 0;       //!< AprilTag id of the first tag (row 0, column 0)
   double margin = 0;          //!< White margin around the pattern (m); 0 = one square / the bitmap's ring + one cell

@@ -23,6 +23,7 @@
 */
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <vector>
 #include <visp3/core/vpColVector.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpRotationMatrix.h>
@@ -104,6 +105,12 @@ struct MotionSample {
   /*! \brief Position of the vision frame's origin in the world (m). */
   Eigen::Vector3d position() const { return Eigen::Vector3d(x, y, z); }
 };
+
+/*!
+  \brief The row of a motion log (sorted by strictly increasing frame) that holds `frame`, or -1.
+  Binary search: every estimator, the refiner and the report find a frame's pose with it.
+*/
+long rowOfFrame(const std::vector<MotionSample> &motion, long frame);
 
 /*!
   \brief Geometry of the camera mount: the yaw joint and the camera's fixed pose on it.

@@ -14,7 +14,7 @@
 #include <vector>
 #include <visp3/core/vpPoseVector.h>
 #include <yawdepth/core/files.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {

@@ -48,7 +48,7 @@
 #include <functional>
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {
@@ -90,8 +90,8 @@ struct RefineResult {
   std::vector<std::vector<bool>> outliers; //!< Per track, per observation: flagged as an outlier.
   std::vector<MotionSample> motion;        //!< Refined motion-log rows (same frames as the input).
   int iterations = 0;                      //!< Ceres iterations, all solves together.
-  /*! Initial cost of the final (inlier, non-robust) solve. */
-  double initial_cost = 0, final_cost = 0; //!< Final cost of the final (inlier, non-robust) solve.
+  double initial_cost = 0;                 //!< Initial cost of the final (inlier, non-robust) solve.
+  double final_cost = 0;                   //!< Final cost of the final (inlier, non-robust) solve.
   bool converged = false;                  //!< Ceres reported convergence of the final solve.
 };
 

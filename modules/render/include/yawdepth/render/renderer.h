@@ -33,12 +33,9 @@ struct RenderOptions {
   int supersampling = 8;       //!< k x k samples per pixel where the pixel straddles an edge (1..64)
   double blur_sigma_px = 0.0;  //!< Gaussian optical blur (px); 0 = none
   double noise_sigma = 0.0;    //!< Gaussian sensor noise (gray levels); 0 = none
-  /*! gray level of the board's black parts */
-  double black = 25, white = 230, background = 110; //!< gray level around the board
-  /*!
-    \var white
-    gray level of the board's white parts
-  */
+  double black = 25;           //!< gray level of the board's black parts
+  double white = 230;          //!< gray level of the board's white parts
+  double background = 110;     //!< gray level around the board
   std::uint64_t seed = 1;      //!< noise seed
 
   /*! \name What makes a render look like a photograph (all off by default)

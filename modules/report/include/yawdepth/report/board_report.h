@@ -7,7 +7,7 @@
 #include <Eigen/Core>
 #include <string>
 #include <vector>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/features/pattern.h>
 #include <yawdepth/geometry/rig.h>
 
@@ -23,8 +23,8 @@ struct BoardPoint {
 
 /*! \brief A distance between two neighbouring features (m). */
 struct BlockLength {
-  /*! id of the first feature */
-  long id_a = 0, id_b = 0; //!< id of the second feature
+  long id_a = 0;           //!< id of the first feature
+  long id_b = 0;           //!< id of the second feature
   double length = 0;       //!< distance between the two (m)
 };
 
@@ -38,8 +38,8 @@ struct BoardMetrics {
   Eigen::Vector3d plane_point = Eigen::Vector3d::Zero();   //!< a point of the fitted plane (the points' centroid)
   std::vector<double> plane_distance;    //!< signed distance of each point to the plane, same order as points
   double max_plane_distance = 0;         //!< largest |distance|
-  /*! smallest camera-frame depth of the points */
-  double min_depth = 0, max_depth = 0;   //!< largest camera-frame depth of the points
+  double min_depth = 0;                  //!< smallest camera-frame depth of the points
+  double max_depth = 0;                  //!< largest camera-frame depth of the points
   /*! Chessboard: the board's pose in the world (wMo) by a rigid least-squares fit (Umeyama) of the
       nominal corners, corner id r*COLS+c at (c SQUARE, r SQUARE, 0), to the measured ones: ViSP's and
       OpenCV's chessboard frame (origin at corner 0, x along a row). Only when `has_board_pose`. */

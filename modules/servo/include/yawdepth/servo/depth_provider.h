@@ -70,7 +70,7 @@
 #include <yawdepth/camera/camera_model.h>
 #include <memory>
 #include <yawdepth/estimation/fused_estimator.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 #include <yawdepth/window/window_estimator.h>
 

@@ -69,8 +69,8 @@ namespace yawdepth {
 
 /*! \brief One feature as the helper sees it: its undistorted normalised position, depth and weight. */
 struct YawHelperFeature {
-  /*! normalised (undistorted) image coordinate x in the current camera frame */
-  double x = 0, y = 0; //!< normalised (undistorted) image coordinate y in the current camera frame
+  double x = 0;        //!< normalised (undistorted) image coordinate x in the current camera frame
+  double y = 0;        //!< normalised (undistorted) image coordinate y in the current camera frame
   double Z = 1;        //!< depth (m), > 0: the estimate, or the prior
   double weight = 1;   //!< weight of its depth information (>= 0), e.g. 0 once converged, 1 before
   /*! its current relative depth sigma sigma_Z / Z (> 0); NaN (the default): unknown, taken as 1 */
@@ -95,8 +95,8 @@ struct YawHelperOptions {
   /*! the current yaw is kept unless the best candidate's score beats it by this much (scores are
       relative to the best information gain: 0.01 = 1 %) */
   double switch_margin = 0.01;
-  /*! the pan joint's range: lower end (rad) */
-  double min_yaw = -M_PI, max_yaw = M_PI; //!< the pan joint's range: upper end (rad)
+  double min_yaw = -M_PI; //!< the pan joint's range: lower end (rad)
+  double max_yaw = M_PI;  //!< the pan joint's range: upper end (rad)
   /*! Where to pan when no feature needs depth information any more (every weight 0): the view in
       which new features' depth is best observed, e.g. the side view (+-pi/2) of a robot driving past
       what it measures. NaN (the default): keep the converged features centred. */

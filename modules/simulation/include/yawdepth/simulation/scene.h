@@ -13,7 +13,7 @@
 #include <vector>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <yawdepth/camera/camera_model.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {

@@ -64,7 +64,7 @@
 #include <vector>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/estimation/fused_estimator.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
 namespace yawdepth {
@@ -122,7 +122,7 @@ public:
     seen twice throws). Rows must have strictly increasing frame numbers and all be planar or all
     6-DoF (throws yawdepth::Error otherwise).
   */
-  std::vector<ObservationResult> addFrame(const MotionSample &row, const std::vector<FrameObservation> &observations);
+  std::vector<ObservationResult> addFrame(const MotionSample &row, const std::vector<FeatureObservation> &observations);
 
   /*!
     \brief A feature's point at its last observed frame, with covariance and status. Unknown ids

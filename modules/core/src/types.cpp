@@ -1,6 +1,6 @@
 #include <cmath>
 #include <yawdepth/error.h>
-#include <yawdepth/estimation/types.h>
+#include <yawdepth/core/types.h>
 
 namespace yawdepth {
 
@@ -25,6 +25,31 @@ const char *toString(Status s)
     return "inconsistent";
   }
   return "unknown";
+}
+
+const char *toString(Method m)
+{
+  switch (m) {
+  case Method::Paper:
+    return "paper";
+  case Method::Exact:
+    return "exact";
+  case Method::Fused:
+    return "fused";
+  case Method::Window:
+    return "window";
+  case Method::Refine:
+    return "refine";
+  }
+  return "unknown";
+}
+
+Method methodFromString(const std::string &word)
+{
+  for (Method m : {Method::Paper, Method::Exact, Method::Fused, Method::Window, Method::Refine})
+    if (word == toString(m))
+      return m;
+  throw Error("unknown method '" + word + "' (expected paper, exact, fused, window or refine)");
 }
 
 Status statusFromString(const std::string &word)

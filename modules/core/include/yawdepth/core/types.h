@@ -15,9 +15,20 @@ namespace yawdepth {
 
 /*! \brief One observation of a feature: its observed (distorted) pixel in a frame. */
 struct Observation {
-  long frame = 0;      //!< frame number
-  /*! observed pixel: column (px) */
-  double u = 0, v = 0; //!< observed pixel: row (px)
+  long frame = 0; //!< frame number
+  double u = 0;   //!< observed pixel: column (px)
+  double v = 0;   //!< observed pixel: row (px)
+};
+
+/*!
+  \brief One feature seen in one frame: its id and observed (distorted) pixel. What a detector or
+  tracker returns per image (the ids of a pattern are in features/pattern.h), and what
+  FusedEstimator, WindowEstimator and DepthProvider take per frame.
+*/
+struct FeatureObservation {
+  long id = 0;  //!< feature id
+  double u = 0; //!< observed pixel: column (px)
+  double v = 0; //!< observed pixel: row (px)
 };
 
 /*! \brief Every observation of one feature, sorted by frame. */
@@ -47,6 +58,24 @@ enum class Status {
 const char *toString(Status s);
 /*! \brief Parse a status word; throws yawdepth::Error for an unknown word. */
 Status statusFromString(const std::string &word);
+
+/*!
+  \brief The estimation methods, cheapest first: the `--method` words of `yawdepth estimate`.
+  yawdepth::estimatePoints() (yawdepth/pipeline/pipeline.h) runs any of them; estimateTracks()
+  (yawdepth/estimation/track_estimator.h) the first three.
+*/
+enum class Method {
+  Paper,  //!< "paper": eq. (5)-(7) on the last increment, as published.
+  Exact,  //!< "exact": finite-increment two-view form on the last increment, rotation compensated.
+  Fused,  //!< "fused": a recursive inverse-depth filter per feature over every frame (FusedEstimator).
+  Window, //!< "window": every point with the last frames' motion, older frames marginalised (WindowEstimator).
+  Refine  //!< "refine": joint MAP of every point with the motion over all frames (Ceres), started from fused.
+};
+
+/*! \brief "paper", "exact", "fused", "window", "refine". */
+const char *toString(Method m);
+/*! \brief Parse a method word; throws yawdepth::Error for an unknown one. */
+Method methodFromString(const std::string &word);
 
 /*!
   \brief A point estimate with its uncertainty.

@@ -1,7 +1,7 @@
 #pragma once
-/*!
-  \file quiet_visp.h
-  \brief Run ViSP calls that print without printing (the library never prints).
+/*
+  quiet_visp.h: run ViSP calls that print without printing (the library never prints). Private to
+  yawdepth::camera and yawdepth::calibration (not installed).
 */
 #include <iosfwd>
 #include <mutex>

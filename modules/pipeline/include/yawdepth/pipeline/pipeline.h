@@ -1,0 +1,75 @@
+#pragma once
+/*!
+  \file pipeline.h
+  \brief One entry point for every estimation method: tracks and the motion log in, points, outlier
+  flags and the motion as estimated out. The command line (`yawdepth estimate`, `measure`) and the
+  benchmarks run their methods through estimatePoints().
+
+  What it owns, so that no caller repeats it:
+  - the method choice (yawdepth::Method: paper, exact, fused, window, refine) and whether this
+    build has it (refine needs Ceres);
+  - the observations no method can use (not finite, more than an image size outside the image, or
+    outside what the lens model can undistort): taken out before estimation and flagged as
+    outliers, so that one broken pixel does not spoil a feature;
+  - refine's start: `fused` on the same tracks, then the joint refinement;
+  - the outlier flags per observation and the motion as the method estimated it (refine's refined
+    rows; the measured rows for the others).
+*/
+#include <functional>
+#include <vector>
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/core/types.h>
+#include <yawdepth/geometry/rig.h>
+#include <yawdepth/refine/refine.h>
+#include <yawdepth/window/window_estimator.h>
+
+namespace yawdepth {
+
+/*! \brief Options of estimatePoints(): the method and what every method shares. */
+struct PipelineOptions {
+  Method method = Method::Fused; //!< The method (bestMethod() is the most accurate this build has).
+  NoiseModel noise;              //!< Noise of pixels, motion and yaw readings.
+  GateOptions gates;             //!< no_motion / degenerate gates.
+  double robust_threshold_px = RefineOptions().robust_threshold_px;   //!< window, refine: scale of the robust loss (px).
+  double outlier_threshold_px = RefineOptions().outlier_threshold_px; //!< window, refine: larger reprojection errors are outliers (px).
+  int window = WindowOptions().window; //!< window: frames kept in the window (>= 2).
+  int threads = 1;                     //!< refine: solver threads.
+  /*! refine: called as the solve goes (RefineOptions::progress); empty: not called. */
+  std::function<void(const RefineProgress &)> progress;
+  /*! Take out the observations no method can use and flag them as outliers (see the file); false
+      gives them to the method as they are. */
+  bool drop_unusable = true;
+  /*!
+    \brief Throws yawdepth::Error, one line, when the options cannot give an answer: a bad noise
+    model or gate, a pixel noise under 1e-6 px for fused, window or refine (they weigh every
+    observation by it), a robust or outlier threshold under 1e-6 px for window and refine, fewer
+    than one thread, or refine in a build without Ceres.
+  */
+  void validate() const;
+};
+
+/*! \brief What estimatePoints() returns. */
+struct PipelineResult {
+  std::vector<PointEstimate> points;       //!< One per track, same order, at the track's last observation.
+  std::vector<std::vector<bool>> outliers; //!< Per track and observation: rejected (or unusable).
+  std::vector<MotionSample> motion;        //!< The motion as estimated (refine) or as given (the others).
+};
+
+/*! \brief Whether this build has the method (every one but refine always; refine with Ceres). */
+bool methodAvailable(Method m);
+/*! \brief The most accurate method this build has: refine with Ceres, else fused. */
+Method bestMethod();
+
+/*!
+  \brief Estimate every track's point with the chosen method.
+  \param camera Camera model (observed pixels are undistorted with it).
+  \param rig Yaw rig.
+  \param motion Motion-log rows sorted by strictly increasing frame; every observed frame must be in it.
+  \param tracks The features; a track with fewer than two observations gets `too_few_frames`.
+  \param options The method and its options (validated first).
+  \throws yawdepth::Error for bad options or inconsistent input (an observed frame not in the log).
+*/
+PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                              const std::vector<Track> &tracks, const PipelineOptions &options);
+
+} // namespace yawdepth

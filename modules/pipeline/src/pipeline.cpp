@@ -1,0 +1,148 @@
+#include <yawdepth/pipeline/pipeline.h>
+
+#include <cmath>
+#include <string>
+#include <utility>
+#include <yawdepth/error.h>
+#include <yawdepth/estimation/track_estimator.h>
+#include <yawdepth/window/window_estimator.h>
+
+namespace yawdepth {
+
+namespace {
+
+/* The smallest pixel noise and robust scale the weighted methods accept: zero (or a denormal)
+   would give infinite weights and NaN uncertainties, not an answer. */
+constexpr double kMinWeightPx = 1e-6;
+
+/* An observation no estimator can use: not finite, more than an image size outside the image, or
+   outside what the lens model can undistort. */
+bool unusableObservation(const CameraModel &camera, const Observation &ob)
+{
+  if (!std::isfinite(ob.u) || !std::isfinite(ob.v))
+    return true;
+  if (camera.width() > 0 && camera.height() > 0) {
+    const double w = camera.width(), h = camera.height();
+    if (ob.u < -w || ob.u > 2 * w || ob.v < -h || ob.v > 2 * h)
+      return true;
+  }
+  Eigen::Vector2d m;
+  return !camera.undistort(Eigen::Vector2d(ob.u, ob.v), m);
+}
+
+/* The chosen method on the tracks as given. */
+PipelineResult run(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                   const std::vector<Track> &tracks, const PipelineOptions &options)
+{
+  PipelineResult r;
+  if (options.method == Method::Window) {
+    WindowOptions wo;
+    wo.noise = options.noise;
+    wo.gates = options.gates;
+    wo.robust_threshold_px = options.robust_threshold_px;
+    wo.outlier_threshold_px = options.outlier_threshold_px;
+    wo.window = options.window;
+    r.points = windowTracks(camera, rig, motion, tracks, wo, &r.outliers);
+    r.motion = motion;
+    return r;
+  }
+  const bool refine = options.method == Method::Refine;
+  TrackEstimatorOptions to;
+  to.method = refine ? Method::Fused : options.method; // refine starts from fused
+  to.two_view.noise = options.noise;
+  to.two_view.gates = options.gates;
+  r.points = estimateTracks(camera, rig, motion, tracks, to, &r.outliers);
+  if (!refine) {
+    r.motion = motion;
+    return r;
+  }
+  RefineOptions ro;
+  ro.noise = options.noise;
+  ro.gates = options.gates;
+  ro.robust_threshold_px = options.robust_threshold_px;
+  ro.outlier_threshold_px = options.outlier_threshold_px;
+  ro.threads = options.threads;
+  ro.progress = options.progress;
+  RefineResult refined = refineWindow(camera, rig, motion, tracks, r.points, ro);
+  r.points = std::move(refined.points);
+  r.outliers = std::move(refined.outliers);
+  r.motion = std::move(refined.motion);
+  return r;
+}
+
+} // namespace
+
+void PipelineOptions::validate() const
+{
+  noise.validate();
+  gates.validate();
+  const bool weighted = method == Method::Fused || method == Method::Window || method == Method::Refine;
+  const std::string name = toString(method);
+  if (!methodAvailable(method))
+    throw Error("method " + name + " is unavailable: this yawdepth was built without Ceres");
+  if (weighted && !(noise.sigma_px >= kMinWeightPx))
+    throw Error("pixel noise " + std::to_string(noise.sigma_px) + " px: method " + name +
+                " needs at least 1e-6 px (it weighs every observation by it)");
+  if ((method == Method::Window || method == Method::Refine) && !(robust_threshold_px >= kMinWeightPx))
+    throw Error("method " + name + " needs a robust threshold of at least 1e-6 px (the scale of its robust loss)");
+  if (method == Method::Window && !(outlier_threshold_px >= kMinWeightPx))
+    throw Error("method window needs an outlier threshold of at least 1e-6 px");
+  if (method == Method::Window && window < 2)
+    throw Error("method window needs a window of at least 2 frames");
+  if (threads < 1)
+    throw Error("refine needs at least one thread");
+}
+
+bool methodAvailable(Method m) { return m != Method::Refine || refineAvailable(); }
+
+Method bestMethod() { return refineAvailable() ? Method::Refine : Method::Fused; }
+
+PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                              const std::vector<Track> &tracks, const PipelineOptions &options)
+{
+  options.validate();
+  if (!options.drop_unusable)
+    return run(camera, rig, motion, tracks, options);
+  // Observations that no method can use are taken out before estimation and reported as outliers:
+  // the feature is estimated from the rest (a track left with none keeps them all, and its method
+  // says why it failed).
+  std::vector<std::vector<bool>> unusable(tracks.size());
+  std::vector<Track> usable_tracks; // a copy only when some observation has to go
+  bool any_unusable = false;
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    unusable[i].assign(tracks[i].observations.size(), false);
+    Track kept;
+    kept.id = tracks[i].id;
+    for (std::size_t k = 0; k < tracks[i].observations.size(); ++k) {
+      unusable[i][k] = unusableObservation(camera, tracks[i].observations[k]);
+      if (!unusable[i][k])
+        kept.observations.push_back(tracks[i].observations[k]);
+    }
+    if (kept.observations.size() == tracks[i].observations.size() || kept.observations.empty()) {
+      unusable[i].assign(tracks[i].observations.size(), false);
+      continue;
+    }
+    if (!any_unusable)
+      usable_tracks = tracks;
+    any_unusable = true;
+    usable_tracks[i] = std::move(kept);
+  }
+  if (!any_unusable)
+    return run(camera, rig, motion, tracks, options);
+  PipelineResult r = run(camera, rig, motion, usable_tracks, options);
+  // The flags back onto the original observations.
+  std::vector<std::vector<bool>> full(tracks.size());
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    full[i] = unusable[i];
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < tracks[i].observations.size(); ++k)
+      if (!unusable[i][k]) {
+        full[i][k] = i < r.outliers.size() && kept < r.outliers[i].size() && r.outliers[i][kept];
+        ++kept;
+      }
+  }
+  r.outliers = std::move(full);
+  return r;
+}
+
+} // namespace yawdepth
