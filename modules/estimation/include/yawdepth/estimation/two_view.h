@@ -33,7 +33,7 @@ struct TwoViewOptions {
 /*!
   \brief Exact depth at the current frame from the u-row, for known rotation and translation:
   \f[ Z_{cur} = \frac{t_1 r_3 - t_3 r_1}{x_{cur} r_3 - r_1} \f]
-  For a pure translation (\f$ R = I,\ t = -(dX_c, dY_c, dZ_c) \f$) this is method.md's
+  For a pure translation (\f$ R = I,\ t = -(dX_c, dY_c, dZ_c) \f$) this is docs/method.md's
   \f$ Z_k = (x_{k-1} dZ_c - dX_c)/(x_k - x_{k-1}) \f$, the finite-increment form of eq. (5).
 */
 double exactDepthURow(const Eigen::Vector2d &m_prev, const Eigen::Vector2d &m_cur, const Eigen::Matrix3d &R,
@@ -92,7 +92,7 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
   to the current frame, the increment of eq. (4) taken from the relative motion (\f$ c_d = -t \f$),
   a known rotation removed to first order with the interaction matrix's rotational columns.
 
-  Being first order, it is biased by about \f$ dZ_c/Z \f$ (method.md): it returns, exactly, the
+  Being first order, it is biased by about \f$ dZ_c/Z \f$ (docs/method.md): it returns, exactly, the
   depth of the *previous* frame for a pure translation. Kept for comparison with the paper.
   Gates as estimateExact(), with the parallax measured on the u-row only. The covariance is
   propagated by central finite differences of the same function.
