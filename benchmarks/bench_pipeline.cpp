@@ -1,6 +1,6 @@
 // The whole per-frame pipeline of `measure` / the servo provider at 640x480: chessboard detection
 // with sub-pixel corners, then tracking by id and the `fused` update of every corner, against
-// detection alone. Target (issue #4): the estimation costs under 5 % on top of detection.
+// detection alone. Target (docs/method.md): the estimation costs under 5 % on top of detection.
 //
 //   bench_pipeline [--frames N] [--repeat R]
 //

@@ -3,7 +3,7 @@
 
   Usage: estimate_from_files <camera.yaml|.xml> <rig.yaml> <motion.csv> <tracks.csv>
 
-  The four inputs are the project's public file formats (shared/docs/formats.md); for instance
+  The four inputs are the project's public file formats (docs/formats.md); for instance
   `yawdepth simulate --camera calib/paper_camera.yaml --rig calib/paper_rig.yaml --out-dir DIR`
   writes a motion.csv and a tracks.csv to try it on. Each reader throws yawdepth::Error with a
   one-line message naming the file (and line) at fault; this program prints it and returns 1.

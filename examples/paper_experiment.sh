@@ -3,7 +3,7 @@
 #
 #   examples/paper_experiment.sh [YAWDEPTH_BINARY] [OUTPUT_FOLDER]
 #
-# Setup (shared/docs/method.md): the paper's camera (640x480, fx 1734.1, fy 1734.5, Brown
+# Setup (docs/method.md, the experiment): the paper's camera (640x480, fx 1734.1, fy 1734.5, Brown
 # distortion) and rig (Lb = 150.3 mm), a chessboard of 5 x 4 inner corners with 20 mm squares about
 # 620 mm in front of the camera. Images are rendered with anti-aliasing, optical blur (sigma 0.7 px)
 # and sensor noise (2 gray levels), then `yawdepth measure` detects the corners and measures them.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Command-line contract test for yawdepth (see shared/docs/formats.md).
+# Command-line contract test for yawdepth (see docs/formats.md).
 #
 #   YAWDEPTH=/path/to/yawdepth CALIB=/path/to/calib bash tests/cli_contract.sh
 #

@@ -13,8 +13,8 @@ TEST_CASE("the Section 4 table is reproduced term by term", "[error-analysis]")
     double depth, u_offset;
     const char *odo, *yaw, *pixel, *parallax, *total;
   };
-  // method.md's table; for the side view at 1000 mm the paper prints 0.0001 for the yaw term,
-  // the first-order model gives 2.6e-5 (method.md says so); the total is 5.30 % either way.
+  // docs/method.md's table; for the side view at 1000 mm the paper prints 0.0001 for the yaw term,
+  // the first-order model gives 2.6e-5 (docs/method.md says so); the total is 5.30 % either way.
   const Expect rows[] = {
       {"front", 0.5, 10, "0.05", "0.1484", "0.01", "0.25", "45.84 %"},
       {"front", 0.5, 20, "0.05", "0.0742", "0.005", "0.125", "25.42 %"},

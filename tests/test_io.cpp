@@ -1,4 +1,4 @@
-// Tests of the public file formats (shared/docs/formats.md): readers, writers, atomic writes.
+// Tests of the public file formats (docs/formats.md): readers, writers, atomic writes.
 #include <catch2/catch.hpp>
 
 #include <algorithm>

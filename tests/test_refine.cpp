@@ -24,7 +24,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-// Issue targets (the test's acceptance bounds are a little looser than the issue's pooled 1.10
+// Targets (the test's acceptance bounds are a little looser than docs/method.md's pooled 1.10
 // because it runs fewer trials).
 constexpr double kMaxRmseOverCrlb = 1.15;
 constexpr double kMinCoverage2Sigma = 0.88, kMaxCoverage2Sigma = 0.99;

@@ -11,7 +11,7 @@ using namespace yawdepth;
 
 namespace {
 
-constexpr double kPinholeRelTol = 1e-9;   // issue #2: exact to 1e-9 relative (pinhole)
+constexpr double kPinholeRelTol = 1e-9;   // docs/method.md's exactness: 1e-9 relative (pinhole)
 constexpr double kDistortedRelTol = 1e-6; // and 1e-6 with distortion
 
 CameraModel paperPinhole() { return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {}, 640, 480); }
@@ -123,7 +123,7 @@ TEST_CASE("exact is exact on noise-free data with ViSP's kud distortion", "[exac
   checkExactness(vispDistorted(), kDistortedRelTol, 24);
 }
 
-TEST_CASE("the u-row and v-row depth formulas are the finite-increment forms of method.md", "[exact]")
+TEST_CASE("the u-row and v-row depth formulas are the finite-increment forms of docs/method.md", "[exact]")
 {
   // Pure translation: t = -(dXc, dYc, dZc).
   const double dX = 0.028, dY = 0.001, dZ = -0.028, Z = 0.62;

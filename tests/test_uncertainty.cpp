@@ -14,7 +14,7 @@ using namespace yawdepth;
 namespace {
 
 constexpr double kFdRelTol = 1e-5;        // central differences vs forward-mode derivatives
-constexpr double kMonteCarloRelTol = 0.10; // issue #2: predicted sigma within 10 % of the spread
+constexpr double kMonteCarloRelTol = 0.10; // docs/method.md: predicted sigma within 10 % of the spread
 constexpr int kTrials = 20000;             // std of a std estimate: 1/sqrt(2N) = 0.5 %
 
 struct Case {

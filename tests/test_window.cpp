@@ -25,7 +25,7 @@ constexpr double kDeg = M_PI / 180.0;
 constexpr double kExact = 1e-6;
 constexpr double kFiniteDifference = 1e-5;
 // Noise-scaled acceptance of the Monte Carlo tests (fewer trials than the benchmark's, so a little
-// looser than the pooled 1.2 and coverage 0.90 to 0.98).
+// looser than docs/method.md's pooled 1.2 and coverage 0.90 to 0.98).
 constexpr double kMaxRatio = 1.3;
 constexpr double kMinCoverage = 0.86, kMaxCoverage = 0.995;
 

@@ -80,7 +80,7 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
   to the current frame, the increment of eq. (4) taken from the relative motion (\f$ c_d = -t \f$),
   a known rotation removed to first order with the interaction matrix's rotational columns.
 
-  Being first order, it is biased by about \f$ dZ_c/Z \f$ (method.md): it returns, exactly, the
+  Being first order, it is biased by about \f$ dZ_c/Z \f$ (docs/method.md): it returns, exactly, the
   depth of the *previous* frame for a pure translation. Kept for comparison with the paper.
   Gates as estimateExact(), with the parallax measured on the u-row only. The covariance is
   propagated by central finite differences of the same function.

@@ -3,7 +3,7 @@
   \file pattern.h
   \brief Calibration patterns: their text form (`--pattern`), their geometry and feature ids.
 
-  Text form (shared/docs/formats.md):
+  Text form (docs/formats.md, "Patterns"):
   - `chessboard:COLSxROWS:SQUARE`: COLS x ROWS inner corners (at least 3 x 3), squares of SQUARE
     metres.
   - `apriltag:FAMILY:SIZE`: AprilTags of a family (36h11, 25h9, 16h5, circle21h7, circle49h12,

@@ -1,7 +1,7 @@
 #pragma once
 /*!
   \file files.h
-  \brief The public file formats (shared/docs/formats.md): motion log, feature tracks, rig file,
+  \brief The public file formats (docs/formats.md): motion log, feature tracks, rig file,
   points output. Every reader throws yawdepth::Error with a one-line reason naming the file and,
   where there is one, the line and column: missing file, empty file, bad header, missing column,
   text in a number, NaN or infinite number, duplicated or unsorted frames.
