@@ -15,27 +15,208 @@
   --yaw-helper adds yawdepth::recommendYawRate() as a secondary task (ViSP's large projection
   operator) while some depth has not converged.
 
+  The servo loop is written here (runServoSimulation()), as ViSP's tutorials write theirs
+  (tutorial-ibvs-4pts, servoSimuPoint2DCamVelocity): the desired and current vpFeaturePoint's, the
+  vpServo task, and each period: observe the corners, give the DepthProvider the odometry and the
+  pan reading, set each feature's Z, compute the control law, saturate it, move the robot. The
+  simulated world (the robot's kinematics, the tag, the noise, the PNG) is in servo_sim/, beside
+  this file; tests/test_servo.cpp and servo_table.sh run this same loop (the test compiles this file
+  without its main: servo_sim/CMakeLists.txt).
+
   Writes a PNG only when asked (--png FILE; nothing by default): the corners' image trajectories and
   the depths over time. --display opens a ViSP window. The last line is
     converged iterations=N final_error=E      (E: true mean corner error in pixels)
   or  diverged iterations=N final_error=E reason=R
 */
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
+#include <limits>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <visp3/core/vpConfig.h>
 #include <visp3/core/vpImage.h>
+#include <visp3/core/vpVelocityTwistMatrix.h>
 #include <visp3/gui/vpDisplayOpenCV.h>
 #include <visp3/gui/vpDisplayX.h>
+#include <visp3/visual_features/vpFeaturePoint.h>
+#include <visp3/vs/vpServo.h>
 
-#include <yawdepth/servo/servo_simulation.h>
+#include <yawdepth/servo/depth_provider.h>
+#include <yawdepth/servo/yaw_helper.h>
+
+#include "servo_sim/servo_sim.h"
+
+namespace servo_sim {
+
+ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<void(const ServoSimStep &)> &on_step)
+{
+  // The simulated world: the tag, the goal and the robot at its start. The robot's odometry
+  // dead-reckons from the same start.
+  const TagScene scene(o);
+  const yawdepth::CameraModel &camera = o.camera;
+  const std::size_t n = scene.ids.size();
+  UnicyclePanRobot robot = scene.start;
+  UnicyclePanRobot odometry = robot;
+  Noise noise(o.seed);
+
+  // Desired features: the corners seen from the goal.
+  ServoSimResult result;
+  std::vector<vpFeaturePoint> s(n), sd(n);
+  const vpHomogeneousMatrix cdMw = scene.wMcd.inverse();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d P = scene.cameraPoint(cdMw, i);
+    sd[i].buildFrom(P.x() / P.z(), P.y() / P.z(), P.z());
+    result.desired_pixels.push_back(camera.project(Eigen::Vector2d(P.x() / P.z(), P.y() / P.z())));
+  }
+
+  // The task: the three joints (v, omega, pan rate) move the camera through eJe = the robot's
+  // Jacobian cJq (cVe = identity); the interaction matrix of the current features, whose depths
+  // are what the provider sets.
+  vpServo task;
+  task.setServo(vpServo::EYEINHAND_L_cVe_eJe);
+  task.setInteractionMatrixType(vpServo::CURRENT);
+  task.setLambda(o.lambda);
+  task.set_cVe(vpVelocityTwistMatrix());
+  for (std::size_t i = 0; i < n; ++i)
+    task.addFeature(s[i], sd[i]);
+
+  yawdepth::DepthProvider provider(camera, o.rig, o.provider);
+
+  vpColVector qdot(3, 0.0);
+  result.reason = "max_iterations";
+  for (int k = 0; k <= o.max_iterations; ++k) {
+    ServoSimStep st;
+    st.iteration = k;
+    st.time = k * o.dt;
+    st.robot = robot.sample(k);
+
+    // Observe the corners: (id, pixel) as a tracker gives them, and the truth for the record.
+    const CornerView view = scene.observe(robot, noise);
+    st.pixels = view.pixels;
+    st.true_Z = view.true_Z;
+    double err = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      err += (st.pixels[i] - result.desired_pixels[i]).norm();
+    st.error_px = err / n;
+    result.final_error_px = st.error_px;
+    result.iterations = k;
+    if (view.lost) {
+      result.reason = "lost_features";
+      break;
+    }
+    if (!std::isfinite(st.error_px)) {
+      result.reason = "not_finite";
+      break;
+    }
+    if (st.error_px < o.tolerance_px) {
+      result.converged = true;
+      result.reason = "converged";
+      result.steps.push_back(st);
+      if (on_step)
+        on_step(result.steps.back());
+      break;
+    }
+    if (k == o.max_iterations)
+      break;
+
+    // Odometry as the robot reports it: dead-reckoned pose, noisy pan reading.
+    yawdepth::MotionSample odo = odometry.sample(k);
+    odo.yaw = robot.pan + o.sigma_pan * noise();
+
+    // Each feature: x, y from the observed pixel, Z from the chosen source.
+    if (o.depth == ServoDepthMode::Estimated)
+      provider.update(odo, view.observed);
+    for (std::size_t i = 0; i < n; ++i) {
+      double Z = 1.0, sigma = 0, est = std::numeric_limits<double>::quiet_NaN();
+      bool conv = false;
+      yawdepth::Status status = yawdepth::Status::TooFewFrames;
+      switch (o.depth) {
+      case ServoDepthMode::True:
+        Z = view.true_Z[i];
+        break;
+      case ServoDepthMode::Constant:
+        Z = o.desired_depth * (1.0 + o.constant_error);
+        break;
+      case ServoDepthMode::Estimated: {
+        const yawdepth::FeatureDepth f = provider.info(scene.ids[i]);
+        Z = f.depth;
+        sigma = f.sigma;
+        conv = f.converged;
+        status = f.status;
+        est = f.estimate;
+        break;
+      }
+      }
+      double x = 0, y = 0;
+      camera.pixelToMeter(view.observed[i].second, x, y);
+      s[i].buildFrom(x, y, Z);
+      st.used_Z.push_back(Z);
+      st.sigma_Z.push_back(sigma);
+      st.converged.push_back(conv);
+      st.status.push_back(status);
+      st.estimate_Z.push_back(est);
+    }
+
+    // Control: the robot's Jacobian at the measured pan.
+    UnicyclePanRobot measured = robot;
+    measured.pan = odo.yaw;
+    task.set_eJe(measured.cJq());
+    qdot = task.computeControlLaw();
+
+    // Optional secondary task: pan for parallax while some depth has not converged.
+    if (o.yaw_helper && o.depth == ServoDepthMode::Estimated) {
+      std::vector<yawdepth::YawHelperFeature> hf;
+      bool any = false;
+      for (std::size_t i = 0; i < n; ++i) {
+        yawdepth::YawHelperFeature f;
+        f.x = s[i].get_x();
+        f.y = s[i].get_y();
+        f.Z = s[i].get_Z();
+        f.weight = st.converged[i] ? 0.0 : 1.0;
+        any = any || !st.converged[i];
+        hf.push_back(f);
+      }
+      if (any) {
+        const yawdepth::YawRecommendation r =
+            yawdepth::recommendYawRate(camera, o.rig, odo.yaw, measured.visionVelocity(qdot[0], qdot[1]), hf, o.helper);
+        vpColVector de2dt(3, 0.0);
+        de2dt[2] = r.rate;
+        st.yaw_helper_rate = r.rate;
+        qdot += task.secondaryTask(de2dt, true);
+      }
+    }
+    // Saturation: scale every rate together.
+    const double scale = std::max({1.0, std::abs(qdot[0]) / o.max_v, std::abs(qdot[1]) / o.max_omega,
+                                   std::abs(qdot[2]) / o.max_pan_rate});
+    qdot /= scale;
+    if (!std::isfinite(qdot.sumSquare())) {
+      result.reason = "not_finite";
+      break;
+    }
+    st.qdot = qdot;
+    result.steps.push_back(st);
+    if (on_step)
+      on_step(result.steps.back());
+
+    // Move the robot; its wheel odometry measures v and omega with noise.
+    robot.step(qdot, o.dt);
+    vpColVector measured_rates = qdot;
+    measured_rates[0] *= 1.0 + o.sigma_odom_rel * noise();
+    measured_rates[1] *= 1.0 + o.sigma_odom_rel * noise();
+    odometry.step(measured_rates, o.dt);
+  }
+  return result;
+}
+
+} // namespace servo_sim
+
+#ifndef SERVO_SIM_LOOP_ONLY // defined where this file is compiled for tests/test_servo.cpp (servo_sim/CMakeLists.txt)
 
 namespace {
 
@@ -46,71 +227,11 @@ void usage()
               "       [--sigma-pan RAD] [--max-iterations N] [--png FILE|none] [--display] [--quiet]\n");
 }
 
-const cv::Scalar kColours[] = {{40, 40, 220}, {40, 160, 40}, {220, 90, 30}, {160, 40, 160}};
-
-void writePlot(const std::string &path, const yawdepth::ServoSimOptions &o, const yawdepth::ServoSimResult &r)
-{
-  const int W = 640, H = 480, pad = 40;
-  cv::Mat img(H + 2 * pad, 2 * W + 3 * pad, CV_8UC3, cv::Scalar(255, 255, 255));
-  // Left: image plane.
-  const cv::Point off(pad, pad);
-  cv::rectangle(img, off, off + cv::Point(W, H), cv::Scalar(0, 0, 0));
-  cv::putText(img, "corner trajectories (px), x = desired", off + cv::Point(5, -10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-              cv::Scalar(0, 0, 0));
-  const double sx = double(W) / o.camera.width(), sy = double(H) / o.camera.height();
-  for (std::size_t i = 0; i < r.desired_pixels.size(); ++i) {
-    std::vector<cv::Point> pts;
-    for (const auto &st : r.steps)
-      if (i < st.pixels.size() && std::isfinite(st.pixels[i].x()))
-        pts.emplace_back(off + cv::Point(int(st.pixels[i].x() * sx), int(st.pixels[i].y() * sy)));
-    if (pts.size() > 1)
-      cv::polylines(img, pts, false, kColours[i % 4], 1, cv::LINE_AA);
-    if (!pts.empty())
-      cv::circle(img, pts.front(), 4, kColours[i % 4], 1, cv::LINE_AA);
-    const cv::Point d = off + cv::Point(int(r.desired_pixels[i].x() * sx), int(r.desired_pixels[i].y() * sy));
-    cv::drawMarker(img, d, kColours[i % 4], cv::MARKER_TILTED_CROSS, 10, 2);
-  }
-  // Right: depth over time.
-  const cv::Point off2(2 * pad + W, pad);
-  cv::rectangle(img, off2, off2 + cv::Point(W, H), cv::Scalar(0, 0, 0));
-  double zmax = 0;
-  for (const auto &st : r.steps) {
-    for (double z : st.true_Z)
-      zmax = std::max(zmax, z);
-    for (double z : st.used_Z)
-      zmax = std::max(zmax, z);
-  }
-  zmax = std::max(zmax * 1.1, 0.1);
-  const double tmax = std::max(1.0, r.steps.empty() ? 1.0 : r.steps.back().time);
-  auto P = [&](double t, double z) {
-    return off2 + cv::Point(int(t / tmax * (W - 1)), int((1.0 - std::min(z, zmax) / zmax) * (H - 1)));
-  };
-  char label[200];
-  std::snprintf(label, sizeof label, "depth Z (m) over %.1f s, 0..%.2f m: thin = true, thick = used (%s)", tmax, zmax,
-                yawdepth::toString(o.depth));
-  cv::putText(img, label, off2 + cv::Point(5, -10), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
-  for (std::size_t i = 0; i < r.desired_pixels.size(); ++i) {
-    std::vector<cv::Point> t, u;
-    for (const auto &st : r.steps) {
-      if (i < st.true_Z.size())
-        t.push_back(P(st.time, st.true_Z[i]));
-      if (i < st.used_Z.size())
-        u.push_back(P(st.time, st.used_Z[i]));
-    }
-    if (t.size() > 1)
-      cv::polylines(img, t, false, kColours[i % 4], 1, cv::LINE_AA);
-    if (u.size() > 1)
-      cv::polylines(img, u, false, kColours[i % 4], 2, cv::LINE_AA);
-  }
-  if (!cv::imwrite(path, img))
-    std::fprintf(stderr, "servo_ibvs_yawing_camera: cannot write %s\n", path.c_str());
-}
-
 } // namespace
 
 int main(int argc, char **argv)
 {
-  yawdepth::ServoSimOptions o;
+  servo_sim::ServoSimOptions o;
   std::string png = "none"; // write nothing unless asked: a run must not litter the current folder
   bool display = false, quiet = false, verbose = false;
   try {
@@ -122,7 +243,7 @@ int main(int argc, char **argv)
         return argv[++i];
       };
       if (a == "--depth")
-        o.depth = yawdepth::servoDepthModeFromString(next());
+        o.depth = servo_sim::servoDepthModeFromString(next());
       else if (a == "--constant-error")
         o.constant_error = std::stod(next());
       else if (a == "--view") {
@@ -182,15 +303,15 @@ int main(int argc, char **argv)
 #endif
   }
 
-  std::printf("servo: depth=%s%s view=%s yaw-helper=%s seed=%llu\n", yawdepth::toString(o.depth),
-              o.depth == yawdepth::ServoDepthMode::Constant
+  std::printf("servo: depth=%s%s view=%s yaw-helper=%s seed=%llu\n", servo_sim::toString(o.depth),
+              o.depth == servo_sim::ServoDepthMode::Constant
                   ? (" (Z = " + std::to_string(o.desired_depth * (1 + o.constant_error)) + " m)").c_str()
                   : "",
               o.side_view ? "side" : "front", o.yaw_helper ? "on" : "off", static_cast<unsigned long long>(o.seed));
-  std::vector<yawdepth::ServoSimStep> trail;
-  yawdepth::ServoSimResult r;
+  std::vector<servo_sim::ServoSimStep> trail;
+  servo_sim::ServoSimResult r;
   try {
-    r = yawdepth::runServoSimulation(o, [&](const yawdepth::ServoSimStep &st) {
+    r = servo_sim::runServoSimulation(o, [&](const servo_sim::ServoSimStep &st) {
       if (!quiet && st.iteration % 25 == 0) {
         std::printf("it %4d  error %8.3f px  Z used", st.iteration, st.error_px);
         for (std::size_t i = 0; i < st.used_Z.size(); ++i)
@@ -221,7 +342,7 @@ int main(int argc, char **argv)
     return 1;
   }
   if (png != "none")
-    writePlot(png, o, r);
+    servo_sim::writePlot(png, o, r);
   if (disp && !quiet) {
     vpDisplay::displayText(I, 20, 20, "Click to quit", vpColor::red);
     vpDisplay::flush(I);
@@ -233,3 +354,5 @@ int main(int argc, char **argv)
     std::printf("diverged iterations=%d final_error=%.4f reason=%s\n", r.iterations, r.final_error_px, r.reason.c_str());
   return r.converged ? 0 : 3;
 }
+
+#endif // SERVO_SIM_LOOP_ONLY

@@ -1,5 +1,7 @@
-// yawdepth::servo: the depth provider for vpFeaturePoint, the yaw helper, the pan robot's
-// Jacobian and a short simulated servo run. Every random input is seeded.
+// yawdepth::servo: the depth provider for vpFeaturePoint, the yaw helper, the Pioneer's geometry;
+// and the servo example's (examples/servo_ibvs_yawing_camera.cpp, its simulated world in
+// examples/servo_sim/): the pan robot's Jacobian and short runs of the example's own loop. Every
+// random input is seeded.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -11,9 +13,10 @@
 #include <visp3/robot/vpSimulatorPioneerPan.h>
 #include <yawdepth/servo/depth_provider.h>
 #include <yawdepth/servo/pioneer_pan.h>
-#include <yawdepth/servo/servo_simulation.h>
 #include <yawdepth/servo/yaw_helper.h>
 #include <yawdepth/simulation/scene.h>
+
+#include "servo_sim.h" // examples/servo_sim/
 
 using namespace yawdepth;
 
@@ -521,7 +524,7 @@ TEST_CASE("pioneer pan: the rig and odometry give vpSimulatorPioneerPan's camera
 
 TEST_CASE("pan robot: the camera Jacobian matches the kinematics", "[servo]")
 {
-  UnicyclePanRobot robot;
+  servo_sim::UnicyclePanRobot robot;
   robot.rig = YawRig(Eigen::Vector3d(0.02, 0, 0.03));
   robot.x = 0.3;
   robot.z = -1.0;
@@ -532,7 +535,7 @@ TEST_CASE("pan robot: the camera Jacobian matches the kinematics", "[servo]")
   for (int j = 0; j < 3; ++j) {
     vpColVector q(3, 0.0);
     q[j] = 1.0;
-    UnicyclePanRobot moved = robot;
+    servo_sim::UnicyclePanRobot moved = robot;
     moved.step(q, dt);
     // Camera twist from the pose change, in the camera frame.
     const vpHomogeneousMatrix cMc2 = robot.wMc().inverse() * moved.wMc();
@@ -545,36 +548,72 @@ TEST_CASE("pan robot: the camera Jacobian matches the kinematics", "[servo]")
 TEST_CASE("servo: a short run converges with estimated depth, front and side", "[servo]")
 {
   for (bool side : {false, true}) {
-    ServoSimOptions o;
-    o.depth = ServoDepthMode::Estimated;
+    servo_sim::ServoSimOptions o;
+    o.depth = servo_sim::ServoDepthMode::Estimated;
     o.side_view = side;
     o.seed = 3;
     o.max_iterations = 400;
     o.provider.noise = NoiseModel{0.3, 0.0005, 0.05 * M_PI / 180, 0.0005};
-    const ServoSimResult r = runServoSimulation(o);
+    const servo_sim::ServoSimResult r = servo_sim::runServoSimulation(o);
     INFO("side " << side << " reason " << r.reason << " iterations " << r.iterations);
     REQUIRE(r.converged);
     CHECK(r.final_error_px < o.tolerance_px);
     CHECK(r.iterations < 200);
     // The estimate took over from the prior, and every depth handed to ViSP was positive.
     bool any_converged = false;
-    for (const ServoSimStep &st : r.steps)
+    for (const servo_sim::ServoSimStep &st : r.steps)
       for (std::size_t i = 0; i < st.used_Z.size(); ++i) {
         REQUIRE(st.used_Z[i] > 0);
         any_converged = any_converged || st.converged[i];
       }
     CHECK(any_converged);
     // The last depths are within 10 % of the truth.
-    const ServoSimStep &before_last = r.steps[r.steps.size() - 2];
+    const servo_sim::ServoSimStep &before_last = r.steps[r.steps.size() - 2];
     for (std::size_t i = 0; i < before_last.used_Z.size(); ++i)
       CHECK(std::abs(before_last.used_Z[i] - before_last.true_Z[i]) / before_last.true_Z[i] < 0.1);
   }
   // The other modes run too.
-  ServoSimOptions t;
-  t.depth = ServoDepthMode::True;
+  servo_sim::ServoSimOptions t;
+  t.depth = servo_sim::ServoDepthMode::True;
   t.max_iterations = 400;
-  CHECK(runServoSimulation(t).converged);
-  CHECK_THROWS_AS(servoDepthModeFromString("sensor"), Error);
+  CHECK(servo_sim::runServoSimulation(t).converged);
+  CHECK_THROWS_AS(servo_sim::servoDepthModeFromString("sensor"), Error);
+}
+
+TEST_CASE("servo: a constant depth 50 % too far converges, faster than true depth at front view and slower at side view",
+          "[servo]")
+{
+  // Measured (seed 1): front 100 iterations against 124 with true depth (0.806), side 141 against 97
+  // (1.454); over seeds 1..5 front 0.79-0.85, side 1.22-1.45 (the runs of examples/servo_table.sh).
+  // The tolerance leaves room for another compiler's round-off.
+  constexpr double kMeasuredFrontRatio = 100.0 / 124.0, kMeasuredSideRatio = 141.0 / 97.0;
+  constexpr double kRatioTolerance = 0.1; // both ratios stay on their side of 1 within it
+  for (bool side : {false, true}) {
+    servo_sim::ServoSimOptions c;
+    c.depth = servo_sim::ServoDepthMode::Constant;
+    c.constant_error = 0.5; // the default, said here: Z = 0.6 m x 1.5 = 0.9 m
+    c.side_view = side;
+    c.max_iterations = 400;
+    servo_sim::ServoSimOptions t = c;
+    t.depth = servo_sim::ServoDepthMode::True;
+    const servo_sim::ServoSimResult rc = servo_sim::runServoSimulation(c);
+    const servo_sim::ServoSimResult rt = servo_sim::runServoSimulation(t);
+    INFO("side " << side << " constant: " << rc.reason << " " << rc.iterations << " iterations, true depth: "
+                 << rt.reason << " " << rt.iterations);
+    REQUIRE(rc.converged);
+    REQUIRE(rt.converged);
+    CHECK(rc.final_error_px < c.tolerance_px);
+    // Every depth handed to the control law was the constant, and it stayed wrong to the end: at the
+    // goal the corners are about 0.6 m away.
+    for (const servo_sim::ServoSimStep &st : rc.steps)
+      for (double Z : st.used_Z)
+        REQUIRE(Z == Approx(c.desired_depth * (1.0 + c.constant_error)));
+    const servo_sim::ServoSimStep &before_last = rc.steps[rc.steps.size() - 2];
+    for (std::size_t i = 0; i < before_last.used_Z.size(); ++i)
+      CHECK(before_last.used_Z[i] / before_last.true_Z[i] == Approx(1.5).margin(0.05));
+    const double ratio = double(rc.iterations) / rt.iterations;
+    CHECK(ratio == Approx(side ? kMeasuredSideRatio : kMeasuredFrontRatio).margin(kRatioTolerance));
+  }
 }
 
 TEST_CASE("depth provider: default noise model, the same accuracy whatever the control period", "[servo][6dof]")
