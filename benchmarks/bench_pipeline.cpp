@@ -14,7 +14,7 @@
 #include <cstring>
 #include <string>
 #include <vector>
-#include <yawdepth/estimation/fused_estimator.h>
+#include <yawdepth/window/stream_estimator.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/render/renderer.h>
 
@@ -70,19 +70,16 @@ int main(int argc, char **argv)
   for (int r = 0; r < repeat; ++r) {
     PatternDetector detector(board.pattern);
     detector.setCamera(camera);
-    FusedOptions fo;
-    FusedEstimator fused(camera, rig, fo);
+    StreamOptions so; // the streaming entry point, as the servo's DepthProvider runs it
+    so.method = Method::Fused;
+    StreamEstimator fused(camera, rig, so);
     double detect_s = 0, estimate_s = 0;
     found = features = 0;
     for (int k = 0; k < frames; ++k) {
       const auto t0 = Clock::now();
       const FrameDetection d = detector.detect(images[k], k);
       const auto t1 = Clock::now();
-      std::vector<FeatureObservation> obs;
-      obs.reserve(d.features.size());
-      for (const FeatureObservation &f : d.features)
-        obs.push_back({f.id, f.u, f.v});
-      fused.addFrame(motion[k], obs);
+      fused.addFrame(motion[k], d.features); // the detector's (id, pixel) are the estimator's input
       const auto t2 = Clock::now();
       detect_s += std::chrono::duration<double>(t1 - t0).count();
       estimate_s += std::chrono::duration<double>(t2 - t1).count();
@@ -99,7 +96,7 @@ int main(int argc, char **argv)
               static_cast<double>(features) / frames);
   std::printf("%-52s %12s\n", "stage (median over runs, per frame)", "time (ms)");
   std::printf("%-52s %12.3f\n", "detection + sub-pixel corners (PatternDetector)", det);
-  std::printf("%-52s %12.4f\n", "tracking by id + fused update (FusedEstimator)", est);
+  std::printf("%-52s %12.4f\n", "tracking by id + fused update (StreamEstimator)", est);
   std::printf("%-52s %12.3f\n", "whole pipeline", det + est);
   std::printf("\nestimation on top of detection: %.2f %% (target: under 5 %%)\n", 100.0 * est / det);
   return 0;

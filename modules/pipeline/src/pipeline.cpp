@@ -30,17 +30,24 @@ bool unusableObservation(const CameraModel &camera, const Observation &ob)
   return !camera.undistort(Eigen::Vector2d(ob.u, ob.v), m);
 }
 
+/* WindowOptions or RefineOptions with what the pipeline's options share with them. */
+template <class Options> Options jointOptions(const PipelineOptions &p)
+{
+  Options o;
+  o.noise = p.noise;
+  o.gates = p.gates;
+  o.robust_threshold_px = p.robust_threshold_px;
+  o.outlier_threshold_px = p.outlier_threshold_px;
+  return o;
+}
+
 /* The chosen method on the tracks as given. */
 PipelineResult run(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                    const std::vector<Track> &tracks, const PipelineOptions &options)
 {
   PipelineResult r;
   if (options.method == Method::Window) {
-    WindowOptions wo;
-    wo.noise = options.noise;
-    wo.gates = options.gates;
-    wo.robust_threshold_px = options.robust_threshold_px;
-    wo.outlier_threshold_px = options.outlier_threshold_px;
+    WindowOptions wo = jointOptions<WindowOptions>(options);
     wo.window = options.window;
     r.points = windowTracks(camera, rig, motion, tracks, wo, &r.outliers);
     r.motion = motion;
@@ -56,11 +63,7 @@ PipelineResult run(const CameraModel &camera, const YawRig &rig, const std::vect
     r.motion = motion;
     return r;
   }
-  RefineOptions ro;
-  ro.noise = options.noise;
-  ro.gates = options.gates;
-  ro.robust_threshold_px = options.robust_threshold_px;
-  ro.outlier_threshold_px = options.outlier_threshold_px;
+  RefineOptions ro = jointOptions<RefineOptions>(options);
   ro.threads = options.threads;
   ro.progress = options.progress;
   RefineResult refined = refineWindow(camera, rig, motion, tracks, r.points, ro);

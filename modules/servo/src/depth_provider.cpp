@@ -12,24 +12,20 @@ namespace {
 
 bool finitePositive(double v) { return std::isfinite(v) && v > 0; }
 
-FusedOptions fusedOptions(const DepthProviderOptions &o)
+StreamOptions streamOptions(const DepthProviderOptions &o)
 {
   o.validate();
-  FusedOptions f;
-  f.sigma_px = o.noise.sigma_px;
-  f.max_missing_frames = o.max_missing_frames;
-  f.filter.noise = o.noise;
-  f.filter.prior_depth = o.initial_depth > 0 ? o.initial_depth : o.prior_depth;
-  return f;
-}
-
-WindowOptions windowOptions(const DepthProviderOptions &o)
-{
-  WindowOptions w;
-  w.noise = o.noise;
-  w.window = o.window;
-  w.prior_inverse_depth = 1.0 / (o.initial_depth > 0 ? o.initial_depth : o.prior_depth);
-  return w;
+  StreamOptions s;
+  s.method = o.method;
+  const double initial = o.initial_depth > 0 ? o.initial_depth : o.prior_depth;
+  s.fused.sigma_px = o.noise.sigma_px;
+  s.fused.max_missing_frames = o.max_missing_frames;
+  s.fused.filter.noise = o.noise;
+  s.fused.filter.prior_depth = initial;
+  s.window.noise = o.noise;
+  s.window.window = o.window;
+  s.window.prior_inverse_depth = 1.0 / initial;
+  return s;
 }
 
 } // namespace
@@ -60,12 +56,13 @@ void DepthProviderOptions::validate() const
     throw Error("depth provider: max_missing_frames must be non-negative");
   if (window < 2)
     throw Error("depth provider: window must be at least 2 frames");
+  if (method != DepthMethod::Window && method != DepthMethod::Fused)
+    throw Error(std::string("depth provider: method ") + toString(method) + " does not run frame by frame (window or fused do)");
   noise.validate();
 }
 
 DepthProvider::DepthProvider(const CameraModel &camera, const YawRig &rig, const Options &options)
-    : camera_(camera), rig_(rig), o_(options), fused_(camera, rig, fusedOptions(options)),
-      window_(std::make_unique<WindowEstimator>(camera, rig, windowOptions(options)))
+    : camera_(camera), rig_(rig), o_(options), stream_(camera, rig, streamOptions(options))
 {
 }
 
@@ -91,27 +88,9 @@ void DepthProvider::setPrior(long id, double Z)
 
 PointEstimate DepthProvider::estimate(long id) const
 {
-  const bool window = o_.method == DepthMethod::Window;
-  PointEstimate e = window ? window_->estimate(id) : fused_.estimate(id);
-  if (!e.ok() || !have_fed_)
-    return e;
-  // Carry the estimate from its frame (the feature's last observed frame) to the current period,
+  // The estimate carried from its frame (the feature's last observed frame) to the current period,
   // through the odometry.
-  const auto it = fed_rows_.find(e.frame);
-  if (it == fed_rows_.end()) { // older than the rows kept: not usable for the current frame
-    e.status = Status::TooFewFrames;
-    return e;
-  }
-  const MotionSample *from = &it->second;
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  fromVisp(curMprev(rig_, *from, current_), R, t);
-  e.c_P = R * e.c_P + t;
-  e.c_cov = R * e.c_cov * R.transpose();
-  e.v_P = rig_.visionPoint(current_.yaw, e.c_P);
-  if (!(e.c_P.z() > 0))
-    e.status = Status::Behind;
-  return e;
+  return have_fed_ ? stream_.estimateAt(id, current_) : stream_.estimate(id);
 }
 
 void DepthProvider::refresh(long id)
@@ -189,17 +168,7 @@ void DepthProvider::update(const MotionSample &odometry, const std::vector<std::
     obs.reserve(points.size());
     for (const auto &p : points)
       obs.push_back(FeatureObservation{p.first, p.second.get_u(), p.second.get_v()});
-    const bool window = o_.method == DepthMethod::Window;
-    if (window)
-      window_->addFrame(row, obs);
-    else
-      fused_.addFrame(row, obs);
-    fed_rows_[row.frame] = odometry;
-    // A feature's estimate is kept at its last observed frame while the estimator keeps it: in the
-    // window, or up to max_missing_frames for fused.
-    const long keep = window ? o_.window : static_cast<long>(o_.max_missing_frames) + 1;
-    while (!fed_rows_.empty() && fed_rows_.begin()->first <= row.frame - keep)
-      fed_rows_.erase(fed_rows_.begin());
+    stream_.addFrame(row, obs);
     last_fed_ = odometry;
     have_fed_ = true;
     skipped_ = 0;
@@ -215,7 +184,7 @@ void DepthProvider::update(const MotionSample &odometry, const std::vector<std::
   // hours keeps bounded memory.
   for (auto it = last_seen_.begin(); it != last_seen_.end();) {
     if (frames_used_ - it->second > o_.max_missing_frames) {
-      window_->forget(it->first);
+      stream_.forget(it->first);
       consistency_.erase(it->first);
       state_.erase(it->first); // forgotten: depth(id) is the prior again, and memory stays bounded
       it = last_seen_.erase(it);

@@ -68,19 +68,18 @@
 #include <visp3/core/vpImagePoint.h>
 #include <visp3/visual_features/vpFeaturePoint.h>
 #include <yawdepth/camera/camera_model.h>
-#include <memory>
-#include <yawdepth/estimation/fused_estimator.h>
 #include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
-#include <yawdepth/window/window_estimator.h>
+#include <yawdepth/window/stream_estimator.h>
 
 namespace yawdepth {
 
-/*! \brief The estimator behind a DepthProvider. */
-enum class DepthMethod {
-  Window, //!< WindowEstimator: every feature and the recent motion together (the default).
-  Fused   //!< FusedEstimator: one filter per feature (cheaper, several times less accurate).
-};
+/*!
+  \brief The estimator behind a DepthProvider: DepthMethod::Window (WindowEstimator: every feature
+  and the recent motion together, the default) or DepthMethod::Fused (FusedEstimator: one filter per
+  feature, cheaper, several times less accurate). The provider runs it through a StreamEstimator.
+*/
+using DepthMethod = Method;
 
 /*!
   \brief The provider's default noise model: 0.3 px; odometry that drifts by 2 % of the distance
@@ -127,7 +126,7 @@ struct DepthProviderOptions {
       in its state while it is seen within its window, restarts it when it comes back later, and
       drops what it kept of it after this many frames). */
   int max_missing_frames = 30;
-  DepthMethod method = DepthMethod::Window; //!< The estimator.
+  DepthMethod method = DepthMethod::Window; //!< The estimator: Window or Fused (the others throw).
   int window = 10;                       //!< Frames in the window estimator's window (>= 2).
   /*! \brief Throws yawdepth::Error for an invalid option. */
   void validate() const;
@@ -216,10 +215,8 @@ public:
   const YawRig &rig() const { return rig_; }
   /*! \brief The options. */
   const Options &options() const { return o_; }
-  /*! \brief The fused estimator (used when options().method is DepthMethod::Fused; its frames are the periods fed to it). */
-  const FusedEstimator &estimator() const { return fused_; }
-  /*! \brief The window estimator (used when options().method is DepthMethod::Window, the default). */
-  const WindowEstimator &windowEstimator() const { return *window_; }
+  /*! \brief The estimator, frame by frame (its frames are the periods fed to it). */
+  const StreamEstimator &stream() const { return stream_; }
 
 private:
   void refresh(long id);
@@ -228,9 +225,7 @@ private:
   CameraModel camera_;
   YawRig rig_;
   Options o_;
-  FusedEstimator fused_;
-  std::unique_ptr<WindowEstimator> window_;
-  std::map<long, MotionSample> fed_rows_; // the rows given to the estimator, by its frame number (as long as it may keep a feature)
+  StreamEstimator stream_;
   std::map<long, long> last_seen_;        // estimator frame at which each id was last given
   long period_ = 0, frames_used_ = 0, skipped_ = 0;
   bool have_fed_ = false;
