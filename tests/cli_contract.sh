@@ -836,6 +836,20 @@ refused motion_missing_tuz "tuz" estimate --camera "$YML" --rig "$A/eMc.yaml" --
   --tracks "$A/sim_orbit/tracks.csv"
 refused simulate_arm_with_step "excludes" simulate --camera "$YML" --rig "$A/eMc.yaml" --out-dir "$A/x" --arm orbit --step 0.1
 
+# The README's worked example, verbatim: its two printed rows (zc 0.9749 and 0.4775 m, sigma_zc
+# 0.0889 and 0.0334 m, to 4 decimals: the rows hold 17 digits) and the truth it quotes (0.958 and
+# 0.531 m).
+X="$W/worked"
+run "$X.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$X" --frames 10 --step 0.02 --yaw 1.5708 --points 12 \
+  --sigma-px 0.3 --sigma-odom 0.001 --sigma-heading 0.00087266 --sigma-yaw 0.00087266
+run "$X.est" estimate --camera "$YML" --rig "$RIG" --motion "$X/motion.csv" --tracks "$X/tracks.csv" --out "$X/points.csv"
+res=$(awk -F, 'FNR == 1 { next }
+  FILENAME == ARGV[1] && FNR <= 3 { t = t sprintf("%.3f ", $8) }
+  FILENAME == ARGV[2] && FNR <= 3 { e = e sprintf("%s %.4f %.4f %s ", $2, $8, $9, $10) }
+  END { print t "| " e }' "$X/truth.csv" "$X/points.csv" 2>/dev/null)
+want='0.958 0.531 | 9 0.9749 0.0889 ok 8 0.4775 0.0334 ok '
+[ "$res" = "$want" ] && pass || fail "README worked example: got '$res', README has '$want'"
+
 # No stray temporary files anywhere.
 left=$(find "$W" -name '.*.tmp*' | head -3)
 [ -z "$left" ] && pass || fail "files: temporary files left: $left"

@@ -169,11 +169,17 @@ TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard
   const CameraModel &t = set.truth;
   INFO("fx " << c.kx() << " fy " << c.ky() << " u0 " << c.u0() << " v0 " << c.v0() << " k1 "
              << c.brownCoefficients()[0] << " k2 " << c.brownCoefficients()[1] << " rms " << cal.rms_px);
-  CHECK(std::abs(c.kx() / t.kx() - 1) < 0.005);
-  CHECK(std::abs(c.ky() / t.ky() - 1) < 0.005);
-  CHECK(std::abs(c.u0() - t.u0()) < 1.0);
-  CHECK(std::abs(c.v0() - t.v0()) < 1.0);
-  CHECK(cal.rms_px < 0.08);
+  // README ("Calibrating the camera") quotes these: fx, fy within 0.04 %, the principal point within
+  // 0.36 px, RMS 0.013 px. Measured (Release, seeded): fx +0.0384 %, fy +0.0332 %, u0 -0.354 px,
+  // v0 +0.079 px, RMS 0.01337 px; the bounds sit just above.
+  constexpr double kFocalTol = 0.0005;  // relative (0.05 %)
+  constexpr double kCentreTolPx = 0.45;
+  constexpr double kRmsTolPx = 0.017;
+  CHECK(std::abs(c.kx() / t.kx() - 1) < kFocalTol);
+  CHECK(std::abs(c.ky() / t.ky() - 1) < kFocalTol);
+  CHECK(std::abs(c.u0() - t.u0()) < kCentreTolPx);
+  CHECK(std::abs(c.v0() - t.v0()) < kCentreTolPx);
+  CHECK(cal.rms_px < kRmsTolPx);
   CHECK(cal.views_used == 14);
   CHECK(cal.std_devs.size() == 12);
   CHECK(cal.std_devs[0] > 0);
@@ -388,6 +394,16 @@ TEST_CASE("calibrate-camera names the pattern that is there, or says there is no
 
 namespace {
 
+// README ("The rig: yawdepth calibrate-rig") quotes: on rendered sequences the offset within 0.12 mm
+// and the yaw zero within 0.005 degree. Measured on the three scenes below (Release, seeded; board
+// square / static at an angle / robot motion): offset x -0.074 / -0.062 / -0.112 mm, z +0.019 /
+// +0.035 / +0.046 mm; yaw zero -0.0042 deg / (kept) / -0.0016 deg; axis 0.009 / 0.004 / 0.002 deg;
+// RMS 0.031 to 0.032 px. The bounds sit just above.
+constexpr double kRigOffsetTol = 0.15e-3; // m, per observable component (x, z)
+constexpr double kRigYawZeroTol = 0.007 * kDeg;
+constexpr double kRigAxisTol = 0.02 * kDeg;
+constexpr double kRigRmsTolPx = 0.05;
+
 struct RigTruth {
   Eigen::Vector3d t0 = Eigen::Vector3d(-0.1503, 0.002, 0.01);
   double yaw_offset = 0.5 * kDeg;
@@ -464,12 +480,12 @@ TEST_CASE("calibrate-rig: offset, axis and yaw zero of a board standing square",
              << rig.yaw_axis.transpose() << " +- " << rig.yaw_axis_sigma.transpose() << "; rms " << rig.rms_px
              << " px, " << rig.iterations << " iterations");
   CHECK(rig.yaw_zero == YawZeroSource::BoardSquare);
-  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 0.001);
-  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < 0.001);
+  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < kRigOffsetTol);
+  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < kRigOffsetTol);
   CHECK(rig.camera_offset.y() == truth.t0.y());
-  CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < 0.1 * kDeg);
-  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < 0.1 * kDeg);
-  CHECK(rig.rms_px < 0.1);
+  CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < kRigYawZeroTol);
+  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < kRigAxisTol);
+  CHECK(rig.rms_px < kRigRmsTolPx);
   // The uncertainties are honest: the errors are within 4 sigma, and the sigmas are small.
   CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 4 * rig.camera_offset_sigma.x() + 1e-5);
   CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < 4 * rig.yaw_offset_sigma + 1e-5);
@@ -503,11 +519,11 @@ TEST_CASE("calibrate-rig: static robot, board at an angle: offset found, yaw zer
   CHECK(rig.yaw_zero == YawZeroSource::Fixed);
   CHECK(rig.yaw_offset == 0.0);
   CHECK(rig.yaw_offset_sigma == 0.0);
-  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 0.001);
-  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < 0.001);
+  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < kRigOffsetTol);
+  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < kRigOffsetTol);
   CHECK(rig.camera_offset.y() == 0.0);
-  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < 0.1 * kDeg);
-  CHECK(rig.rms_px < 0.1);
+  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < kRigAxisTol);
+  CHECK(rig.rms_px < kRigRmsTolPx);
 }
 
 TEST_CASE("calibrate-rig: the robot's translation gives the yaw zero", "[calibration][rig][slow]")
@@ -523,10 +539,11 @@ TEST_CASE("calibrate-rig: the robot's translation gives the yaw zero", "[calibra
   INFO("t0 " << rig.camera_offset.transpose() << "; yaw offset " << rig.yaw_offset / kDeg << " +- "
              << rig.yaw_offset_sigma / kDeg << " deg");
   CHECK(rig.yaw_zero == YawZeroSource::RobotMotion);
-  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 0.001);
-  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < 0.001);
-  CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < 0.1 * kDeg);
-  CHECK(rig.rms_px < 0.1);
+  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < kRigOffsetTol);
+  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < kRigOffsetTol);
+  CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < kRigYawZeroTol);
+  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < kRigAxisTol);
+  CHECK(rig.rms_px < kRigRmsTolPx);
 }
 
 TEST_CASE("calibrate-rig rejects too small a yaw spread and too few views", "[calibration][rig]")
@@ -751,9 +768,29 @@ TEST_CASE("hand-eye on the real franka photos: ViSP's published eMc within milli
               1e3 * dt, dr, 1e3 * (isoOf(cal.initial_camera_pose).translation() - isoOf(visp).translation()).norm(),
               Eigen::AngleAxisd(E0.linear()).angle() * 180 / M_PI, cal.rms_px, cal.initial_rms_px);
   std::printf("  largest hand-pose correction %.2f mm, %.3f deg\n", cal.pose_correction_mm, cal.pose_correction_deg);
+  const Eigen::Vector3d sig_t = 1e3 * cal.camera_pose_sigma.head<3>(), sig_r = cal.camera_pose_sigma.tail<3>() * 180 / M_PI;
+  std::printf("  stated 1-sigma of eMc: %.2f to %.2f mm, %.3f to %.3f deg\n", sig_t.minCoeff(), sig_t.maxCoeff(),
+              sig_r.minCoeff(), sig_r.maxCoeff());
+  // README ("A camera on an arm") quotes these: eMc within 2.4 mm and 0.41 deg of ViSP's (start 2.0 mm,
+  // 0.40 deg), RMS 0.19 px (4.4 px at the start), stated 1-sigma 0.5 to 0.8 mm and 0.05 to 0.09 deg,
+  // largest hand-pose correction 5.7 mm and 0.46 deg. Measured: 2.43 mm, 0.405 deg (start 2.02 mm,
+  // 0.397 deg), RMS 0.187 px (start 4.435 px), sigmas 0.46 to 0.84 mm and 0.048 to 0.092 deg,
+  // correction 5.73 mm and 0.464 deg. The bounds sit just around them.
+  constexpr double kEmcTolM = 3e-3, kEmcTolDeg = 0.5, kRmsTolPx = 0.25;
   CHECK(cal.views == 8);
-  CHECK(dt < 5e-3);
-  CHECK(dr < 0.5);
+  CHECK(dt < kEmcTolM);
+  CHECK(dr < kEmcTolDeg);
+  CHECK((isoOf(cal.initial_camera_pose).translation() - isoOf(visp).translation()).norm() < kEmcTolM);
+  CHECK(Eigen::AngleAxisd(E0.linear()).angle() * 180 / M_PI < kEmcTolDeg);
+  CHECK(cal.rms_px < kRmsTolPx);
+  CHECK(cal.initial_rms_px > 3.5);
+  CHECK(cal.initial_rms_px < 5.5);
+  CHECK(sig_t.minCoeff() > 0.35);
+  CHECK(sig_t.maxCoeff() < 1.0);
+  CHECK(sig_r.minCoeff() > 0.035);
+  CHECK(sig_r.maxCoeff() < 0.11);
+  CHECK(cal.pose_correction_mm < 7.0);
+  CHECK(cal.pose_correction_deg < 0.6);
   // ViSP's published board pose rMo within a few millimetres too.
   const vpHomogeneousMatrix rMo(0.5364858483, 0.123945742, 0.09155742609, 2.22636085, -2.213916548, 0.02071766945);
   CHECK((isoOf(cal.target_pose).translation() - isoOf(rMo).translation()).norm() < 5e-3);

@@ -4,7 +4,6 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -24,181 +23,16 @@
 #include <yawdepth/render/renderer.h>
 
 #include "corner_metrics.h"
+#include "render_scenes.h"
 
 using namespace yawdepth;
+using namespace yawdepth::bench;
 
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-CameraModel paperCamera() {
-  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-}
-/*! A wide camera with strong barrel distortion: small squares in pixels, curved edges. */
-CameraModel wideCamera() {
-  return CameraModel::brown(600.0, 602.0, 322.5, 238.0, {-0.28, 0.09, 0.0005, -0.0003, -0.012}, 640, 480);
-}
-YawRig paperRig() { return YawRig(Eigen::Vector3d(-0.1503, 0.0, 0.0)); }
-
-/*! True (distorted) pixel of every board feature, by id; false when one is behind the camera. */
-bool truthPixels(const CameraModel &cam, const YawRig &rig, const MotionSample &s, const BoardLayout &board,
-                 const Eigen::Isometry3d &wMb, std::map<long, Eigen::Vector2d> &out) {
-  const Eigen::Isometry3d cMb = toIsometry(wMc(rig, s)).inverse() * wMb;
-  out.clear();
-  for (const auto &f : board.features()) {
-    const Eigen::Vector3d c = cMb * f.second;
-    if (!(c.z() > 0))
-      return false;
-    out[f.first] = cam.project(Eigen::Vector2d(c.x() / c.z(), c.y() / c.z()));
-  }
-  return true;
-}
-
-/*!
-  A random pose of the board in front of the camera: board centre at depth `depth` near the optical
-  axis, tilted by up to `max_tilt` about two axes, rotated in plane by `roll`. Returns wMb.
-*/
-Eigen::Isometry3d boardPose(const YawRig &rig, const MotionSample &s, const BoardLayout &board, double depth,
-                            double tilt_x, double tilt_y, double roll, double off_x, double off_y) {
-  const Eigen::Vector4d e = board.extent();
-  const Eigen::Vector3d centre(0.5 * (e[0] + e[2]), 0.5 * (e[1] + e[3]), 0.0);
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(tilt_x, Eigen::Vector3d::UnitX()) *
-                             Eigen::AngleAxisd(tilt_y, Eigen::Vector3d::UnitY()))
-                                .toRotationMatrix();
-  Eigen::Isometry3d cMb = Eigen::Isometry3d::Identity();
-  cMb.linear() = R;
-  cMb.translation() = Eigen::Vector3d(off_x, off_y, depth) - R * centre;
-  return toIsometry(wMc(rig, s)) * cMb;
-}
-
-bool allInside(const std::map<long, Eigen::Vector2d> &px, const CameraModel &cam, double margin) {
-  for (const auto &kv : px)
-    if (kv.second.x() < margin || kv.second.y() < margin || kv.second.x() > cam.width() - 1 - margin ||
-        kv.second.y() > cam.height() - 1 - margin)
-      return false;
-  return true;
-}
-
-struct ErrorStats {
-  double sx = 0, sy = 0, sxx = 0, syy = 0, max = 0;
-  long n = 0;
-  void add(const Eigen::Vector2d &e) {
-    sx += e.x();
-    sy += e.y();
-    sxx += e.x() * e.x();
-    syy += e.y() * e.y();
-    max = std::max(max, e.norm());
-    ++n;
-  }
-  double rms() const { return n ? std::sqrt((sxx + syy) / n) : NAN; } // of the 2D error
-  double biasX() const { return n ? sx / n : NAN; }
-  double biasY() const { return n ? sy / n : NAN; }
-};
-
-struct AccuracyScene {
-  CameraModel cam;
-  BoardLayout board;
-  MotionSample sample;
-  Eigen::Isometry3d wMb;
-  std::map<long, Eigen::Vector2d> truth;
-};
-
-/*! Seeded random scenes with every corner well inside the image. */
-std::vector<AccuracyScene> accuracyScenes(int count, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> U(0.0, 1.0);
-  std::vector<AccuracyScene> out;
-  const YawRig rig = paperRig();
-  int attempts = 0;
-  while (static_cast<int>(out.size()) < count && attempts < 100 * count) {
-    ++attempts;
-    AccuracyScene sc;
-    const bool wide = U(rng) < 0.5;
-    sc.cam = wide ? wideCamera() : paperCamera();
-    const int pick = static_cast<int>(U(rng) * 3);
-    sc.board.pattern = PatternSpec::parse(pick == 0 ? "chessboard:5x4:0.02" : pick == 1 ? "chessboard:7x6:0.02"
-                                                                                         : "chessboard:6x6:0.02");
-    sc.sample.yaw = (U(rng) - 0.5) * 90 * kDeg;
-    sc.sample.x = (U(rng) - 0.5) * 0.1;
-    sc.sample.z = (U(rng) - 0.5) * 0.1;
-    sc.sample.heading = (U(rng) - 0.5) * 20 * kDeg;
-    const double depth = wide ? 0.25 + 0.35 * U(rng) : 0.55 + 0.4 * U(rng);
-    sc.wMb = boardPose(rig, sc.sample, sc.board, depth, (U(rng) - 0.5) * 80 * kDeg, (U(rng) - 0.5) * 80 * kDeg,
-                       U(rng) * 2 * M_PI, (U(rng) - 0.5) * 0.2 * depth, (U(rng) - 0.5) * 0.15 * depth);
-    if (!truthPixels(sc.cam, rig, sc.sample, sc.board, sc.wMb, sc.truth) || !allInside(sc.truth, sc.cam, 25))
-      continue;
-    out.push_back(sc);
-  }
-  return out;
-}
-
 } // namespace
-
-// ------------------------------------------------------------------------------------------------
-// Method comparison (hidden; run with: test_features "[.bench]"): per-corner error of each
-// refinement against the renderer's truth over seeded random poses (the 6x6 boards, symmetric
-// and seen without history, get the top-left labelling and count as "wrong ids").
-TEST_CASE("corner refinement comparison", "[.bench]") {
-  const YawRig rig = paperRig();
-  const std::vector<AccuracyScene> scenes = accuracyScenes(24, 7);
-  struct Cond {
-    const char *name;
-    double blur, noise;
-  };
-  for (const Cond cond : {Cond{"blur 0.7 noise 2", 0.7, 2.0}, Cond{"blur 0 noise 0", 0.0, 0.0},
-                          Cond{"blur 1.2 noise 4", 1.2, 4.0}}) {
-    std::map<std::string, ErrorStats> stats;
-    std::map<std::string, int> id_errors;
-    std::map<std::string, double> det_ms;
-    double render_ms = 0;
-    int failures = 0;
-    for (std::size_t i = 0; i < scenes.size(); ++i) {
-      const AccuracyScene &sc = scenes[i];
-      RenderOptions ro;
-      ro.blur_sigma_px = cond.blur;
-      ro.noise_sigma = cond.noise;
-      ro.seed = 100 + i;
-      const auto t0 = std::chrono::steady_clock::now();
-      const cv::Mat img = renderBoard(sc.cam, rig, sc.sample, sc.board, sc.wMb, ro);
-      render_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      for (int mi = 0; mi < 5; ++mi) {
-        const CornerRefinement m = mi == 0 ? CornerRefinement::None : mi <= 2 ? CornerRefinement::OpenCV
-                                   : mi == 3                      ? CornerRefinement::Saddle
-                                                                  : CornerRefinement::Gradient;
-        DetectorOptions o;
-        o.refinement = m;
-        if (mi == 2)
-          o.subpixel_window = 5; // the common 11x11 window
-        PatternDetector det(sc.board.pattern, o);
-        const auto t1 = std::chrono::steady_clock::now();
-        const FrameDetection d = det.detect(img, 0);
-        const char *name = m == CornerRefinement::None ? "SB+ACCURACY" : mi == 2 ? "cornerSubPix11" : m == CornerRefinement::OpenCV ? "cornerSubPix"
-                           : m == CornerRefinement::Saddle                                       ? "saddle"
-                                                                                                 : "gradient";
-        det_ms[name] += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
-        if (!d.found) {
-          ++failures;
-          continue;
-        }
-        for (const auto &f : d.features) {
-          const Eigen::Vector2d e = Eigen::Vector2d(f.u, f.v) - sc.truth.at(f.id);
-          if (e.norm() > 3)
-            ++id_errors[name];
-          else
-            stats[name].add(e);
-        }
-      }
-    }
-    std::printf("%s: %zu scenes, render %.1f ms/frame, %d failed detections\n", cond.name, scenes.size(),
-                render_ms / scenes.size(), failures);
-    for (const auto &kv : stats)
-      std::printf("  %-14s n=%5ld rms %.4f px  bias (%+.4f, %+.4f)  max %.4f  (%d wrong ids, %.1f ms/detect)\n",
-                  kv.first.c_str(), kv.second.n, kv.second.rms(), kv.second.biasX(), kv.second.biasY(), kv.second.max,
-                  id_errors[kv.first], det_ms[kv.first] / scenes.size());
-  }
-}
-
 
 // ------------------------------------------------------------------------------------------------
 TEST_CASE("pattern text form", "[features]") {
@@ -270,7 +104,7 @@ TEST_CASE("board layout: ids, reflectance, extent", "[features]") {
   CHECK_THROWS_AS(t.features(), yawdepth::Error);
 }
 
-TEST_CASE("renderer: exact coverage, background, determinism and speed", "[render]") {
+TEST_CASE("renderer: exact coverage, background and determinism", "[render]") {
   const CameraModel cam = CameraModel::brown(800, 800, 320, 240, {}, 640, 480);
   const YawRig rig;
   MotionSample s;
@@ -399,10 +233,16 @@ TEST_CASE("chessboard corner accuracy on rendered images", "[features][slow]") {
   REQUIRE(scenes == 16);
   std::printf("corner accuracy: %ld corners, rms %.4f px, bias (%+.4f, %+.4f) px, max %.4f px\n", stats.n,
               stats.rms(), stats.biasX(), stats.biasY(), stats.max);
-  CHECK(stats.rms() < 0.05);
-  CHECK(std::abs(stats.biasX()) < 0.02);
-  CHECK(std::abs(stats.biasY()) < 0.02);
-  CHECK(stats.max < 0.2); // every id right (a wrong id is off by a whole square)
+  // README (the paper's experiment) quotes 0.018 px RMS for these renders (blur 0.7, noise 2; the
+  // same figure bench_corner_refinement prints on its 24 scenes). Measured here (Release, seeded):
+  // 496 corners, RMS 0.0175 px, bias (-0.0010, -0.0003) px, max 0.072 px; the bounds sit just above.
+  constexpr double kRmsTolPx = 0.025;
+  constexpr double kBiasTolPx = 0.005;
+  constexpr double kMaxTolPx = 0.1; // also: every id right (a wrong id is off by a whole square)
+  CHECK(stats.rms() < kRmsTolPx);
+  CHECK(std::abs(stats.biasX()) < kBiasTolPx);
+  CHECK(std::abs(stats.biasY()) < kBiasTolPx);
+  CHECK(stats.max < kMaxTolPx);
 }
 
 TEST_CASE("chessboard corners on photo-like renders of a board with narrow outer squares", "[features]") {
