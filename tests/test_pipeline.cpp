@@ -9,6 +9,7 @@
 #include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/pipeline/pipeline.h>
 #include <yawdepth/simulation/scene.h>
+#include <yawdepth/window/stream_estimator.h>
 
 using namespace yawdepth;
 
@@ -176,5 +177,101 @@ TEST_CASE("method words round-trip, and estimateTracks sends window and refine t
     to.method = m;
     CHECK_THROWS_AS(estimateTracks(paperCamera(), paperRig(), s.measured, s.tracks, to), Error);
     CHECK_THROWS_AS(estimateTrack(paperCamera(), paperRig(), s.measured, s.tracks[0], to), Error);
+  }
+}
+
+namespace {
+
+// The observations of every frame of a scene, by row; feature `stop_id` not given from row `stop_row` on.
+std::vector<std::vector<FeatureObservation>> framesOf(const Scene &s, long stop_id = -1, std::size_t stop_row = 0)
+{
+  std::vector<std::vector<FeatureObservation>> frames(s.measured.size());
+  for (const Track &t : s.tracks)
+    for (const Observation &o : t.observations) {
+      const long row = rowOfFrame(s.measured, o.frame);
+      REQUIRE(row >= 0);
+      if (t.id == stop_id && static_cast<std::size_t>(row) >= stop_row)
+        continue;
+      frames[static_cast<std::size_t>(row)].push_back({t.id, o.u, o.v});
+    }
+  return frames;
+}
+
+} // namespace
+
+TEST_CASE("StreamEstimator: fused and window frame by frame, estimates carried to the current pose", "[pipeline]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  SceneOptions so; // noise-free: the carried point must be the true point at the later pose
+  so.frames = 12;
+  so.yaw = 60 * kDeg;
+  so.turn_rate = 0.5 * kDeg;
+  so.points = 12;
+  so.seed = 11;
+  const Scene s = simulateScene(camera, rig, so);
+  const std::size_t last = s.measured.size() - 1, stop_row = last - 2; // feature 0 unseen in the last 3 frames
+  REQUIRE(s.tracks[0].observations.size() == s.measured.size());
+  const auto frames = framesOf(s, 0, stop_row);
+
+  for (Method m : {Method::Fused, Method::Window}) {
+    StreamOptions o;
+    o.method = m;
+    StreamEstimator stream(camera, rig, o);
+    FusedEstimator fused(camera, rig, o.fused);
+    WindowEstimator window(camera, rig, o.window);
+    for (std::size_t r = 0; r < frames.size(); ++r) {
+      stream.addFrame(s.measured[r], frames[r]);
+      if (m == Method::Fused)
+        fused.addFrame(s.measured[r], frames[r]);
+      else
+        window.addFrame(s.measured[r], frames[r]);
+    }
+    CHECK(stream.method() == m);
+    CHECK((stream.fusedEstimator() != nullptr) == (m == Method::Fused));
+    CHECK((stream.windowEstimator() != nullptr) == (m == Method::Window));
+    for (const Track &t : s.tracks) { // the same estimator, nothing added
+      const PointEstimate a = stream.estimate(t.id);
+      const PointEstimate b = m == Method::Fused ? fused.estimate(t.id) : window.estimate(t.id);
+      CHECK(a.status == b.status);
+      if (a.ok() && b.ok())
+        CHECK(a.c_P == b.c_P);
+    }
+    // Feature 0's estimate is at its last observed frame; carried to the last pose it is the true
+    // point there (noise-free data: only the estimator's weak prior and round-off remain).
+    const PointEstimate at_frame = stream.estimate(0);
+    REQUIRE(at_frame.ok());
+    CHECK(at_frame.frame == s.measured[stop_row - 1].frame);
+    const PointEstimate carried = stream.estimateAt(0, s.measured[last]);
+    REQUIRE(carried.ok());
+    const Eigen::Vector3d truth = s.cameraPoint(rig, 0, last);
+    const Eigen::Vector3d truth_then = s.cameraPoint(rig, 0, stop_row - 1);
+    CHECK((carried.c_P - truth).norm() < 1e-3 * truth.norm());
+    CHECK((truth - truth_then).norm() > 0.02); // the carry moved it (two 2 cm steps and a turn)
+    CHECK(carried.v_P.isApprox(rig.visionPoint(s.measured[last].yaw, carried.c_P)));
+    CHECK(carried.c_cov.trace() == Approx(at_frame.c_cov.trace()).epsilon(1e-9)); // rotated, not scaled
+    // At its own frame the carry changes nothing.
+    const PointEstimate same = stream.estimateAt(0, s.measured[stop_row - 1]);
+    CHECK((same.c_P - at_frame.c_P).norm() < 1e-12);
+    // Forgotten: unknown.
+    stream.forget(0);
+    CHECK(stream.estimate(0).status == Status::TooFewFrames);
+  }
+
+  // A frame older than the rows kept can no longer be carried: fused keeps max_missing_frames + 1.
+  StreamOptions o;
+  o.method = Method::Fused;
+  o.fused.max_missing_frames = 1;
+  StreamEstimator stream(camera, rig, o);
+  for (std::size_t r = 0; r < frames.size(); ++r)
+    stream.addFrame(s.measured[r], frames[r]);
+  CHECK(stream.estimate(0).status == Status::TooFewFrames); // dropped by fused itself after 1 missing frame
+  const PointEstimate kept = stream.estimateAt(1, s.measured[last]);
+  CHECK(kept.ok());
+
+  for (Method m : {Method::Paper, Method::Exact, Method::Refine}) {
+    StreamOptions bad;
+    bad.method = m;
+    CHECK_THROWS_AS(StreamEstimator(camera, rig, bad), Error);
   }
 }

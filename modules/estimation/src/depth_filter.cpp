@@ -66,6 +66,84 @@ bool predict(const IncrementModel &inc, const Vec11 &w, Eigen::Vector4d &s, Mat4
   return true;
 }
 
+/* G Pw G^T for a 4x11 G and the block-diagonal prior Pw = diag(P, Q) of w = (state, increment noise). */
+Eigen::Matrix4d propagateJoint(const Mat4W &G, const Eigen::Matrix4d &P, const Eigen::Matrix<double, kN, kN> &Q)
+{
+  const Eigen::Matrix4d Gs = G.leftCols<4>();
+  const Eigen::Matrix<double, 4, kN> Gn = G.rightCols<kN>();
+  return Gs * P * Gs.transpose() + Gn * Q * Gn.transpose();
+}
+
+/* The first update from the diffuse depth prior is the most nonlinear one (a large rotation between
+   the frames makes it worse): the iterations start at the depth that the two observations
+   triangulate, Z (m x R b) = -(m x t), where the MAP lies (the prior still counts). `s` is the state
+   at the earlier frame; w, s_new and G are replaced only when that depth is usable. */
+void startAtTriangulatedDepth(const IncrementModel &inc, const Eigen::Vector4d &s, const Eigen::Vector2d &m, Vec11 &w,
+                              Eigen::Vector4d &s_new, Mat4W &G)
+{
+  const Eigen::Vector3d b(s(0), s(1), 1.0), mh(m.x(), m.y(), 1.0);
+  const Eigen::Vector3d a = mh.cross(inc.R * b), c = mh.cross(inc.t);
+  const double Z = -a.dot(c) / a.squaredNorm();
+  Eigen::Vector4d s_try;
+  Mat4W G_try;
+  Vec11 w_try = w;
+  w_try(2) = -std::log(Z);
+  if (Z > 0 && std::isfinite(w_try(2)) && predict(inc, w_try, s_try, &G_try)) {
+    w = w_try;
+    s_new = s_try;
+    G = G_try;
+  }
+}
+
+/* How the iterated update of one observation ended. */
+enum class Iterated { Converged, Gated, Failed };
+
+/* Iterated EKF on w, started at `w` (s_new = g(w), G its Jacobian): the measurement h(w) is the first
+   two components of g(w). With `gate`, the first iteration's innovation is tested against
+   `outlier_chi2` (Gated: rejected). Failed: the innovation covariance is not positive or the
+   iterate leaves the valid region (the caller restarts). */
+Iterated iterateUpdate(const IncrementModel &inc, const Vec11 &mu, const Eigen::Matrix4d &P,
+                       const Eigen::Matrix<double, kN, kN> &Q, const Eigen::Vector2d &m, const Eigen::Matrix2d &m_cov,
+                       bool gate, double outlier_chi2, int max_iterations, Vec11 &w, Eigen::Vector4d &s_new, Mat4W &G)
+{
+  for (int it = 0; it < max_iterations; ++it) {
+    const Eigen::Matrix<double, 2, kW> H = G.topRows<2>();
+    Eigen::Matrix<double, kW, 2> PHt;
+    PHt.topRows<4>() = P * H.leftCols<4>().transpose();
+    PHt.bottomRows<kN>() = Q * H.rightCols<kN>().transpose();
+    const Eigen::Matrix2d S = H * PHt + m_cov;
+    const double det = S.determinant();
+    if (!(det > 0) || !std::isfinite(det))
+      return Iterated::Failed;
+    const Eigen::Matrix2d S_inv = S.inverse();
+    const Eigen::Vector2d nu = m - s_new.head<2>() - H * (mu - w);
+    if (it == 0 && gate && !(nu.dot(S_inv * nu) <= outlier_chi2))
+      return Iterated::Gated;
+    const Vec11 w_next = mu + PHt * (S_inv * nu);
+    const double change = std::abs(w_next(2) - w(2));
+    w = w_next;
+    if (!predict(inc, w, s_new, &G))
+      return Iterated::Failed;
+    if (change <= 1e-9 * (1.0 + std::abs(w(2))))
+      break;
+  }
+  return Iterated::Converged;
+}
+
+/* The posterior covariance: the predicted state s' = g(w) linearised at the estimate has covariance
+   M = G Pw G^T, and the observation is linear in s' (its first two components), so the update is a
+   linear Kalman update of M, in Joseph form (stays positive semi-definite when the observation is
+   far more precise than the prediction). */
+Eigen::Matrix4d josephUpdate(const Eigen::Matrix4d &M, const Eigen::Matrix2d &m_cov)
+{
+  const Eigen::Matrix2d S = M.topLeftCorner<2, 2>() + m_cov;
+  const Eigen::Matrix<double, 4, 2> K = M.leftCols<2>() * S.inverse();
+  Eigen::Matrix4d IKC = Eigen::Matrix4d::Identity();
+  IKC.leftCols<2>() -= K;
+  const Eigen::Matrix4d P = IKC * M * IKC.transpose() + K * m_cov * K.transpose();
+  return 0.5 * (P + P.transpose());
+}
+
 } // namespace
 
 void composeIncrementNoise(Eigen::Matrix<double, 6, 6> &cov, Eigen::Matrix3d &R, const Eigen::Vector3d &d,
@@ -218,12 +296,6 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
   Vec11 mu;
   mu << s_, np.mean;
   const Eigen::Matrix<double, kN, kN> &Q = np.cov;
-  // G Pw G^T for a 4x11 G.
-  auto propagate = [&](const Mat4W &G) -> Eigen::Matrix4d {
-    const Eigen::Matrix4d Gs = G.leftCols<4>();
-    const Eigen::Matrix<double, 4, kN> Gn = G.rightCols<kN>();
-    return Gs * P_ * Gs.transpose() + Gn * Q * Gn.transpose();
-  };
 
   Eigen::Vector4d s_new;
   Mat4W G;
@@ -237,7 +309,7 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
   };
   auto predictOnly = [&]() {
     s_ = s_new;
-    P_ = propagate(G);
+    P_ = propagateJoint(G, P_, Q);
     P_ = 0.5 * (P_ + P_.transpose());
   };
 
@@ -248,65 +320,26 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
     return Update::PredictOnly;
   }
 
-  // Iterated EKF on w: the measurement h(w) is the first two components of g(w).
+  // Iterated EKF on w (the measurement is the first two components of g(w)). The gate needs a
+  // prediction to test against: the first update after a (re)start comes from the diffuse depth
+  // prior, whose linearisation cannot judge it.
   Vec11 w = mu;
-  if (inliers_ == 1) {
-    // The first update from the diffuse depth prior is the most nonlinear one (a large rotation
-    // between the frames makes it worse): start the iterations at the depth that the two
-    // observations triangulate, Z (m x R b) = -(m x t), where the MAP lies; the prior still counts.
-    const Eigen::Vector3d b(s_(0), s_(1), 1.0), mh(m->x(), m->y(), 1.0);
-    const Eigen::Vector3d a = mh.cross(inc.R * b), c = mh.cross(inc.t);
-    const double Z = -a.dot(c) / a.squaredNorm();
-    Eigen::Vector4d s_try;
-    Mat4W G_try;
-    Vec11 w_try = w;
-    w_try(2) = -std::log(Z);
-    if (Z > 0 && std::isfinite(w_try(2)) && predict(inc, w_try, s_try, &G_try)) {
-      w = w_try;
-      s_new = s_try;
-      G = G_try;
-    }
-  }
-  for (int it = 0; it < o_.max_iterations; ++it) {
-    const Eigen::Matrix<double, 2, kW> H = G.topRows<2>();
-    Eigen::Matrix<double, kW, 2> PHt;
-    PHt.topRows<4>() = P_ * H.leftCols<4>().transpose();
-    PHt.bottomRows<kN>() = Q * H.rightCols<kN>().transpose();
-    const Eigen::Matrix2d S = H * PHt + *m_cov;
-    const double det = S.determinant();
-    if (!(det > 0) || !std::isfinite(det))
+  if (inliers_ == 1)
+    startAtTriangulatedDepth(inc, s_, *m, w, s_new, G);
+  const Iterated result = iterateUpdate(inc, mu, P_, Q, *m, *m_cov, inliers_ >= 2, o_.outlier_chi2,
+                                        o_.max_iterations, w, s_new, G);
+  if (result == Iterated::Failed)
+    return restartAt(*m, *m_cov);
+  if (result == Iterated::Gated) {
+    ++outliers_;
+    ++rejected_;
+    if (++consecutive_outliers_ >= o_.max_consecutive_outliers)
       return restartAt(*m, *m_cov);
-    const Eigen::Matrix2d S_inv = S.inverse();
-    const Eigen::Vector2d nu = *m - s_new.head<2>() - H * (mu - w);
-    // The gate needs a prediction to test against: the first update after a (re)start comes from
-    // the diffuse depth prior, whose linearisation cannot judge it.
-    if (it == 0 && inliers_ >= 2 && !(nu.dot(S_inv * nu) <= o_.outlier_chi2)) {
-      ++outliers_;
-      ++rejected_;
-      if (++consecutive_outliers_ >= o_.max_consecutive_outliers)
-        return restartAt(*m, *m_cov);
-      predictOnly();
-      return Update::Outlier;
-    }
-    const Vec11 w_next = mu + PHt * (S_inv * nu);
-    const double change = std::abs(w_next(2) - w(2));
-    w = w_next;
-    if (!predict(inc, w, s_new, &G))
-      return restartAt(*m, *m_cov);
-    if (change <= 1e-9 * (1.0 + std::abs(w(2))))
-      break;
+    predictOnly();
+    return Update::Outlier;
   }
-  // Posterior: the predicted state s' = g(w) linearised at the estimate has covariance
-  // M = G Pw G^T, and the observation is linear in s' (its first two components), so the update
-  // is a linear Kalman update of M, in Joseph form (stays positive semi-definite when the
-  // observation is far more precise than the prediction). The mean is the iterated one.
-  const Eigen::Matrix4d M = propagate(G);
-  const Eigen::Matrix2d S = M.topLeftCorner<2, 2>() + *m_cov;
-  const Eigen::Matrix<double, 4, 2> K = M.leftCols<2>() * S.inverse();
-  Eigen::Matrix4d IKC = Eigen::Matrix4d::Identity();
-  IKC.leftCols<2>() -= K;
-  P_ = IKC * M * IKC.transpose() + K * (*m_cov) * K.transpose();
-  P_ = 0.5 * (P_ + P_.transpose());
+  // Posterior: the iterated mean, the covariance by a Joseph-form update at it.
+  P_ = josephUpdate(propagateJoint(G, P_, Q), *m_cov);
   s_ = s_new;
   ++inliers_;
   consecutive_outliers_ = 0;

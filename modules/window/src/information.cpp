@@ -279,20 +279,13 @@ private:
    memory grows with frames x band instead of frames^2. */
 constexpr int kBandedMinParameters = 300;
 
-template <int PD>
-void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &cov, std::vector<char> &ok)
+/* The motion's own information, from the odometry (per increment, or per pose for absolute noise)
+   and the yaw readings, as (i, j, value) triplets over the model's motion parameters, summed. */
+template <int PD> std::vector<Eigen::Triplet<double>> motionPrior(const Model &m)
 {
-  using AD = typename Layout<PD>::AD;
   using ADPrior = typename Layout<PD>::ADPrior;
-  constexpr int kLocal = Layout<PD>::kLocal;
   constexpr int kR = PD == 6 ? 6 : 4; // odometry residuals
-  const int np = static_cast<int>(m.points.size());
-  const int nl = m.motionParameters();
-  cov.assign(np, Eigen::Matrix3d::Constant(kNaN));
-  ok.assign(np, 0);
-
-  // Motion-only information: the odometry and yaw priors.
-  std::vector<Eigen::Triplet<double>> prior; // (i, j, value), summed
+  std::vector<Eigen::Triplet<double>> prior;
   if (m.poses_free && m.absolute) {
     for (int row = 0; row < m.rows(); ++row)
       for (int j = 0; j < PD; ++j) {
@@ -330,41 +323,40 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
   if (m.yaws_free)
     for (int row = 0; row < m.rows(); ++row)
       prior.emplace_back(m.yawIndex(row), m.yawIndex(row), m.inv_sigma_yaw * m.inv_sigma_yaw);
+  return prior;
+}
 
-  // Observations grouped by point.
-  std::vector<std::vector<int>> by_point(np);
-  for (int i = 0; i < static_cast<int>(m.observations.size()); ++i)
-    by_point[m.observations[i].point].push_back(i);
-
-  // Each point's information is kept over the motion columns it touches only (cols[p], sorted):
-  // Hpl[p] is 3 x |cols[p]|, and its Schur complement on the motion goes into S over those columns.
-  // A point seen in a few of many frames then costs what its own observations cost, not the size
-  // of the whole motion (with dense 3 x nl and nl x nl blocks per point, a long log's cost grew
-  // with points x frames^2).
-  std::vector<Eigen::Matrix3d> Hpp(np, Eigen::Matrix3d::Zero());
-  std::vector<Eigen::MatrixXd> Hpl(np);
-  std::vector<std::vector<int>> cols(np);
-  std::vector<Eigen::Matrix3d> Hpp_inv(np, Eigen::Matrix3d::Constant(kNaN));
-  std::vector<int> where(static_cast<std::size_t>(nl), -1); // global motion column -> position in cols[p]
-  // The motion columns in frame order (each row's pose, then its yaw): S's order, in which a point
-  // couples only the columns of the frames it sees and the priors only neighbouring frames.
+/* The motion columns in frame order (each row's pose, then its yaw): S's order, in which a point
+   couples only the columns of the frames it sees and the priors only neighbouring frames. pos[c] is
+   column c's place in that order (the identity when the model's columns do not fit it). */
+template <int PD> std::vector<int> frameOrder(const Model &m, int nl)
+{
   std::vector<int> pos(static_cast<std::size_t>(nl), -1);
-  {
-    int next = 0;
-    for (int row = 0; row < m.rows(); ++row) {
-      for (int j = 0; j < PD; ++j)
-        if (const int c = m.poseIndex(row, j); c >= 0)
-          pos[static_cast<std::size_t>(c)] = next++;
-      if (const int c = m.yawIndex(row); c >= 0)
+  int next = 0;
+  for (int row = 0; row < m.rows(); ++row) {
+    for (int j = 0; j < PD; ++j)
+      if (const int c = m.poseIndex(row, j); c >= 0)
         pos[static_cast<std::size_t>(c)] = next++;
-    }
-    if (next != nl || std::count(pos.begin(), pos.end(), -1) > 0)
-      std::iota(pos.begin(), pos.end(), 0);
+    if (const int c = m.yawIndex(row); c >= 0)
+      pos[static_cast<std::size_t>(c)] = next++;
   }
-  int band = 0; // the widest coupling between two motion columns, in that order
+  if (next != nl || std::count(pos.begin(), pos.end(), -1) > 0)
+    std::iota(pos.begin(), pos.end(), 0);
+  return pos;
+}
+
+/* Each point's motion columns (cols[p], sorted), and the widest coupling between two motion columns
+   in frame order, over the priors and the points. */
+template <int PD>
+int pointColumns(const Model &m, const std::vector<std::vector<int>> &by_point, const std::vector<int> &pos,
+                 const std::vector<Eigen::Triplet<double>> &prior, std::vector<std::vector<int>> &cols)
+{
+  const int nl = static_cast<int>(pos.size());
+  int band = 0;
   for (const auto &t : prior)
     band = std::max(band, std::abs(pos[static_cast<std::size_t>(t.row())] - pos[static_cast<std::size_t>(t.col())]));
-  for (int p = 0; p < np; ++p) {
+  cols.assign(by_point.size(), {});
+  for (std::size_t p = 0; p < by_point.size(); ++p) {
     std::vector<int> &cp = cols[p];
     for (int oi : by_point[p])
       for (int c : motionColumns<PD>(m, m.anchor_row[p], m.observations[oi].row))
@@ -379,6 +371,166 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
     }
     band = std::max(band, hi - lo);
   }
+  return band;
+}
+
+/* One point's information from its observations: Hpp (3x3), Hpl (3 x its motion columns cp) and
+   Hll (over cp). `where` maps a global motion column to its place in cp; it is all -1 on entry and
+   on return. */
+template <int PD>
+void pointInformation(const Model &m, int p, const std::vector<int> &observations, const std::vector<int> &cp,
+                      std::vector<int> &where, Eigen::Matrix3d &Hpp, Eigen::MatrixXd &Hpl, Eigen::MatrixXd &Hll)
+{
+  using AD = typename Layout<PD>::AD;
+  constexpr int kLocal = Layout<PD>::kLocal;
+  const int ra = m.anchor_row[p];
+  const int k = static_cast<int>(cp.size());
+  for (int i = 0; i < k; ++i)
+    where[static_cast<std::size_t>(cp[i])] = i;
+  Hpl = Eigen::MatrixXd::Zero(3, k);
+  Hll = Eigen::MatrixXd::Zero(k, k);
+  for (int oi : observations) {
+    const ModelObservation &o = m.observations[oi];
+    Eigen::Matrix<double, 2, kLocal> J = Eigen::Matrix<double, 2, kLocal>::Zero();
+    if (o.row == ra) {
+      // (alpha, beta) against the observation: d r / d point = S [I2 0].
+      J(0, 0) = o.w.s00;
+      J(0, 1) = o.w.s01;
+      J(1, 1) = o.w.s11;
+    } else {
+      const Local<PD> x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[o.row].data(), m.yaws[o.row]);
+      AD q[3];
+      modelAnchoredPoint<PD>(m, ra, o.row, x.frameA(), x.frameK(), x.point(), q);
+      AD r[2];
+      whiten(o.w, AD(q[0] / q[2] - o.w.m[0]), AD(q[1] / q[2] - o.w.m[1]), r);
+      J.row(0) = r[0].derivatives().transpose();
+      J.row(1) = r[1].derivatives().transpose();
+    }
+    const std::array<int, kLocal> col = motionColumns<PD>(m, ra, o.row);
+    std::array<int, kLocal> loc;
+    for (int b = 0; b < kLocal; ++b)
+      loc[b] = col[b] >= 0 ? where[static_cast<std::size_t>(col[b])] : -1;
+    const Eigen::Matrix<double, kLocal, kLocal> JtJ = J.transpose() * J;
+    Hpp += JtJ.template topLeftCorner<3, 3>();
+    for (int b = 3; b < kLocal; ++b) {
+      if (loc[b] < 0)
+        continue;
+      Hpl.col(loc[b]) += JtJ.template block<3, 1>(0, b);
+      for (int a = 3; a < kLocal; ++a)
+        if (loc[a] >= 0)
+          Hll(loc[a], loc[b]) += JtJ(a, b);
+    }
+  }
+  for (int c : cp)
+    where[static_cast<std::size_t>(c)] = -1;
+}
+
+/* The motion's covariance from its information S (frame order): dense, S^-1 whole; banded, S's
+   sparse Cholesky factor L (natural order: the band has no fill outside itself), with which each
+   point's B S^-1 B^T is |L^-1 B^T|^2. */
+struct MotionCovariance {
+  Eigen::MatrixXd dense;
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> sparse_llt;
+  bool use_sparse = false;
+
+  void compute(MotionInformation &S, int nl)
+  {
+    if (S.banded()) {
+      sparse_llt.compute(S.lowerSparse());
+      use_sparse = sparse_llt.info() == Eigen::Success;
+    }
+    if (use_sparse)
+      return;
+    Eigen::MatrixXd Sd = S.takeDense();
+    Sd = 0.5 * (Sd + Sd.transpose());
+    Eigen::LLT<Eigen::MatrixXd> llt(Sd);
+    if (llt.info() == Eigen::Success) {
+      dense = Eigen::MatrixXd::Identity(nl, nl);
+      llt.solveInPlace(dense);
+    } else
+      dense = Sd.completeOrthogonalDecomposition().pseudoInverse();
+  }
+};
+
+/* Point p's camera-frame covariance at its report row: G_p Hpp^-1 G_p^T + B Sigma_ll B^T with
+   B = G_l - G_p Hpp^-1 Hpl, over the point's motion columns and its report row's. `joint`: the
+   motion's covariance is `motion` (frame order, `pos`); otherwise the point's own Sigma_ll_point
+   (the motion's order). */
+template <int PD>
+Eigen::Matrix3d pointCovariance(const Model &m, int p, bool joint, const Eigen::Matrix3d &Hpp_inv,
+                                const Eigen::MatrixXd &Hpl, const std::vector<int> &cp, const std::vector<int> &pos,
+                                MotionCovariance &motion, const Eigen::MatrixXd &Sigma_ll_point)
+{
+  using AD = typename Layout<PD>::AD;
+  constexpr int kLocal = Layout<PD>::kLocal;
+  const int nl = static_cast<int>(pos.size());
+  const int ra = m.anchor_row[p], rk = m.report_row[p];
+  const Local<PD> x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[rk].data(), m.yaws[rk]);
+  AD q[3];
+  modelAnchoredPoint<PD>(m, ra, rk, x.frameA(), x.frameK(), x.point(), q);
+  Eigen::Matrix<double, 3, kLocal> G;
+  for (int i = 0; i < 3; ++i) {
+    const AD c = q[i] / x.x[2];
+    G.row(i) = c.derivatives().transpose();
+  }
+  const Eigen::Matrix3d Gp = G.template leftCols<3>();
+  Eigen::Matrix3d C = Gp * Hpp_inv * Gp.transpose();
+  if (nl > 0) {
+    // B's columns: the point's own, then its report row's that it does not already touch.
+    const std::array<int, kLocal> col = motionColumns<PD>(m, ra, rk);
+    std::vector<int> cb = cp;
+    for (int b = 3; b < kLocal; ++b)
+      if (col[b] >= 0 && !std::binary_search(cp.begin(), cp.end(), col[b]))
+        cb.push_back(col[b]);
+    const int kb = static_cast<int>(cb.size());
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3, kb);
+    B.leftCols(static_cast<Eigen::Index>(cp.size())) = -(Gp * Hpp_inv) * Hpl;
+    for (int b = 3; b < kLocal; ++b)
+      if (col[b] >= 0)
+        B.col(std::find(cb.begin(), cb.end(), col[b]) - cb.begin()) += G.col(b);
+    if (joint && motion.use_sparse) {
+      Eigen::MatrixXd Bt = Eigen::MatrixXd::Zero(nl, 3);
+      for (int i = 0; i < kb; ++i)
+        Bt.row(pos[static_cast<std::size_t>(cb[i])]) = B.col(i).transpose();
+      if (motion.sparse_llt.permutationP().size() > 0) // none with the natural order; kept general
+        Bt = motion.sparse_llt.permutationP() * Bt;
+      motion.sparse_llt.matrixL().solveInPlace(Bt);
+      C += Bt.transpose() * Bt;
+    } else {
+      // joint: in S's (frame) order; per point: in the motion's own.
+      const Eigen::MatrixXd &Sll = joint ? motion.dense : Sigma_ll_point;
+      auto at = [&](int c) { return joint ? pos[static_cast<std::size_t>(c)] : c; };
+      Eigen::MatrixXd Ssub(kb, kb);
+      for (int j = 0; j < kb; ++j)
+        for (int i = 0; i < kb; ++i)
+          Ssub(i, j) = Sll(at(cb[i]), at(cb[j]));
+      C += B * Ssub * B.transpose();
+    }
+  }
+  return 0.5 * (C + C.transpose());
+}
+
+template <int PD>
+void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> &cov, std::vector<char> &ok)
+{
+  const int np = static_cast<int>(m.points.size());
+  const int nl = m.motionParameters();
+  cov.assign(np, Eigen::Matrix3d::Constant(kNaN));
+  ok.assign(np, 0);
+
+  const std::vector<Eigen::Triplet<double>> prior = motionPrior<PD>(m);
+  std::vector<std::vector<int>> by_point(np); // observations grouped by point
+  for (int i = 0; i < static_cast<int>(m.observations.size()); ++i)
+    by_point[m.observations[i].point].push_back(i);
+
+  // Each point's information is kept over the motion columns it touches only (cols[p], sorted):
+  // Hpl[p] is 3 x |cols[p]|, and its Schur complement on the motion goes into S over those columns.
+  // A point seen in a few of many frames then costs what its own observations cost, not the size
+  // of the whole motion (with dense 3 x nl and nl x nl blocks per point, a long log's cost grew
+  // with points x frames^2).
+  const std::vector<int> pos = frameOrder<PD>(m, nl);
+  std::vector<std::vector<int>> cols;
+  const int band = pointColumns<PD>(m, by_point, pos, prior, cols);
   // joint: S = Hprior + the sum over points of (Hll_p - schur_p), in frame order; per point:
   // Hprior alone, dense, in the motion's own order.
   MotionInformation S(joint ? nl : 0, joint && nl >= kBandedMinParameters && 2 * band < nl ? band : -1);
@@ -392,51 +544,17 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
       Hprior(t.row(), t.col()) += t.value();
   }
   std::vector<Eigen::MatrixXd> Sigma_ll_point(joint ? 0 : np);
-
+  std::vector<Eigen::MatrixXd> Hpl(np);
+  std::vector<Eigen::Matrix3d> Hpp_inv(np, Eigen::Matrix3d::Constant(kNaN));
+  std::vector<int> where(static_cast<std::size_t>(nl), -1); // global motion column -> position in cols[p]
   for (int p = 0; p < np; ++p) {
-    const int ra = m.anchor_row[p];
     const std::vector<int> &cp = cols[p];
     const int k = static_cast<int>(cp.size());
-    for (int i = 0; i < k; ++i)
-      where[static_cast<std::size_t>(cp[i])] = i;
-    Hpl[p] = Eigen::MatrixXd::Zero(3, k);
-    Eigen::MatrixXd Hll_p = Eigen::MatrixXd::Zero(k, k);
-    for (int oi : by_point[p]) {
-      const ModelObservation &o = m.observations[oi];
-      Eigen::Matrix<double, 2, kLocal> J = Eigen::Matrix<double, 2, kLocal>::Zero();
-      if (o.row == ra) {
-        // (alpha, beta) against the observation: d r / d point = S [I2 0].
-        J(0, 0) = o.w.s00;
-        J(0, 1) = o.w.s01;
-        J(1, 1) = o.w.s11;
-      } else {
-        const Local<PD> x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[o.row].data(), m.yaws[o.row]);
-        AD q[3];
-        modelAnchoredPoint<PD>(m, ra, o.row, x.frameA(), x.frameK(), x.point(), q);
-        AD r[2];
-        whiten(o.w, AD(q[0] / q[2] - o.w.m[0]), AD(q[1] / q[2] - o.w.m[1]), r);
-        J.row(0) = r[0].derivatives().transpose();
-        J.row(1) = r[1].derivatives().transpose();
-      }
-      const std::array<int, kLocal> col = motionColumns<PD>(m, ra, o.row);
-      std::array<int, kLocal> loc;
-      for (int b = 0; b < kLocal; ++b)
-        loc[b] = col[b] >= 0 ? where[static_cast<std::size_t>(col[b])] : -1;
-      const Eigen::Matrix<double, kLocal, kLocal> JtJ = J.transpose() * J;
-      Hpp[p] += JtJ.template topLeftCorner<3, 3>();
-      for (int b = 3; b < kLocal; ++b) {
-        if (loc[b] < 0)
-          continue;
-        Hpl[p].col(loc[b]) += JtJ.template block<3, 1>(0, b);
-        for (int a = 3; a < kLocal; ++a)
-          if (loc[a] >= 0)
-            Hll_p(loc[a], loc[b]) += JtJ(a, b);
-      }
-    }
-    for (int c : cp)
-      where[static_cast<std::size_t>(c)] = -1;
+    Eigen::Matrix3d Hpp = Eigen::Matrix3d::Zero();
+    Eigen::MatrixXd Hll_p;
+    pointInformation<PD>(m, p, by_point[p], cp, where, Hpp, Hpl[p], Hll_p);
     // A numerically singular point information: no estimate for that point.
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(Hpp[p]);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(Hpp);
     const Eigen::Vector3d &ev = es.eigenvalues();
     if (!(ev(0) > 1e-12 * std::max(ev(2), 1e-300)) || !ev.allFinite())
       continue;
@@ -456,76 +574,16 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
       Sigma_ll_point[p] = Si.llt().solve(Eigen::MatrixXd::Identity(nl, nl));
     }
   }
-  // The motion's covariance: dense, S^-1 whole; banded, S's sparse Cholesky factor L (natural
-  // order: the band has no fill outside itself), and each point's B S^-1 B^T = |L^-1 B^T|^2 below.
-  Eigen::MatrixXd Sigma_ll;
-  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> sparse_llt;
-  bool use_sparse = false;
-  if (joint && nl > 0 && S.banded()) {
-    sparse_llt.compute(S.lowerSparse());
-    use_sparse = sparse_llt.info() == Eigen::Success;
-  }
-  if (joint && nl > 0 && !use_sparse) {
-    Eigen::MatrixXd Sd = S.takeDense();
-    Sd = 0.5 * (Sd + Sd.transpose());
-    Eigen::LLT<Eigen::MatrixXd> llt(Sd);
-    if (llt.info() == Eigen::Success) {
-      Sigma_ll = Eigen::MatrixXd::Identity(nl, nl);
-      llt.solveInPlace(Sigma_ll);
-    } else
-      Sigma_ll = Sd.completeOrthogonalDecomposition().pseudoInverse();
-  }
+  MotionCovariance motion;
+  if (joint && nl > 0)
+    motion.compute(S, nl);
 
-  // Each point's camera-frame position at its report row, c_P = q / rho, and its covariance
-  // G_p Hpp^-1 G_p^T + B Sigma_ll B^T with B = G_l - G_p Hpp^-1 Hpl, over the point's motion
-  // columns and its report row's.
+  // Each point's camera-frame position at its report row, c_P = q / rho, and its covariance.
   for (int p = 0; p < np; ++p) {
     if (!ok[p])
       continue;
-    const int ra = m.anchor_row[p], rk = m.report_row[p];
-    const Local<PD> x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[rk].data(), m.yaws[rk]);
-    AD q[3];
-    modelAnchoredPoint<PD>(m, ra, rk, x.frameA(), x.frameK(), x.point(), q);
-    Eigen::Matrix<double, 3, kLocal> G;
-    for (int i = 0; i < 3; ++i) {
-      const AD c = q[i] / x.x[2];
-      G.row(i) = c.derivatives().transpose();
-    }
-    const Eigen::Matrix3d Gp = G.template leftCols<3>();
-    Eigen::Matrix3d C = Gp * Hpp_inv[p] * Gp.transpose();
-    if (nl > 0) {
-      // B's columns: the point's own, then its report row's that it does not already touch.
-      const std::array<int, kLocal> col = motionColumns<PD>(m, ra, rk);
-      std::vector<int> cb = cols[p];
-      for (int b = 3; b < kLocal; ++b)
-        if (col[b] >= 0 && !std::binary_search(cols[p].begin(), cols[p].end(), col[b]))
-          cb.push_back(col[b]);
-      const int kb = static_cast<int>(cb.size());
-      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3, kb);
-      B.leftCols(static_cast<Eigen::Index>(cols[p].size())) = -(Gp * Hpp_inv[p]) * Hpl[p];
-      for (int b = 3; b < kLocal; ++b)
-        if (col[b] >= 0)
-          B.col(std::find(cb.begin(), cb.end(), col[b]) - cb.begin()) += G.col(b);
-      if (use_sparse) {
-        Eigen::MatrixXd Bt = Eigen::MatrixXd::Zero(nl, 3);
-        for (int i = 0; i < kb; ++i)
-          Bt.row(pos[static_cast<std::size_t>(cb[i])]) = B.col(i).transpose();
-        if (sparse_llt.permutationP().size() > 0) // none with the natural order; kept general
-          Bt = sparse_llt.permutationP() * Bt;
-        sparse_llt.matrixL().solveInPlace(Bt);
-        C += Bt.transpose() * Bt;
-      } else {
-        // joint: Sigma_ll is in S's (frame) order; per point: in the motion's own.
-        const Eigen::MatrixXd &Sll = joint ? Sigma_ll : Sigma_ll_point[p];
-        auto at = [&](int c) { return joint ? pos[static_cast<std::size_t>(c)] : c; };
-        Eigen::MatrixXd Ssub(kb, kb);
-        for (int j = 0; j < kb; ++j)
-          for (int i = 0; i < kb; ++i)
-            Ssub(i, j) = Sll(at(cb[i]), at(cb[j]));
-        C += B * Ssub * B.transpose();
-      }
-    }
-    cov[p] = 0.5 * (C + C.transpose());
+    cov[p] = pointCovariance<PD>(m, p, joint, Hpp_inv[p], Hpl[p], cols[p], pos, motion,
+                                 joint ? motion.dense : Sigma_ll_point[p]);
     if (!cov[p].allFinite())
       ok[p] = 0;
   }
