@@ -41,15 +41,21 @@ bool boardPoseByPnP(const CameraModel &camera, const std::map<long, Eigen::Vecto
   if (!cv::solvePnP(obj, norm, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_IPPE))
     return false;
   cv::solvePnP(obj, norm, K, cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
+  cMb = isometryOf(rvec, tvec);
+  return true;
+}
+
+Eigen::Isometry3d isometryOf(const cv::Mat &rvec, const cv::Mat &tvec)
+{
   cv::Mat R;
   cv::Rodrigues(rvec, R);
-  cMb = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
   for (int a = 0; a < 3; ++a) {
     for (int b = 0; b < 3; ++b)
-      cMb.linear()(a, b) = R.at<double>(a, b);
-    cMb.translation()(a) = tvec.at<double>(a);
+      M.linear()(a, b) = R.at<double>(a, b);
+    M.translation()(a) = tvec.at<double>(a);
   }
-  return true;
+  return M;
 }
 
 } // namespace calibration_detail

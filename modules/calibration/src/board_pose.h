@@ -7,6 +7,7 @@
 #include <vector>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <opencv2/core.hpp>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/features/pattern.h>
@@ -24,6 +25,9 @@ std::map<long, Eigen::Vector3d> boardPoints(const BoardLayout &board);
 bool boardPoseByPnP(const CameraModel &camera, const std::map<long, Eigen::Vector3d> &points,
                     const std::vector<FeatureObservation> &features, int min_points, Eigen::Isometry3d &cMb,
                     std::vector<Eigen::Vector3d> &P, std::vector<Eigen::Vector2d> &uv);
+
+/* The pose [R(rvec) | tvec] of an OpenCV rotation vector and translation (CV_64F). */
+Eigen::Isometry3d isometryOf(const cv::Mat &rvec, const cv::Mat &tvec);
 
 } // namespace calibration_detail
 } // namespace yawdepth

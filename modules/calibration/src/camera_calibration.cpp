@@ -86,6 +86,25 @@ std::string sizeHint(const BoardLayout &board, const std::vector<cv::Mat> &image
   return {};
 }
 
+/* The largest angle between two of the unit vectors (board normals). */
+double largestAngle(const std::vector<Eigen::Vector3d> &normals)
+{
+  double spread = 0;
+  for (std::size_t i = 0; i < normals.size(); ++i)
+    for (std::size_t j = i + 1; j < normals.size(); ++j)
+      spread = std::max(spread, std::acos(std::clamp(normals[i].dot(normals[j]), -1.0, 1.0)));
+  return spread;
+}
+
+/* The cell of a pixel in the image's 8 x 6 grid, row by row (computed in the pixel's own type). */
+template <class T>
+std::size_t coverageCell(T x, T y, int width, int height)
+{
+  const int cx = std::clamp(static_cast<int>(x / width * 8), 0, 7);
+  const int cy = std::clamp(static_cast<int>(y / height * 6), 0, 5);
+  return static_cast<std::size_t>(cy) * 8 + cx;
+}
+
 /*! Board normal (camera frame) from a homography with a guessed camera, for a failed calibration. */
 double homographySpread(const std::map<long, Eigen::Vector3d> &pts, const std::vector<CalibrationView> &views, int width,
                         int height)
@@ -122,11 +141,7 @@ double homographySpread(const std::map<long, Eigen::Vector3d> &pts, const std::v
       n = -n;
     normals.push_back(n);
   }
-  double spread = 0;
-  for (std::size_t i = 0; i < normals.size(); ++i)
-    for (std::size_t j = i + 1; j < normals.size(); ++j)
-      spread = std::max(spread, std::acos(std::clamp(normals[i].dot(normals[j]), -1.0, 1.0)));
-  return spread;
+  return largestAngle(normals);
 }
 
 
@@ -225,6 +240,562 @@ void projectionJacobians(const std::vector<cv::Point3f> &obj, const cv::Mat &rve
     *proj = p;
 }
 
+/* The views' message when the board's orientation hardly varies (the focal length is then unknown). */
+std::string degenerateMessage(double spread, std::size_t n)
+{
+  return "degenerate views: the board's orientation varies by only " + fixed(spread / kDeg, 1) + " deg over the " +
+         std::to_string(n) + " views (all fronto-parallel or all tilted alike); the focal length cannot be "
+         "told from the distance: tilt the board 20 to 45 degrees in different directions";
+}
+
+/* Adds the squared pixel errors of projections against the observed points to sse (a float
+   projection is differenced in float, as before). */
+template <class Point>
+void addSquaredErrors(const std::vector<Point> &proj, const std::vector<cv::Point2f> &observed, double &sse)
+{
+  for (std::size_t j = 0; j < proj.size(); ++j) {
+    const double du = proj[j].x - observed[j].x, dv = proj[j].y - observed[j].y;
+    sse += du * du + dv * dv;
+  }
+}
+
+/* The Brown camera of a fit (5 coefficients, 8 for the rational model). */
+CameraModel brownCamera(const OpenCvSolution &s, Distortion d, int width, int height)
+{
+  std::vector<double> c(static_cast<std::size_t>(d == Distortion::K8 ? 8 : 5));
+  for (std::size_t i = 0; i < c.size(); ++i)
+    c[i] = s.dist.at<double>(static_cast<int>(i));
+  return CameraModel::brown(s.K.at<double>(0, 0), s.K.at<double>(1, 1), s.K.at<double>(0, 2), s.K.at<double>(1, 2), c,
+                            static_cast<unsigned>(width), static_cast<unsigned>(height));
+}
+
+/* Projection uncertainty at the centres of the 8 x 6 cells of the image, row by row. */
+std::vector<double> uncertaintyGrid(const CameraCalibration &calibration, int width, int height)
+{
+  std::vector<double> grid;
+  for (int cy = 0; cy < 6; ++cy)
+    for (int cx = 0; cx < 8; ++cx)
+      grid.push_back(projectionUncertainty(calibration, (cx + 0.5) * width / 8.0 - 0.5, (cy + 0.5) * height / 6.0 - 0.5));
+  return grid;
+}
+
+/* The board's correspondences in every view, and OpenCV's fits and their diagnostics on subsets of
+   the views (`idx`: indices into `views`; a fit's poses follow idx's order). */
+struct CameraFit {
+  const std::map<long, Eigen::Vector3d> pts;
+  const std::vector<CalibrationView> &views;
+  const int width, height;
+  const CameraCalibrationOptions &options;
+  std::vector<std::vector<cv::Point3f>> object; // per view: board points with a finite observation
+  std::vector<std::vector<cv::Point2f>> image;  // per view: their pixels
+
+  OpenCvSolution solve(const std::vector<std::size_t> &idx, Distortion d) const;
+  double heldOut(const std::vector<std::size_t> &idx, Distortion d, const OpenCvSolution &all) const;
+  bool intrinsicsCovariance(const std::vector<std::size_t> &idx, const OpenCvSolution &s, Distortion d,
+                            Eigen::Matrix<double, 12, 12> &out) const;
+  std::string admissibility(const OpenCvSolution &s, Distortion d, const std::vector<std::size_t> &idx) const;
+};
+
+OpenCvSolution CameraFit::solve(const std::vector<std::size_t> &idx, Distortion d) const
+{
+  const int flags = modelFlags(d, options);
+  std::vector<std::vector<cv::Point3f>> obj;
+  std::vector<std::vector<cv::Point2f>> img;
+  std::vector<CalibrationView> sel;
+  for (std::size_t i : idx) {
+    obj.push_back(object[i]);
+    img.push_back(image[i]);
+    sel.push_back(views[i]);
+  }
+  // Before OpenCV: a homography-based orientation check (independent of the focal length's value
+  // for fronto-parallel boards, whose homographies have no perspective part).
+  const double pre = homographySpread(pts, sel, width, height);
+  if (pre < 0.25 * options.min_orientation_spread)
+    throw Error(degenerateMessage(pre, idx.size()));
+  OpenCvSolution s;
+  s.K = cv::Mat::eye(3, 3, CV_64F);
+  s.dist = cv::Mat::zeros(1, d == Distortion::K8 ? 8 : 5, CV_64F);
+  cv::Mat std_ext, per_view;
+  try {
+    cv::calibrateCamera(obj, img, cv::Size(width, height), s.K, s.dist, s.rvecs, s.tvecs, s.std_intrinsics, std_ext,
+                        per_view, flags, cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
+  } catch (const cv::Exception &e) {
+    if (pre < options.min_orientation_spread)
+      throw Error(degenerateMessage(pre, idx.size()));
+    throw Error("calibration failed (OpenCV: " + oneLine(e.err) + ")");
+  }
+  const double fx = s.K.at<double>(0, 0), fy = s.K.at<double>(1, 1);
+  if (!cv::checkRange(s.K) || !cv::checkRange(s.dist) || !(fx > 0) || !(fy > 0)) {
+    if (pre < options.min_orientation_spread)
+      throw Error(degenerateMessage(pre, idx.size()));
+    throw Error("calibration failed: no finite solution (views too few or too alike?)");
+  }
+  return s;
+}
+
+// Held-out error of a model: views left out in folds, each predicted by a calibration without
+// it (its pose fitted to its own corners). Infinite when a fold's calibration fails.
+double CameraFit::heldOut(const std::vector<std::size_t> &idx, Distortion d, const OpenCvSolution &all) const
+{
+  const std::size_t folds = std::min<std::size_t>(idx.size(), static_cast<std::size_t>(std::max(2, options.cv_folds)));
+  double sse = 0;
+  std::size_t n = 0;
+  for (std::size_t f = 0; f < folds; ++f) {
+    std::vector<std::vector<cv::Point3f>> obj;
+    std::vector<std::vector<cv::Point2f>> img;
+    for (std::size_t k = 0; k < idx.size(); ++k)
+      if (k % folds != f) {
+        obj.push_back(object[idx[k]]);
+        img.push_back(image[idx[k]]);
+      }
+    // Started from the fit on every view: a fold's solution is near it.
+    cv::Mat K = all.K.clone(), dist = all.dist.clone();
+    std::vector<cv::Mat> rv, tv;
+    try {
+      cv::calibrateCamera(obj, img, cv::Size(width, height), K, dist, rv, tv,
+                          modelFlags(d, options) | cv::CALIB_USE_INTRINSIC_GUESS,
+                          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
+      if (!cv::checkRange(K) || !cv::checkRange(dist))
+        return std::numeric_limits<double>::infinity();
+      for (std::size_t k = f; k < idx.size(); k += folds) {
+        cv::Mat r, t;
+        if (!cv::solvePnP(object[idx[k]], image[idx[k]], K, dist, r, t, false, cv::SOLVEPNP_ITERATIVE))
+          return std::numeric_limits<double>::infinity();
+        std::vector<cv::Point2f> proj;
+        cv::projectPoints(object[idx[k]], r, t, K, dist, proj);
+        addSquaredErrors(proj, image[idx[k]], sse);
+        n += proj.size();
+      }
+    } catch (const cv::Exception &) {
+      return std::numeric_limits<double>::infinity();
+    }
+  }
+  const double r = std::sqrt(sse / static_cast<double>(std::max<std::size_t>(n, 1)));
+  return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
+}
+
+// Covariance of the intrinsics: Gauss-Newton normal equations of a fit, the poses marginalised
+// view by view (Schur complement), the residual variance over 2N - parameters. False (and zero)
+// when the reduced normal matrix is singular after scaling each parameter to unit diagonal.
+bool CameraFit::intrinsicsCovariance(const std::vector<std::size_t> &idx, const OpenCvSolution &s, Distortion d,
+                                     Eigen::Matrix<double, 12, 12> &out) const
+{
+  out.setZero();
+  const Eigen::MatrixXd S = freeParameterMap(d, options, s.K.at<double>(0, 0) / s.K.at<double>(1, 1));
+  const Eigen::Index nf = S.cols();
+  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nf, nf);
+  double sse = 0;
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < idx.size(); ++k) {
+    Eigen::MatrixXd Jint, Jpose;
+    std::vector<cv::Point2d> proj;
+    projectionJacobians(object[idx[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, Jint, Jpose, &proj);
+    const Eigen::MatrixXd B = Jint * S;
+    const Eigen::Matrix<double, 6, 6> V = Jpose.transpose() * Jpose;
+    const Eigen::MatrixXd W = B.transpose() * Jpose;
+    U += B.transpose() * B - W * V.ldlt().solve(W.transpose());
+    addSquaredErrors(proj, image[idx[k]], sse);
+    n += proj.size();
+  }
+  const double dof = 2.0 * static_cast<double>(n) - static_cast<double>(nf) - 6.0 * static_cast<double>(idx.size());
+  if (!(dof > 0))
+    return false;
+  const Eigen::VectorXd dg = U.diagonal();
+  if (!(dg.minCoeff() > 0))
+    return false;
+  const Eigen::VectorXd sc = dg.cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd Us = sc.asDiagonal() * U * sc.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Us);
+  if (!(es.eigenvalues().minCoeff() > 1e-12 * es.eigenvalues().maxCoeff()))
+    return false;
+  const Eigen::MatrixXd cov = (sse / dof) * (sc.asDiagonal() * es.eigenvectors() *
+                                             es.eigenvalues().cwiseInverse().asDiagonal() *
+                                             es.eigenvectors().transpose() * sc.asDiagonal());
+  out = S * cov * S.transpose();
+  return out.allFinite();
+}
+
+// A fit is admissible when its camera is usable over the whole image (what loadCameraFile()
+// would accept): a high-order model can bend back beyond the corners' reach. Empty when it is.
+std::string CameraFit::admissibility(const OpenCvSolution &s, Distortion d, const std::vector<std::size_t> &idx) const
+{
+  Eigen::Matrix<double, 12, 12> cov;
+  if (!intrinsicsCovariance(idx, s, d, cov))
+    return modelName(d) + ": the views do not determine its parameters (singular covariance)";
+  try {
+    checkCameraPlausible(brownCamera(s, d, width, height), modelName(d));
+  } catch (const Error &e) {
+    return e.what();
+  }
+  return {};
+}
+
+/* Fills fit.object and fit.image and the views' names and point counts; the views with enough
+   points (the others are marked unused, with a note). */
+std::vector<std::size_t> collectCorrespondences(CameraFit &fit, CameraCalibration &result)
+{
+  const std::vector<CalibrationView> &views = fit.views;
+  result.views.resize(views.size());
+  fit.object.assign(views.size(), {});
+  fit.image.assign(views.size(), {});
+  std::vector<std::size_t> usable;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    result.views[i].name = views[i].name;
+    for (const auto &f : views[i].features) {
+      auto it = fit.pts.find(f.id);
+      if (it == fit.pts.end() || !std::isfinite(f.u) || !std::isfinite(f.v))
+        continue;
+      fit.object[i].emplace_back(static_cast<float>(it->second.x()), static_cast<float>(it->second.y()), 0.0f);
+      fit.image[i].emplace_back(static_cast<float>(f.u), static_cast<float>(f.v));
+    }
+    result.views[i].points = static_cast<int>(fit.object[i].size());
+    if (result.views[i].points >= std::max(4, fit.options.min_points_per_view))
+      usable.push_back(i);
+    else {
+      result.views[i].used = false;
+      result.notes.push_back(views[i].name + ": only " + std::to_string(result.views[i].points) +
+                             " points, view not used");
+    }
+  }
+  return usable;
+}
+
+/* A model fitted on the usable views and scored: RMS, held-out RMS, projection uncertainty over
+   the image and their combination (or why the model is not usable). */
+DistortionModelScore scoreModel(const CameraFit &fit, const std::vector<std::size_t> &usable, Distortion d)
+{
+  DistortionModelScore m;
+  m.name = modelName(d);
+  m.coefficients = coefficientsOf(d);
+  const OpenCvSolution s = fit.solve(usable, d);
+  double sse = 0;
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < usable.size(); ++k) {
+    std::vector<cv::Point2f> proj;
+    cv::projectPoints(fit.object[usable[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, proj);
+    addSquaredErrors(proj, fit.image[usable[k]], sse);
+    n += proj.size();
+  }
+  m.rms_px = std::sqrt(sse / static_cast<double>(n));
+  m.heldout_rms_px = fit.heldOut(usable, d, s);
+  m.inadmissible = fit.admissibility(s, d, usable);
+  if (m.inadmissible.empty()) {
+    CameraCalibration tmp;
+    tmp.camera = brownCamera(s, d, fit.width, fit.height);
+    fit.intrinsicsCovariance(usable, s, d, tmp.intrinsics_covariance);
+    double u2 = 0;
+    for (double u : uncertaintyGrid(tmp, fit.width, fit.height))
+      u2 += u * u / 48.0;
+    m.image_uncertainty_px = std::sqrt(u2);
+    m.score_px = std::hypot(m.heldout_rms_px, m.image_uncertainty_px);
+    if (!std::isfinite(m.score_px))
+      m.inadmissible = m.name + ": its projection cannot be computed over the whole image";
+  }
+  return m;
+}
+
+/* Why model `pick` was chosen among the scored ones (`best`: the least score). */
+std::string modelReason(const std::vector<DistortionModelScore> &models, std::size_t pick, std::size_t best,
+                        double simpler_within)
+{
+  std::ostringstream why;
+  why << models[pick].name << ": expected error over the image " << fixed(models[pick].score_px, 4) << " px";
+  bool first = true;
+  for (std::size_t i = 0; i < models.size(); ++i)
+    if (i != pick) {
+      why << (first ? " against " : ", ")
+          << (models[i].inadmissible.empty() ? fixed(models[i].score_px, 4) : std::string("not usable")) << " ("
+          << models[i].coefficients << " coefficients)";
+      first = false;
+    }
+  if (pick != best)
+    why << "; the simpler model is within " << fixed(100 * simpler_within, 0) << " % of the best";
+  return why.str();
+}
+
+/* Among the scored K4, K5, K8 (in this order): the simplest usable one within `simpler_within`
+   of the best score, marked chosen; the reason into `reason`. Throws when none is usable. */
+Distortion pickModel(std::vector<DistortionModelScore> &models, double simpler_within, std::string &reason)
+{
+  std::size_t best = models.size();
+  for (std::size_t i = 0; i < models.size(); ++i)
+    if (models[i].inadmissible.empty() && std::isfinite(models[i].score_px) &&
+        (best == models.size() || models[i].score_px < models[best].score_px))
+      best = i;
+  if (best == models.size()) {
+    std::string why;
+    for (const auto &m : models)
+      why += (why.empty() ? "" : "; ") + m.name + ": " +
+             (m.inadmissible.empty() ? std::string("its calibration failed on views left out") : m.inadmissible);
+    throw Error("no distortion model gives a usable camera (" + why +
+                "): take views whose corners reach the image's corners and edges");
+  }
+  std::size_t pick = best;
+  for (std::size_t i = 0; i < best; ++i) // the simplest within the margin
+    if (models[i].inadmissible.empty() && models[i].score_px <= (1 + simpler_within) * models[best].score_px) {
+      pick = i;
+      break;
+    }
+  models[pick].chosen = true;
+  reason = modelReason(models, pick, best, simpler_within);
+  return pick == 0 ? Distortion::K4 : pick == 1 ? Distortion::K5 : Distortion::K8;
+}
+
+/* The distortion model: given, or chosen by the held-out error (result.models, model_reason). */
+Distortion chooseModel(const CameraFit &fit, const std::vector<std::size_t> &usable, CameraCalibration &result)
+{
+  Distortion model = fit.options.distortion;
+  if (model == Distortion::Auto && fit.options.estimate_k3)
+    model = Distortion::K5;
+  if (model != Distortion::Auto) {
+    DistortionModelScore m;
+    m.name = modelName(model);
+    m.coefficients = coefficientsOf(model);
+    m.chosen = true;
+    result.models.push_back(m);
+    result.model_reason = modelName(model) + ": as asked";
+    return model;
+  }
+  if (usable.size() < 4) {
+    model = Distortion::K4;
+    result.model_reason = "k1 k2 p1 p2: too few views (" + std::to_string(usable.size()) +
+                          ") to compare models on views left out";
+    DistortionModelScore m;
+    m.name = modelName(model);
+    m.coefficients = 4;
+    m.chosen = true;
+    result.models.push_back(m);
+    return model;
+  }
+  for (Distortion d : {Distortion::K4, Distortion::K5, Distortion::K8})
+    result.models.push_back(scoreModel(fit, usable, d));
+  return pickModel(result.models, fit.options.simpler_within, result.model_reason);
+}
+
+/* A fit's board poses into the used views' results (pose, tilt); the largest angle between the
+   board normals. */
+double storeBoardPoses(const OpenCvSolution &sol, const std::vector<std::size_t> &used, CameraCalibration &result)
+{
+  std::vector<Eigen::Vector3d> normals;
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    const Eigen::Isometry3d M = calibration_detail::isometryOf(sol.rvecs[k], sol.tvecs[k]);
+    CalibrationViewResult &vr = result.views[used[k]];
+    vr.cMb = M;
+    const Eigen::Vector3d n = M.linear().col(2);
+    vr.tilt = std::acos(std::min(1.0, std::abs(n.z())));
+    normals.push_back(n);
+  }
+  return largestAngle(normals);
+}
+
+/* A fit's reprojection RMS of each used view (into its result, and returned in used's order) and
+   over all (result.rms_px), in double precision. */
+std::vector<double> storeViewErrors(const CameraFit &fit, const OpenCvSolution &sol, const std::vector<std::size_t> &used,
+                                    CameraCalibration &result)
+{
+  double sum2 = 0;
+  std::size_t n_all = 0;
+  std::vector<double> rms;
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    std::vector<cv::Point2f> proj;
+    cv::projectPoints(fit.object[used[k]], sol.rvecs[k], sol.tvecs[k], sol.K, sol.dist, proj);
+    double s2 = 0;
+    addSquaredErrors(proj, fit.image[used[k]], s2);
+    sum2 += s2;
+    n_all += proj.size();
+    result.views[used[k]].rms_px = std::sqrt(s2 / static_cast<double>(proj.size()));
+    rms.push_back(result.views[used[k]].rms_px);
+  }
+  result.rms_px = std::sqrt(sum2 / static_cast<double>(n_all));
+  return rms;
+}
+
+/* Flags the outlier views (on the first pass only: RMS above ratio x the median and above the
+   floor); the used views that are not, and the median RMS in `median`. */
+std::vector<std::size_t> flagOutliers(const std::vector<double> &rms, const std::vector<std::size_t> &used, int pass,
+                                      const CameraCalibrationOptions &options, CameraCalibration &result, double &median)
+{
+  std::vector<double> sorted = rms;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  median = sorted[sorted.size() / 2];
+  std::vector<std::size_t> kept;
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    CalibrationViewResult &vr = result.views[used[k]];
+    vr.outlier = pass == 0 && rms[k] > options.outlier_ratio * median && rms[k] > options.outlier_min_px;
+    if (!vr.outlier)
+      kept.push_back(used[k]);
+  }
+  return kept;
+}
+
+/* The fit of `model` on the `used` views, refitted once without its outlier views when the
+   options drop them (`used` then the views kept); poses, errors and spread into result. */
+OpenCvSolution fitDroppingOutliers(const CameraFit &fit, Distortion model, int min_views, std::vector<std::size_t> &used,
+                                   CameraCalibration &result)
+{
+  const CameraCalibrationOptions &options = fit.options;
+  OpenCvSolution sol;
+  for (int pass = 0; pass < 2; ++pass) {
+    sol = fit.solve(used, model);
+    result.orientation_spread = storeBoardPoses(sol, used, result);
+    if (result.orientation_spread < options.min_orientation_spread)
+      throw Error(degenerateMessage(result.orientation_spread, used.size()));
+    const std::vector<double> rms = storeViewErrors(fit, sol, used, result);
+    double median = 0;
+    const std::vector<std::size_t> kept = flagOutliers(rms, used, pass, options, result, median);
+    if (pass == 1 || !options.drop_outliers || kept.size() == used.size())
+      break;
+    if (static_cast<int>(kept.size()) < min_views)
+      throw Error("too few views: " + std::to_string(kept.size()) + " left after dropping " +
+                  std::to_string(used.size() - kept.size()) + " outlier view(s), at least " +
+                  std::to_string(min_views) + " are needed");
+    for (std::size_t i : used)
+      if (std::find(kept.begin(), kept.end(), i) == kept.end()) {
+        result.views[i].used = false;
+        result.views[i].outlier = true;
+        result.notes.push_back(result.views[i].name + ": outlier view dropped (RMS " + fixed(result.views[i].rms_px) +
+                               " px against a median of " + fixed(median) + " px)");
+      }
+    used = kept;
+  }
+  return sol;
+}
+
+/* The final fit's camera (refused when not usable over the image), its covariance, standard
+   deviations and uncertainty grid. */
+void storeCamera(const CameraFit &fit, const OpenCvSolution &sol, Distortion model, const std::vector<std::size_t> &used,
+                 CameraCalibration &result)
+{
+  result.camera = brownCamera(sol, model, fit.width, fit.height);
+  const std::string bad = fit.admissibility(sol, model, used);
+  if (!bad.empty())
+    throw Error("the calibrated camera is not usable: " + bad +
+                "; take views whose corners reach the image's corners and edges" +
+                (model != Distortion::K4 ? std::string(", or a model with fewer coefficients") : std::string()));
+  for (auto &m : result.models)
+    if (m.chosen && m.rms_px == 0)
+      m.rms_px = result.rms_px;
+  if (!fit.intrinsicsCovariance(used, sol, model, result.intrinsics_covariance))
+    result.notes.emplace_back("the intrinsics' covariance is singular: the views do not determine every parameter");
+  result.std_devs.assign(12, 0.0);
+  for (int i = 0; i < 12; ++i)
+    result.std_devs[static_cast<std::size_t>(i)] = std::sqrt(std::max(0.0, result.intrinsics_covariance(i, i)));
+  result.uncertainty_grid = uncertaintyGrid(result, fit.width, fit.height);
+}
+
+/* Share of the 8 x 6 cells of the image with a corner of a used view. */
+double coverageOf(const CameraFit &fit, const std::vector<std::size_t> &used)
+{
+  std::vector<int> cells(48, 0);
+  for (std::size_t i : used)
+    for (const auto &p : fit.image[i])
+      ++cells[coverageCell(p.x, p.y, fit.width, fit.height)];
+  return static_cast<double>(std::count_if(cells.begin(), cells.end(), [](int c) { return c > 0; })) / 48.0;
+}
+
+/* Notes on few views, poor coverage and outlier views kept. */
+void addQualityNotes(CameraCalibration &result)
+{
+  if (result.views_used < 8)
+    result.notes.push_back("only " + std::to_string(result.views_used) +
+                           " views used: 10 to 20 views give more reliable parameters");
+  if (result.coverage < 0.6)
+    result.notes.push_back("the corners cover only " + fixed(100 * result.coverage, 0) +
+                           " % of the image: the distortion is poorly known where there are none (see the coverage picture)");
+  for (const auto &v : result.views)
+    if (v.outlier && v.used)
+      result.notes.push_back(v.name + ": outlier view (RMS " + fixed(v.rms_px) + " px); --drop-outliers recalibrates without it");
+}
+
+/* One vpCalibration per used view, with its board points and pixels. */
+std::vector<vpCalibration> vispCalibrationTable(const CameraFit &fit, const std::vector<std::size_t> &used)
+{
+  std::vector<vpCalibration> table;
+  for (std::size_t i : used) {
+    vpCalibration calib;
+    calib.clearPoint();
+    if (fit.options.fix_aspect_ratio)
+      calib.setAspectRatio(1.0);
+    for (std::size_t j = 0; j < fit.object[i].size(); ++j) {
+      vpImagePoint ip(fit.image[i][j].y, fit.image[i][j].x);
+      calib.addPoint(fit.object[i][j].x, fit.object[i][j].y, fit.object[i][j].z, ip);
+    }
+    table.push_back(calib);
+  }
+  return table;
+}
+
+/* Reprojection RMS of ViSP's two models, each with its own poses (and of kdu, the inverse
+   distortion), into result. */
+void storeVispErrors(const CameraFit &fit, const std::vector<std::size_t> &used, const std::vector<vpCalibration> &table,
+                     CameraCalibration &result)
+{
+  double s_wo = 0, s_w = 0, s_kdu = 0;
+  std::size_t n = 0;
+  const vpCameraParameters &cw = result.visp_with, &c0 = result.visp_without;
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    const std::size_t i = used[k];
+    const vpHomogeneousMatrix &M0 = table[k].cMo, &M1 = table[k].cMo_dist;
+    for (std::size_t j = 0; j < fit.object[i].size(); ++j) {
+      const double X = fit.object[i][j].x, Y = fit.object[i][j].y, Z = fit.object[i][j].z;
+      const double u = fit.image[i][j].x, v = fit.image[i][j].y;
+      auto proj = [&](const vpHomogeneousMatrix &M, double &x, double &y) {
+        const double cx = M[0][0] * X + M[0][1] * Y + M[0][2] * Z + M[0][3];
+        const double cy = M[1][0] * X + M[1][1] * Y + M[1][2] * Z + M[1][3];
+        const double cz = M[2][0] * X + M[2][1] * Y + M[2][2] * Z + M[2][3];
+        x = cx / cz;
+        y = cy / cz;
+      };
+      double x, y;
+      proj(M0, x, y);
+      s_wo += std::pow(c0.get_u0() + c0.get_px() * x - u, 2) + std::pow(c0.get_v0() + c0.get_py() * y - v, 2);
+      proj(M1, x, y);
+      const double r2 = x * x + y * y;
+      s_w += std::pow(cw.get_u0() + cw.get_px() * x * (1 + cw.get_kud() * r2) - u, 2) +
+             std::pow(cw.get_v0() + cw.get_py() * y * (1 + cw.get_kud() * r2) - v, 2);
+      // kdu: observed pixel to undistorted pixel, compared with the pinhole projection.
+      const double xd = (u - cw.get_u0()) / cw.get_px(), yd = (v - cw.get_v0()) / cw.get_py();
+      const double f = 1 + cw.get_kdu() * (xd * xd + yd * yd);
+      s_kdu += std::pow(cw.get_u0() + cw.get_px() * xd * f - (cw.get_u0() + cw.get_px() * x), 2) +
+               std::pow(cw.get_v0() + cw.get_py() * yd * f - (cw.get_v0() + cw.get_py() * y), 2);
+      ++n;
+    }
+  }
+  result.visp_rms_without = std::sqrt(s_wo / static_cast<double>(n));
+  result.visp_rms_with = std::sqrt(s_w / static_cast<double>(n));
+  result.visp_rms_kdu = std::sqrt(s_kdu / static_cast<double>(n));
+}
+
+/* ViSP's two models, fitted by vpCalibration as ViSP's calibration tool does, from OpenCV's
+   result; a note instead when they cannot be. */
+void fitVispModels(const CameraFit &fit, const OpenCvSolution &sol, const std::vector<std::size_t> &used,
+                   CameraCalibration &result)
+{
+  try {
+    const detail::QuietVisp quiet; // vpCalibration prints, and its gain is a static
+    std::vector<vpCalibration> table = vispCalibrationTable(fit, used);
+    vpCalibration::setLambda(0.5);
+    vpCameraParameters cam;
+    cam.initPersProjWithoutDistortion(sol.K.at<double>(0, 0), sol.K.at<double>(1, 1), sol.K.at<double>(0, 2),
+                                      sol.K.at<double>(1, 2));
+    double err = 0;
+    if (vpCalibration::computeCalibrationMulti(vpCalibration::CALIB_VIRTUAL_VS, table, cam, err, false) != 0)
+      throw Error("vpCalibration failed (model without distortion)");
+    result.visp_without = cam;
+    if (vpCalibration::computeCalibrationMulti(vpCalibration::CALIB_VIRTUAL_VS_DIST, table, cam, err, false) != 0)
+      throw Error("vpCalibration failed (model with distortion)");
+    result.visp_with = cam;
+    storeVispErrors(fit, used, table, result);
+    result.visp_fitted = std::isfinite(result.visp_rms_with) && std::isfinite(result.visp_rms_without);
+    if (!result.visp_fitted)
+      result.notes.emplace_back("ViSP models: non-finite fit");
+  } catch (const Error &e) {
+    result.notes.push_back(std::string("ViSP models not fitted: ") + e.what());
+  } catch (const vpException &e) {
+    result.notes.push_back("ViSP models not fitted: " + oneLine(e.getStringMessage()));
+  }
+}
+
 } // namespace
 
 CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std::vector<std::string> &names,
@@ -304,480 +875,22 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
 {
   if (width <= 0 || height <= 0)
     throw Error("calibrateCamera: unknown image size");
-  const std::map<long, Eigen::Vector3d> pts = calibration_detail::boardPoints(board);
-
+  CameraFit fit{calibration_detail::boardPoints(board), views, width, height, options, {}, {}};
   CameraCalibration result;
-  result.views.resize(views.size());
-  std::vector<std::vector<cv::Point3f>> object(views.size());
-  std::vector<std::vector<cv::Point2f>> image(views.size());
-  std::vector<std::size_t> usable;
-  for (std::size_t i = 0; i < views.size(); ++i) {
-    result.views[i].name = views[i].name;
-    for (const auto &f : views[i].features) {
-      auto it = pts.find(f.id);
-      if (it == pts.end() || !std::isfinite(f.u) || !std::isfinite(f.v))
-        continue;
-      object[i].emplace_back(static_cast<float>(it->second.x()), static_cast<float>(it->second.y()), 0.0f);
-      image[i].emplace_back(static_cast<float>(f.u), static_cast<float>(f.v));
-    }
-    result.views[i].points = static_cast<int>(object[i].size());
-    if (result.views[i].points >= std::max(4, options.min_points_per_view))
-      usable.push_back(i);
-    else {
-      result.views[i].used = false;
-      result.notes.push_back(views[i].name + ": only " + std::to_string(result.views[i].points) +
-                             " points, view not used");
-    }
-  }
+  const std::vector<std::size_t> usable = collectCorrespondences(fit, result);
   const int min_views = std::max(1, options.min_views);
   if (static_cast<int>(usable.size()) < min_views)
     throw Error("too few views: " + std::to_string(usable.size()) + " usable view(s) of the board, at least " +
                 std::to_string(min_views) + " are needed (10 to 20 views at different tilts are best)");
-
-  Distortion model = options.distortion;
-  if (model == Distortion::Auto && options.estimate_k3)
-    model = Distortion::K5;
-
-  auto degenerateMessage = [&](double spread, std::size_t n) {
-    return "degenerate views: the board's orientation varies by only " + fixed(spread / kDeg, 1) + " deg over the " +
-           std::to_string(n) + " views (all fronto-parallel or all tilted alike); the focal length cannot be "
-           "told from the distance: tilt the board 20 to 45 degrees in different directions";
-  };
-
-  auto solve = [&](const std::vector<std::size_t> &idx, Distortion d) {
-    const int flags = modelFlags(d, options);
-    std::vector<std::vector<cv::Point3f>> obj;
-    std::vector<std::vector<cv::Point2f>> img;
-    std::vector<CalibrationView> sel;
-    for (std::size_t i : idx) {
-      obj.push_back(object[i]);
-      img.push_back(image[i]);
-      sel.push_back(views[i]);
-    }
-    // Before OpenCV: a homography-based orientation check (independent of the focal length's value
-    // for fronto-parallel boards, whose homographies have no perspective part).
-    const double pre = homographySpread(pts, sel, width, height);
-    if (pre < 0.25 * options.min_orientation_spread)
-      throw Error(degenerateMessage(pre, idx.size()));
-    OpenCvSolution s;
-    s.K = cv::Mat::eye(3, 3, CV_64F);
-    s.dist = cv::Mat::zeros(1, d == Distortion::K8 ? 8 : 5, CV_64F);
-    cv::Mat std_ext, per_view;
-    try {
-      cv::calibrateCamera(obj, img, cv::Size(width, height), s.K, s.dist, s.rvecs, s.tvecs, s.std_intrinsics, std_ext,
-                          per_view, flags,
-                          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
-    } catch (const cv::Exception &e) {
-      if (pre < options.min_orientation_spread)
-        throw Error(degenerateMessage(pre, idx.size()));
-      throw Error("calibration failed (OpenCV: " + oneLine(e.err) + ")");
-    }
-    const double fx = s.K.at<double>(0, 0), fy = s.K.at<double>(1, 1);
-    if (!cv::checkRange(s.K) || !cv::checkRange(s.dist) || !(fx > 0) || !(fy > 0)) {
-      if (pre < options.min_orientation_spread)
-        throw Error(degenerateMessage(pre, idx.size()));
-      throw Error("calibration failed: no finite solution (views too few or too alike?)");
-    }
-    return s;
-  };
-
-  // Held-out error of a model: views left out in folds, each predicted by a calibration without
-  // it (its pose fitted to its own corners). Infinite when a fold's calibration fails.
-  auto heldOut = [&](const std::vector<std::size_t> &idx, Distortion d, const OpenCvSolution &all) {
-    const std::size_t folds = std::min<std::size_t>(idx.size(), static_cast<std::size_t>(std::max(2, options.cv_folds)));
-    double sse = 0;
-    std::size_t n = 0;
-    for (std::size_t f = 0; f < folds; ++f) {
-      std::vector<std::vector<cv::Point3f>> obj;
-      std::vector<std::vector<cv::Point2f>> img;
-      for (std::size_t k = 0; k < idx.size(); ++k)
-        if (k % folds != f) {
-          obj.push_back(object[idx[k]]);
-          img.push_back(image[idx[k]]);
-        }
-      // Started from the fit on every view: a fold's solution is near it.
-      cv::Mat K = all.K.clone(), dist = all.dist.clone();
-      std::vector<cv::Mat> rv, tv;
-      try {
-        cv::calibrateCamera(obj, img, cv::Size(width, height), K, dist, rv, tv,
-                            modelFlags(d, options) | cv::CALIB_USE_INTRINSIC_GUESS,
-                            cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
-        if (!cv::checkRange(K) || !cv::checkRange(dist))
-          return std::numeric_limits<double>::infinity();
-        for (std::size_t k = f; k < idx.size(); k += folds) {
-          cv::Mat r, t;
-          if (!cv::solvePnP(object[idx[k]], image[idx[k]], K, dist, r, t, false, cv::SOLVEPNP_ITERATIVE))
-            return std::numeric_limits<double>::infinity();
-          std::vector<cv::Point2f> proj;
-          cv::projectPoints(object[idx[k]], r, t, K, dist, proj);
-          for (std::size_t j = 0; j < proj.size(); ++j) {
-            const double du = proj[j].x - image[idx[k]][j].x, dv = proj[j].y - image[idx[k]][j].y;
-            sse += du * du + dv * dv;
-          }
-          n += proj.size();
-        }
-      } catch (const cv::Exception &) {
-        return std::numeric_limits<double>::infinity();
-      }
-    }
-    const double r = std::sqrt(sse / static_cast<double>(std::max<std::size_t>(n, 1)));
-    return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
-  };
-
-  // Covariance of the intrinsics: Gauss-Newton normal equations of a fit, the poses marginalised
-  // view by view (Schur complement), the residual variance over 2N - parameters. False (and zero)
-  // when the reduced normal matrix is singular after scaling each parameter to unit diagonal.
-  auto intrinsicsCovariance = [&](const std::vector<std::size_t> &idx, const OpenCvSolution &s, Distortion d,
-                                  Eigen::Matrix<double, 12, 12> &out) {
-    out.setZero();
-    const Eigen::MatrixXd S = freeParameterMap(d, options, s.K.at<double>(0, 0) / s.K.at<double>(1, 1));
-    const Eigen::Index nf = S.cols();
-    Eigen::MatrixXd U = Eigen::MatrixXd::Zero(nf, nf);
-    double sse = 0;
-    std::size_t n = 0;
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-      Eigen::MatrixXd Jint, Jpose;
-      std::vector<cv::Point2d> proj;
-      projectionJacobians(object[idx[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, Jint, Jpose, &proj);
-      const Eigen::MatrixXd B = Jint * S;
-      const Eigen::Matrix<double, 6, 6> V = Jpose.transpose() * Jpose;
-      const Eigen::MatrixXd W = B.transpose() * Jpose;
-      U += B.transpose() * B - W * V.ldlt().solve(W.transpose());
-      for (std::size_t j = 0; j < proj.size(); ++j) {
-        const double du = proj[j].x - image[idx[k]][j].x, dv = proj[j].y - image[idx[k]][j].y;
-        sse += du * du + dv * dv;
-      }
-      n += proj.size();
-    }
-    const double dof = 2.0 * static_cast<double>(n) - static_cast<double>(nf) - 6.0 * static_cast<double>(idx.size());
-    if (!(dof > 0))
-      return false;
-    const Eigen::VectorXd dg = U.diagonal();
-    if (!(dg.minCoeff() > 0))
-      return false;
-    const Eigen::VectorXd sc = dg.cwiseSqrt().cwiseInverse();
-    const Eigen::MatrixXd Us = sc.asDiagonal() * U * sc.asDiagonal();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Us);
-    if (!(es.eigenvalues().minCoeff() > 1e-12 * es.eigenvalues().maxCoeff()))
-      return false;
-    const Eigen::MatrixXd cov = (sse / dof) * (sc.asDiagonal() * es.eigenvectors() *
-                                               es.eigenvalues().cwiseInverse().asDiagonal() *
-                                               es.eigenvectors().transpose() * sc.asDiagonal());
-    out = S * cov * S.transpose();
-    return out.allFinite();
-  };
-
-  // A fit is admissible when its camera is usable over the whole image (what loadCameraFile()
-  // would accept): a high-order model can bend back beyond the corners' reach.
-  auto admissibility = [&](const OpenCvSolution &s, Distortion d, const std::vector<std::size_t> &idx) -> std::string {
-    Eigen::Matrix<double, 12, 12> cov;
-    if (!intrinsicsCovariance(idx, s, d, cov))
-      return modelName(d) + ": the views do not determine its parameters (singular covariance)";
-    std::vector<double> c(static_cast<std::size_t>(d == Distortion::K8 ? 8 : 5));
-    for (std::size_t i = 0; i < c.size(); ++i)
-      c[i] = s.dist.at<double>(static_cast<int>(i));
-    try {
-      checkCameraPlausible(CameraModel::brown(s.K.at<double>(0, 0), s.K.at<double>(1, 1), s.K.at<double>(0, 2),
-                                              s.K.at<double>(1, 2), c, static_cast<unsigned>(width),
-                                              static_cast<unsigned>(height)),
-                           modelName(d));
-    } catch (const Error &e) {
-      return e.what();
-    }
-    return {};
-  };
-
-  // The distortion model: given, or chosen by the held-out error.
-  if (model == Distortion::Auto) {
-    if (usable.size() < 4) {
-      model = Distortion::K4;
-      result.model_reason = "k1 k2 p1 p2: too few views (" + std::to_string(usable.size()) +
-                            ") to compare models on views left out";
-      DistortionModelScore m;
-      m.name = modelName(model);
-      m.coefficients = 4;
-      m.chosen = true;
-      result.models.push_back(m);
-    } else {
-      for (Distortion d : {Distortion::K4, Distortion::K5, Distortion::K8}) {
-        DistortionModelScore m;
-        m.name = modelName(d);
-        m.coefficients = coefficientsOf(d);
-        const OpenCvSolution s = solve(usable, d);
-        double sse = 0;
-        std::size_t n = 0;
-        for (std::size_t k = 0; k < usable.size(); ++k) {
-          std::vector<cv::Point2f> proj;
-          cv::projectPoints(object[usable[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, proj);
-          for (std::size_t j = 0; j < proj.size(); ++j) {
-            const double du = proj[j].x - image[usable[k]][j].x, dv = proj[j].y - image[usable[k]][j].y;
-            sse += du * du + dv * dv;
-          }
-          n += proj.size();
-        }
-        m.rms_px = std::sqrt(sse / static_cast<double>(n));
-        m.heldout_rms_px = heldOut(usable, d, s);
-        m.inadmissible = admissibility(s, d, usable);
-        if (m.inadmissible.empty()) {
-          CameraCalibration tmp;
-          std::vector<double> c(static_cast<std::size_t>(d == Distortion::K8 ? 8 : 5));
-          for (std::size_t i = 0; i < c.size(); ++i)
-            c[i] = s.dist.at<double>(static_cast<int>(i));
-          tmp.camera = CameraModel::brown(s.K.at<double>(0, 0), s.K.at<double>(1, 1), s.K.at<double>(0, 2),
-                                          s.K.at<double>(1, 2), c, static_cast<unsigned>(width), static_cast<unsigned>(height));
-          intrinsicsCovariance(usable, s, d, tmp.intrinsics_covariance);
-          double u2 = 0;
-          for (int cy = 0; cy < 6; ++cy)
-            for (int cx = 0; cx < 8; ++cx) {
-              const double u = projectionUncertainty(tmp, (cx + 0.5) * width / 8.0 - 0.5, (cy + 0.5) * height / 6.0 - 0.5);
-              u2 += u * u / 48.0;
-            }
-          m.image_uncertainty_px = std::sqrt(u2);
-          m.score_px = std::hypot(m.heldout_rms_px, m.image_uncertainty_px);
-          if (!std::isfinite(m.score_px))
-            m.inadmissible = m.name + ": its projection cannot be computed over the whole image";
-        }
-        result.models.push_back(m);
-      }
-      std::size_t best = result.models.size();
-      for (std::size_t i = 0; i < result.models.size(); ++i)
-        if (result.models[i].inadmissible.empty() && std::isfinite(result.models[i].score_px) &&
-            (best == result.models.size() || result.models[i].score_px < result.models[best].score_px))
-          best = i;
-      if (best == result.models.size()) {
-        std::string why;
-        for (const auto &m : result.models)
-          why += (why.empty() ? "" : "; ") + m.name + ": " +
-                 (m.inadmissible.empty() ? std::string("its calibration failed on views left out") : m.inadmissible);
-        throw Error("no distortion model gives a usable camera (" + why +
-                    "): take views whose corners reach the image's corners and edges");
-      }
-      std::size_t pick = best;
-      for (std::size_t i = 0; i < best; ++i) // the simplest within the margin
-        if (result.models[i].inadmissible.empty() &&
-            result.models[i].score_px <= (1 + options.simpler_within) * result.models[best].score_px) {
-          pick = i;
-          break;
-        }
-      result.models[pick].chosen = true;
-      model = pick == 0 ? Distortion::K4 : pick == 1 ? Distortion::K5 : Distortion::K8;
-      std::ostringstream why;
-      why << result.models[pick].name << ": expected error over the image " << fixed(result.models[pick].score_px, 4)
-          << " px";
-      bool first = true;
-      for (std::size_t i = 0; i < result.models.size(); ++i)
-        if (i != pick) {
-          why << (first ? " against " : ", ")
-              << (result.models[i].inadmissible.empty() ? fixed(result.models[i].score_px, 4) : std::string("not usable"))
-              << " (" << result.models[i].coefficients << " coefficients)";
-          first = false;
-        }
-      if (pick != best)
-        why << "; the simpler model is within " << fixed(100 * options.simpler_within, 0) << " % of the best";
-      result.model_reason = why.str();
-    }
-  } else {
-    DistortionModelScore m;
-    m.name = modelName(model);
-    m.coefficients = coefficientsOf(model);
-    m.chosen = true;
-    result.models.push_back(m);
-    result.model_reason = modelName(model) + ": as asked";
-  }
-
+  const Distortion model = chooseModel(fit, usable, result);
   std::vector<std::size_t> used = usable;
-  OpenCvSolution sol;
-  for (int pass = 0; pass < 2; ++pass) {
-    sol = solve(used, model);
-    // Orientation spread of the board normals.
-    std::vector<Eigen::Vector3d> normals;
-    for (std::size_t k = 0; k < used.size(); ++k) {
-      cv::Mat R;
-      cv::Rodrigues(sol.rvecs[k], R);
-      Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
-      for (int a = 0; a < 3; ++a) {
-        for (int b = 0; b < 3; ++b)
-          M.linear()(a, b) = R.at<double>(a, b);
-        M.translation()(a) = sol.tvecs[k].at<double>(a);
-      }
-      CalibrationViewResult &vr = result.views[used[k]];
-      vr.cMb = M;
-      const Eigen::Vector3d n = M.linear().col(2);
-      vr.tilt = std::acos(std::min(1.0, std::abs(n.z())));
-      normals.push_back(n);
-    }
-    double spread = 0;
-    for (std::size_t a = 0; a < normals.size(); ++a)
-      for (std::size_t b = a + 1; b < normals.size(); ++b)
-        spread = std::max(spread, std::acos(std::clamp(normals[a].dot(normals[b]), -1.0, 1.0)));
-    result.orientation_spread = spread;
-    if (spread < options.min_orientation_spread)
-      throw Error(degenerateMessage(spread, used.size()));
-
-    // Per-view errors (double precision reprojection).
-    double sum2 = 0;
-    std::size_t n_all = 0;
-    std::vector<double> rms;
-    for (std::size_t k = 0; k < used.size(); ++k) {
-      std::vector<cv::Point2f> proj;
-      cv::projectPoints(object[used[k]], sol.rvecs[k], sol.tvecs[k], sol.K, sol.dist, proj);
-      double s2 = 0;
-      for (std::size_t j = 0; j < proj.size(); ++j) {
-        const double du = proj[j].x - image[used[k]][j].x, dv = proj[j].y - image[used[k]][j].y;
-        s2 += du * du + dv * dv;
-      }
-      sum2 += s2;
-      n_all += proj.size();
-      result.views[used[k]].rms_px = std::sqrt(s2 / static_cast<double>(proj.size()));
-      rms.push_back(result.views[used[k]].rms_px);
-    }
-    result.rms_px = std::sqrt(sum2 / static_cast<double>(n_all));
-    std::vector<double> sorted = rms;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-    const double median = sorted[sorted.size() / 2];
-    std::vector<std::size_t> kept;
-    for (std::size_t k = 0; k < used.size(); ++k) {
-      CalibrationViewResult &vr = result.views[used[k]];
-      vr.outlier = pass == 0 && rms[k] > options.outlier_ratio * median && rms[k] > options.outlier_min_px;
-      if (!vr.outlier)
-        kept.push_back(used[k]);
-    }
-    if (pass == 1 || !options.drop_outliers || kept.size() == used.size())
-      break;
-    if (static_cast<int>(kept.size()) < min_views)
-      throw Error("too few views: " + std::to_string(kept.size()) + " left after dropping " +
-                  std::to_string(used.size() - kept.size()) + " outlier view(s), at least " +
-                  std::to_string(min_views) + " are needed");
-    for (std::size_t i : used)
-      if (std::find(kept.begin(), kept.end(), i) == kept.end()) {
-        result.views[i].used = false;
-        result.views[i].outlier = true;
-        result.notes.push_back(result.views[i].name + ": outlier view dropped (RMS " +
-                               fixed(result.views[i].rms_px) + " px against a median of " + fixed(median) + " px)");
-      }
-    used = kept;
-  }
+  const OpenCvSolution sol = fitDroppingOutliers(fit, model, min_views, used, result);
   result.views_used = static_cast<int>(used.size());
-
-  const double fx = sol.K.at<double>(0, 0), fy = sol.K.at<double>(1, 1);
-  const double u0 = sol.K.at<double>(0, 2), v0 = sol.K.at<double>(1, 2);
-  const int ncoef = model == Distortion::K8 ? 8 : 5;
-  std::vector<double> d(static_cast<std::size_t>(ncoef));
-  for (int i = 0; i < ncoef; ++i)
-    d[static_cast<std::size_t>(i)] = sol.dist.at<double>(i);
-  result.camera = CameraModel::brown(fx, fy, u0, v0, d, static_cast<unsigned>(width), static_cast<unsigned>(height));
-  {
-    const std::string bad = admissibility(sol, model, used);
-    if (!bad.empty())
-      throw Error("the calibrated camera is not usable: " + bad +
-                  "; take views whose corners reach the image's corners and edges" +
-                  (model != Distortion::K4 ? std::string(", or a model with fewer coefficients") : std::string()));
-  }
-  for (auto &m : result.models)
-    if (m.chosen && m.rms_px == 0)
-      m.rms_px = result.rms_px;
-
-  if (!intrinsicsCovariance(used, sol, model, result.intrinsics_covariance))
-    result.notes.emplace_back("the intrinsics' covariance is singular: the views do not determine every parameter");
-  result.std_devs.assign(12, 0.0);
-  for (int i = 0; i < 12; ++i)
-    result.std_devs[static_cast<std::size_t>(i)] = std::sqrt(std::max(0.0, result.intrinsics_covariance(i, i)));
-  result.uncertainty_grid.clear();
-  for (int cy = 0; cy < 6; ++cy)
-    for (int cx = 0; cx < 8; ++cx)
-      result.uncertainty_grid.push_back(projectionUncertainty(result, (cx + 0.5) * width / 8.0 - 0.5, (cy + 0.5) * height / 6.0 - 0.5));
-
-  // Coverage: 8 x 6 cells.
-  {
-    std::vector<int> cells(48, 0);
-    for (std::size_t i : used)
-      for (const auto &p : image[i]) {
-        const int cx = std::clamp(static_cast<int>(p.x / width * 8), 0, 7);
-        const int cy = std::clamp(static_cast<int>(p.y / height * 6), 0, 5);
-        ++cells[static_cast<std::size_t>(cy) * 8 + cx];
-      }
-    result.coverage = static_cast<double>(std::count_if(cells.begin(), cells.end(), [](int c) { return c > 0; })) / 48.0;
-  }
-  if (result.views_used < 8)
-    result.notes.push_back("only " + std::to_string(result.views_used) +
-                           " views used: 10 to 20 views give more reliable parameters");
-  if (result.coverage < 0.6)
-    result.notes.push_back("the corners cover only " + fixed(100 * result.coverage, 0) +
-                           " % of the image: the distortion is poorly known where there are none (see the coverage picture)");
-  for (const auto &v : result.views)
-    if (v.outlier && v.used)
-      result.notes.push_back(v.name + ": outlier view (RMS " + fixed(v.rms_px) + " px); --drop-outliers recalibrates without it");
-
-  // ViSP's two models, fitted by vpCalibration as ViSP's calibration tool does, from OpenCV's result.
-  if (options.fit_visp) {
-    try {
-      const detail::QuietVisp quiet; // vpCalibration prints, and its gain is a static
-      std::vector<vpCalibration> table;
-      for (std::size_t i : used) {
-        vpCalibration calib;
-        calib.clearPoint();
-        if (options.fix_aspect_ratio)
-          calib.setAspectRatio(1.0);
-        for (std::size_t j = 0; j < object[i].size(); ++j) {
-          vpImagePoint ip(image[i][j].y, image[i][j].x);
-          calib.addPoint(object[i][j].x, object[i][j].y, object[i][j].z, ip);
-        }
-        table.push_back(calib);
-      }
-      vpCalibration::setLambda(0.5);
-      vpCameraParameters cam;
-      cam.initPersProjWithoutDistortion(fx, fy, u0, v0);
-      double err = 0;
-      if (vpCalibration::computeCalibrationMulti(vpCalibration::CALIB_VIRTUAL_VS, table, cam, err, false) != 0)
-        throw Error("vpCalibration failed (model without distortion)");
-      result.visp_without = cam;
-      if (vpCalibration::computeCalibrationMulti(vpCalibration::CALIB_VIRTUAL_VS_DIST, table, cam, err, false) != 0)
-        throw Error("vpCalibration failed (model with distortion)");
-      result.visp_with = cam;
-      // Reprojection errors of each model with its own poses.
-      double s_wo = 0, s_w = 0, s_kdu = 0;
-      std::size_t n = 0;
-      const vpCameraParameters &cw = result.visp_with, &c0 = result.visp_without;
-      for (std::size_t k = 0; k < used.size(); ++k) {
-        const std::size_t i = used[k];
-        const vpHomogeneousMatrix &M0 = table[k].cMo, &M1 = table[k].cMo_dist;
-        for (std::size_t j = 0; j < object[i].size(); ++j) {
-          const double X = object[i][j].x, Y = object[i][j].y, Z = object[i][j].z;
-          const double u = image[i][j].x, v = image[i][j].y;
-          auto proj = [&](const vpHomogeneousMatrix &M, double &x, double &y) {
-            const double cx = M[0][0] * X + M[0][1] * Y + M[0][2] * Z + M[0][3];
-            const double cy = M[1][0] * X + M[1][1] * Y + M[1][2] * Z + M[1][3];
-            const double cz = M[2][0] * X + M[2][1] * Y + M[2][2] * Z + M[2][3];
-            x = cx / cz;
-            y = cy / cz;
-          };
-          double x, y;
-          proj(M0, x, y);
-          s_wo += std::pow(c0.get_u0() + c0.get_px() * x - u, 2) + std::pow(c0.get_v0() + c0.get_py() * y - v, 2);
-          proj(M1, x, y);
-          const double r2 = x * x + y * y;
-          s_w += std::pow(cw.get_u0() + cw.get_px() * x * (1 + cw.get_kud() * r2) - u, 2) +
-                 std::pow(cw.get_v0() + cw.get_py() * y * (1 + cw.get_kud() * r2) - v, 2);
-          // kdu: observed pixel to undistorted pixel, compared with the pinhole projection.
-          const double xd = (u - cw.get_u0()) / cw.get_px(), yd = (v - cw.get_v0()) / cw.get_py();
-          const double f = 1 + cw.get_kdu() * (xd * xd + yd * yd);
-          s_kdu += std::pow(cw.get_u0() + cw.get_px() * xd * f - (cw.get_u0() + cw.get_px() * x), 2) +
-                   std::pow(cw.get_v0() + cw.get_py() * yd * f - (cw.get_v0() + cw.get_py() * y), 2);
-          ++n;
-        }
-      }
-      result.visp_rms_without = std::sqrt(s_wo / static_cast<double>(n));
-      result.visp_rms_with = std::sqrt(s_w / static_cast<double>(n));
-      result.visp_rms_kdu = std::sqrt(s_kdu / static_cast<double>(n));
-      result.visp_fitted = std::isfinite(result.visp_rms_with) && std::isfinite(result.visp_rms_without);
-      if (!result.visp_fitted)
-        result.notes.emplace_back("ViSP models: non-finite fit");
-    } catch (const Error &e) {
-      result.notes.push_back(std::string("ViSP models not fitted: ") + e.what());
-    } catch (const vpException &e) {
-      result.notes.push_back("ViSP models not fitted: " + oneLine(e.getStringMessage()));
-    }
-  }
+  storeCamera(fit, sol, model, used, result);
+  result.coverage = coverageOf(fit, used);
+  addQualityNotes(result);
+  if (options.fit_visp)
+    fitVispModels(fit, sol, used, result);
   return result;
 }
 
@@ -871,11 +984,8 @@ cv::Mat coverageImage(const CameraCalibration &calibration, const std::vector<Ca
   std::vector<int> cells(48, 0);
   for (std::size_t i = 0; i < views.size() && i < calibration.views.size(); ++i)
     if (calibration.views[i].used)
-      for (const auto &f : views[i].features) {
-        const int cx = std::clamp(static_cast<int>(f.u / w * 8), 0, 7);
-        const int cy = std::clamp(static_cast<int>(f.v / h * 6), 0, 5);
-        ++cells[static_cast<std::size_t>(cy) * 8 + cx];
-      }
+      for (const auto &f : views[i].features)
+        ++cells[coverageCell(f.u, f.v, w, h)];
   for (int cy = 0; cy < 6; ++cy)
     for (int cx = 0; cx < 8; ++cx)
       if (cells[static_cast<std::size_t>(cy) * 8 + cx] == 0)

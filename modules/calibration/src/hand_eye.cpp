@@ -6,6 +6,7 @@
 #include <yawdepth/calibration/hand_eye.h>
 
 #include "board_pose.h"
+#include "reprojection.h"
 #include "text.h"
 
 #include <algorithm>
@@ -45,16 +46,15 @@ Iso perturbed(const Iso &T0, const double *p)
   return T;
 }
 
-struct HandEyeProblem {
+/* The views' board points, pixels and pixel residual count (BoardObservations), the hand poses,
+   and the whitened residuals of increments p about X0, Y0 and E0. */
+struct HandEyeProblem : calibration_detail::BoardObservations {
   const CameraModel *camera = nullptr;
   bool in_hand = true;
   std::vector<Iso> rMe;                               // per view: the measured hand pose
   std::vector<Iso> A;                                 // per view: eMr (eye-in-hand) or rMe (eye-to-hand)
-  std::vector<std::vector<Eigen::Vector3d>> points;  // board points per view
-  std::vector<std::vector<Eigen::Vector2d>> pixels;  // observed pixels per view
   Iso X0 = Iso::Identity(), Y0 = Iso::Identity();     // linearisation points of the parameters
   std::vector<Iso> E0;                                // per view: the estimated hand pose (starts at rMe)
-  std::size_t residuals = 0;                          // pixel residuals
   double inv_px = 1, inv_t = 1, inv_r = 1;            // whitening
 
   int params() const { return kPoseParams + 6 * static_cast<int>(A.size()); }
@@ -79,20 +79,8 @@ struct HandEyeProblem {
   {
     Eigen::VectorXd r(static_cast<Eigen::Index>(residuals + 6 * A.size()));
     Eigen::Index k = 0;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const Iso M = cMo(p, i);
-      for (std::size_t j = 0; j < points[i].size(); ++j) {
-        const Eigen::Vector3d P = M * points[i][j];
-        if (!(P.z() > 1e-9)) { // behind the camera: a large, smooth-enough penalty
-          r[k++] = 1e4;
-          r[k++] = 1e4;
-          continue;
-        }
-        const Eigen::Vector2d uv = camera->project(Eigen::Vector2d(P.x() / P.z(), P.y() / P.z()));
-        r[k++] = (uv.x() - pixels[i][j].x()) * inv_px;
-        r[k++] = (uv.y() - pixels[i][j].y()) * inv_px;
-      }
-    }
+    for (std::size_t i = 0; i < points.size(); ++i)
+      pixelResiduals(*camera, cMo(p, i), i, inv_px, r, k);
     for (std::size_t i = 0; i < A.size(); ++i) {
       const Iso D = rMe[i].inverse() * hand(p, i);
       const Eigen::Vector3d t = D.translation(), w = logSO3(D.linear());
@@ -110,16 +98,12 @@ struct HandEyeProblem {
   }
   Eigen::MatrixXd jacobian(const Eigen::VectorXd &p) const
   {
-    const int np = params();
-    Eigen::MatrixXd J(static_cast<Eigen::Index>(residuals + 6 * A.size()), np);
-    for (int c = 0; c < np; ++c) {
-      const double h = 1e-7; // m and rad: well above round-off, far below the noise
-      Eigen::VectorXd pp = p, pm = p;
-      pp[c] += h;
-      pm[c] -= h;
-      J.col(c) = (residual(pp) - residual(pm)) / (2 * h);
-    }
-    return J;
+    std::vector<int> all(static_cast<std::size_t>(params()));
+    for (std::size_t c = 0; c < all.size(); ++c)
+      all[c] = static_cast<int>(c);
+    // Step 1e-7 (m and rad): well above round-off, far below the noise.
+    return calibration_detail::centralJacobian([this](const Eigen::VectorXd &q) { return residual(q); }, p, all, 1e-7,
+                                               static_cast<Eigen::Index>(residuals + 6 * A.size()));
   }
   double viewRms(const Eigen::VectorXd &p, std::size_t i) const
   {
@@ -153,35 +137,27 @@ Iso averageY(const Iso &X, const std::vector<Iso> &A, const std::vector<Iso> &cM
   return Y;
 }
 
-} // namespace
-
-HandEyeSetup handEyeSetupFromString(const std::string &word)
+/* A view's robot pose, refused when not finite or its rotation not a rotation matrix. */
+void checkRobotPose(const HandEyeView &v)
 {
-  if (word == "eye-in-hand")
-    return HandEyeSetup::EyeInHand;
-  if (word == "eye-to-hand")
-    return HandEyeSetup::EyeToHand;
-  throw Error("unknown hand-eye setup '" + word + "' (eye-in-hand or eye-to-hand)");
+  for (unsigned a = 0; a < 3; ++a)
+    for (unsigned b = 0; b < 4; ++b)
+      if (!std::isfinite(v.rMe[a][b]))
+        throw Error(v.name + ": the robot pose is not finite");
+  if (!v.rMe.isAnHomogeneousMatrix(1e-6))
+    throw Error(v.name + ": the robot pose's rotation is not a rotation matrix");
 }
 
-HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout &board,
-                                    const std::vector<HandEyeView> &views, const HandEyeOptions &options)
+/* The views whose board pose PnP finds: into pb (A_i, rMe, points and pixels), cMo0, ViSP's
+   inputs (cMo_i, B_i = A_i^-1) and out.view_names; the others into out.skipped. */
+void collectHandEyeViews(const CameraModel &camera, const BoardLayout &board, const std::vector<HandEyeView> &views,
+                         const HandEyeOptions &options, HandEyeProblem &pb, std::vector<Iso> &cMo0,
+                         std::vector<vpHomogeneousMatrix> &visp_cMo, std::vector<vpHomogeneousMatrix> &visp_B,
+                         HandEyeCalibration &out)
 {
   const std::map<long, Eigen::Vector3d> pts = calibration_detail::boardPoints(board);
-
-  HandEyeCalibration out;
-  out.setup = options.setup;
-  HandEyeProblem pb;
-  pb.camera = &camera;
-  std::vector<Iso> cMo0;
-  std::vector<vpHomogeneousMatrix> visp_cMo, visp_B;
   for (const HandEyeView &v : views) {
-    for (unsigned a = 0; a < 3; ++a)
-      for (unsigned b = 0; b < 4; ++b)
-        if (!std::isfinite(v.rMe[a][b]))
-          throw Error(v.name + ": the robot pose is not finite");
-    if (!v.rMe.isAnHomogeneousMatrix(1e-6))
-      throw Error(v.name + ": the robot pose's rotation is not a rotation matrix");
+    checkRobotPose(v);
     std::vector<Eigen::Vector3d> P;
     std::vector<Eigen::Vector2d> uv;
     Iso M;
@@ -197,30 +173,32 @@ HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout
     pb.rMe.push_back(rMe);
     visp_cMo.push_back(toHom(M));
     visp_B.push_back(toHom(A.inverse()));
-    pb.points.push_back(std::move(P));
-    pb.pixels.push_back(std::move(uv));
-    pb.residuals += 2 * pb.points.back().size();
+    pb.add(std::move(P), std::move(uv));
     out.view_names.push_back(v.name);
   }
-  const std::size_t n = pb.A.size();
-  if (n < 3)
-    throw Error("too few views: the board was usable in " + std::to_string(n) +
-                " image(s); a hand-eye calibration needs at least 3 (better 8 or more) robot poses");
-  // The rotations between poses must turn about at least two different axes.
-  {
-    Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
-    for (std::size_t i = 1; i < n; ++i) {
-      const Eigen::Vector3d w = logSO3(pb.A[0].linear().transpose() * pb.A[i].linear());
-      S += w * w.transpose();
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
-    const double second = std::sqrt(std::max(0.0, es.eigenvalues()(1)) / static_cast<double>(n - 1));
-    if (!(second > 2 * kDeg))
-      throw Error("the robot poses turn about a single axis (second rotation spread " + fixed(second / kDeg, 2) +
-                  " deg): the hand-eye pose is not determined; rotate the hand about two different axes");
-  }
+}
 
-  // Start: ViSP's closed form (and its own refinement of AX = XB).
+/* Refused when the rotations between the poses turn about a single axis (they must turn about at
+   least two different ones). */
+void checkTwoRotationAxes(const std::vector<Iso> &A)
+{
+  const std::size_t n = A.size();
+  Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 1; i < n; ++i) {
+    const Eigen::Vector3d w = logSO3(A[0].linear().transpose() * A[i].linear());
+    S += w * w.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
+  const double second = std::sqrt(std::max(0.0, es.eigenvalues()(1)) / static_cast<double>(n - 1));
+  if (!(second > 2 * kDeg))
+    throw Error("the robot poses turn about a single axis (second rotation spread " + fixed(second / kDeg, 2) +
+                " deg): the hand-eye pose is not determined; rotate the hand about two different axes");
+}
+
+/* The start of X: ViSP's closed form (and its own refinement of AX = XB). */
+vpHomogeneousMatrix vispHandEyeStart(const std::vector<vpHomogeneousMatrix> &visp_cMo,
+                                     const std::vector<vpHomogeneousMatrix> &visp_B)
+{
   vpHomogeneousMatrix X_visp;
   int visp_status = 0;
   {
@@ -229,33 +207,23 @@ HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout
   }
   if (visp_status != 0)
     throw Error("vpHandEyeCalibration failed on these poses (degenerate or inconsistent robot poses)");
-  out.initial_camera_pose = X_visp;
-  pb.X0 = toIso(X_visp);
-  pb.Y0 = averageY(pb.X0, pb.A, cMo0);
-  pb.E0 = pb.rMe;
-  pb.in_hand = options.setup == HandEyeSetup::EyeInHand;
-  pb.inv_px = 1.0 / std::max(options.sigma_px, 1e-6);
-  pb.inv_t = 1.0 / std::max(options.sigma_pose_translation, 1e-9);
-  pb.inv_r = 1.0 / std::max(options.sigma_pose_rotation, 1e-9);
-  if (pb.residuals <= static_cast<std::size_t>(kPoseParams))
-    throw Error("too few points for a hand-eye calibration");
-  const int np = pb.params();
+  return X_visp;
+}
 
-  // Levenberg–Marquardt on X, Y and the hand poses, relinearising after each accepted step.
-  Eigen::VectorXd p = Eigen::VectorXd::Zero(np);
-  Eigen::VectorXd r = pb.residual(p);
-  out.initial_rms_px = std::sqrt(pb.pixelSse(r) / static_cast<double>(pb.residuals));
-  double cost = r.squaredNorm(), lambda = 1e-3;
+/* Levenberg–Marquardt on X, Y and the hand poses, relinearising after each accepted step (pb's
+   X0, Y0 and E0 move, the parameters stay zero); r and cost: the residuals at zero and their
+   squared norm, then at the solution. */
+void refineHandEye(HandEyeProblem &pb, Eigen::VectorXd &r, double &cost)
+{
+  double lambda = 1e-3;
   for (int it = 0; it < 100; ++it) {
-    const Eigen::MatrixXd J = pb.jacobian(p);
+    const Eigen::MatrixXd J = pb.jacobian(Eigen::VectorXd::Zero(pb.params()));
     const Eigen::MatrixXd H = J.transpose() * J;
     const Eigen::VectorXd g = J.transpose() * r;
     bool accepted = false;
     double step = 0;
     for (int k = 0; k < 20 && !accepted; ++k) {
-      Eigen::MatrixXd A = H;
-      A.diagonal() += lambda * H.diagonal().cwiseMax(1e-12);
-      const Eigen::VectorXd dx = A.ldlt().solve(-g);
+      const Eigen::VectorXd dx = calibration_detail::dampedStep(H, g, lambda);
       const Eigen::VectorXd r_new = pb.residual(dx);
       const double c_new = r_new.squaredNorm();
       if (std::isfinite(c_new) && c_new < cost) {
@@ -275,11 +243,14 @@ HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout
     if (!accepted || step < 1e-12)
       break;
   }
-  out.points = static_cast<int>(pb.residuals / 2);
-  out.views = static_cast<int>(n);
-  out.rms_px = std::sqrt(pb.pixelSse(r) / static_cast<double>(pb.residuals));
+}
+
+/* The largest correction of a measured hand pose into out (mm, deg); refused when one is beyond
+   options.max_pose_correction_sigmas of the kinematics, or the RMS beyond options.max_rms_px. */
+void checkHandPoses(const HandEyeProblem &pb, const HandEyeOptions &options, HandEyeCalibration &out)
+{
   double worst_sigmas = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < pb.rMe.size(); ++i) {
     const Iso D = pb.rMe[i].inverse() * pb.E0[i];
     out.pose_correction_mm = std::max(out.pose_correction_mm, 1e3 * D.translation().norm());
     out.pose_correction_deg = std::max(out.pose_correction_deg, Eigen::AngleAxisd(D.linear()).angle() / kDeg);
@@ -295,14 +266,15 @@ HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout
     throw Error("the hand-eye fit failed: reprojection RMS " + fixed(out.rms_px, 2) + " px (more than " +
                 fixed(options.max_rms_px, 1) + "): check that the robot poses belong to these images, are in metres "
                 "and radians, and that the setup (eye-in-hand or eye-to-hand) is right");
-  out.camera_pose = toHom(pb.X0);
-  out.target_pose = toHom(pb.Y0);
-  for (std::size_t i = 0; i < n; ++i)
-    out.view_rms_px.push_back(pb.viewRms(p, i));
+}
 
-  // Covariance at the solution (parameters are increments about it): (J^T J)^-1 of the whitened
-  // problem, scaled by the variance factor when the residuals are larger than the noise model.
-  const Eigen::MatrixXd J = pb.jacobian(p);
+/* Covariance at the solution (parameters are increments about it): (J^T J)^-1 of the whitened
+   problem, scaled by the variance factor when the residuals are larger than the noise model; the
+   1-sigma of X and Y into out, refused when not finite. */
+void storeHandEyeSigmas(const HandEyeProblem &pb, double cost, HandEyeCalibration &out)
+{
+  const int np = pb.params();
+  const Eigen::MatrixXd J = pb.jacobian(Eigen::VectorXd::Zero(np));
   const double dof = static_cast<double>(pb.residuals) - kPoseParams;
   const double s2 = std::max(1.0, cost / dof);
   Eigen::MatrixXd cov = (J.transpose() * J).ldlt().solve(Eigen::MatrixXd::Identity(np, np)) * s2;
@@ -312,6 +284,61 @@ HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout
   }
   if (!out.camera_pose_sigma.allFinite() || !out.target_pose_sigma.allFinite())
     throw Error("the hand-eye pose is not determined by these views (singular information)");
+}
+
+} // namespace
+
+HandEyeSetup handEyeSetupFromString(const std::string &word)
+{
+  if (word == "eye-in-hand")
+    return HandEyeSetup::EyeInHand;
+  if (word == "eye-to-hand")
+    return HandEyeSetup::EyeToHand;
+  throw Error("unknown hand-eye setup '" + word + "' (eye-in-hand or eye-to-hand)");
+}
+
+HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout &board,
+                                    const std::vector<HandEyeView> &views, const HandEyeOptions &options)
+{
+  HandEyeCalibration out;
+  out.setup = options.setup;
+  HandEyeProblem pb;
+  pb.camera = &camera;
+  std::vector<Iso> cMo0;
+  std::vector<vpHomogeneousMatrix> visp_cMo, visp_B;
+  collectHandEyeViews(camera, board, views, options, pb, cMo0, visp_cMo, visp_B, out);
+  const std::size_t n = pb.A.size();
+  if (n < 3)
+    throw Error("too few views: the board was usable in " + std::to_string(n) +
+                " image(s); a hand-eye calibration needs at least 3 (better 8 or more) robot poses");
+  checkTwoRotationAxes(pb.A);
+
+  const vpHomogeneousMatrix X_visp = vispHandEyeStart(visp_cMo, visp_B);
+  out.initial_camera_pose = X_visp;
+  pb.X0 = toIso(X_visp);
+  pb.Y0 = averageY(pb.X0, pb.A, cMo0);
+  pb.E0 = pb.rMe;
+  pb.in_hand = options.setup == HandEyeSetup::EyeInHand;
+  pb.inv_px = 1.0 / std::max(options.sigma_px, 1e-6);
+  pb.inv_t = 1.0 / std::max(options.sigma_pose_translation, 1e-9);
+  pb.inv_r = 1.0 / std::max(options.sigma_pose_rotation, 1e-9);
+  if (pb.residuals <= static_cast<std::size_t>(kPoseParams))
+    throw Error("too few points for a hand-eye calibration");
+
+  const Eigen::VectorXd p = Eigen::VectorXd::Zero(pb.params()); // increments about X0, Y0, E0
+  Eigen::VectorXd r = pb.residual(p);
+  out.initial_rms_px = std::sqrt(pb.pixelSse(r) / static_cast<double>(pb.residuals));
+  double cost = r.squaredNorm();
+  refineHandEye(pb, r, cost);
+  out.points = static_cast<int>(pb.residuals / 2);
+  out.views = static_cast<int>(n);
+  out.rms_px = std::sqrt(pb.pixelSse(r) / static_cast<double>(pb.residuals));
+  checkHandPoses(pb, options, out);
+  out.camera_pose = toHom(pb.X0);
+  out.target_pose = toHom(pb.Y0);
+  for (std::size_t i = 0; i < n; ++i)
+    out.view_rms_px.push_back(pb.viewRms(p, i));
+  storeHandEyeSigmas(pb, cost, out);
   return out;
 }
 

@@ -6,6 +6,7 @@
 #include <yawdepth/calibration/rig_calibration.h>
 
 #include "board_pose.h"
+#include "reprojection.h"
 #include "text.h"
 
 #include <algorithm>
@@ -62,14 +63,13 @@ Eigen::Isometry3d vMc(const Eigen::Vector3d &axis, double theta, const Eigen::Ve
   return M;
 }
 
-struct RigProblem {
+/* The views' board points, pixels and residual count (BoardObservations), the robot's poses and
+   yaw readings, and the reprojection residuals of parameters p. */
+struct RigProblem : calibration_detail::BoardObservations {
   const CameraModel *camera = nullptr;
   std::vector<Eigen::Isometry3d> v0Mv;                   // vision frame of each view in the first one
   std::vector<double> readings;                          // yaw readings
-  std::vector<std::vector<Eigen::Vector3d>> points;      // board points per view
-  std::vector<std::vector<Eigen::Vector2d>> pixels;      // observed pixels per view
   double t0y = 0;
-  std::size_t residuals = 0;
 
   Eigen::Isometry3d board(const Eigen::VectorXd &p) const
   {
@@ -87,33 +87,14 @@ struct RigProblem {
   {
     Eigen::VectorXd r(static_cast<Eigen::Index>(residuals));
     Eigen::Index k = 0;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const Eigen::Isometry3d M = cMb(p, i);
-      for (std::size_t j = 0; j < points[i].size(); ++j) {
-        const Eigen::Vector3d P = M * points[i][j];
-        if (!(P.z() > 1e-9)) {
-          r[k++] = 1e4;
-          r[k++] = 1e4;
-          continue;
-        }
-        const Eigen::Vector2d uv = camera->project(Eigen::Vector2d(P.x() / P.z(), P.y() / P.z()));
-        r[k++] = uv.x() - pixels[i][j].x();
-        r[k++] = uv.y() - pixels[i][j].y();
-      }
-    }
+    for (std::size_t i = 0; i < points.size(); ++i)
+      pixelResiduals(*camera, cMb(p, i), i, 1.0, r, k);
     return r;
   }
   Eigen::MatrixXd jacobian(const Eigen::VectorXd &p, const std::vector<int> &free) const
   {
-    Eigen::MatrixXd J(static_cast<Eigen::Index>(residuals), static_cast<Eigen::Index>(free.size()));
-    for (std::size_t c = 0; c < free.size(); ++c) {
-      const double h = 1e-6;
-      Eigen::VectorXd pp = p, pm = p;
-      pp[free[c]] += h;
-      pm[free[c]] -= h;
-      J.col(static_cast<Eigen::Index>(c)) = (residual(pp) - residual(pm)) / (2 * h);
-    }
-    return J;
+    return calibration_detail::centralJacobian([this](const Eigen::VectorXd &q) { return residual(q); }, p, free, 1e-6,
+                                               static_cast<Eigen::Index>(residuals));
   }
 };
 
@@ -133,39 +114,28 @@ void setBoard(Eigen::VectorXd &p, const Eigen::Isometry3d &M)
   p[P_BZ] = M.translation().z();
 }
 
-} // namespace
-
-RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board, const std::vector<RigView> &views,
-                            const RigCalibrationOptions &options)
+/* The views whose board pose PnP finds: their points and pixels into pb, their poses into cMb0 and
+   their motion samples into samples. */
+void collectRigViews(const CameraModel &camera, const BoardLayout &board, const std::vector<RigView> &views,
+                     int min_points, RigProblem &pb, std::vector<Eigen::Isometry3d> &cMb0,
+                     std::vector<MotionSample> &samples)
 {
   const std::map<long, Eigen::Vector3d> pts = calibration_detail::boardPoints(board);
-
-  RigProblem pb;
-  pb.camera = &camera;
-  std::vector<Eigen::Isometry3d> cMb0; // per view, from its own pose estimate
-  std::vector<MotionSample> samples;
   for (const RigView &v : views) {
     std::vector<Eigen::Vector3d> P;
     std::vector<Eigen::Vector2d> uv;
     Eigen::Isometry3d M;
-    if (!calibration_detail::boardPoseByPnP(camera, pts, v.features, options.min_points_per_view, M, P, uv))
+    if (!calibration_detail::boardPoseByPnP(camera, pts, v.features, min_points, M, P, uv))
       continue;
     cMb0.push_back(M);
     samples.push_back(v.sample);
-    pb.points.push_back(std::move(P));
-    pb.pixels.push_back(std::move(uv));
-    pb.residuals += 2 * pb.points.back().size();
+    pb.add(std::move(P), std::move(uv));
   }
-  const std::size_t n = samples.size();
-  if (n < 3)
-    throw Error("too few views: the board was usable in " + std::to_string(n) +
-                " image(s); at least 3 at different yaw readings are needed");
+}
 
-  RigCalibration out;
-  out.views = static_cast<int>(n);
-  out.points = static_cast<int>(pb.residuals / 2);
-
-  // Yaw readings: distinct values and span.
+/* The yaw readings' distinct values and span into out; refused when too few or too narrow. */
+void checkYawReadings(const std::vector<MotionSample> &samples, const RigCalibrationOptions &options, RigCalibration &out)
+{
   std::vector<double> yaws;
   yaws.reserve(samples.size());
   for (const auto &s : samples)
@@ -178,75 +148,107 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
   out.yaw_span = yaws.back() - yaws.front();
   if (out.distinct_yaws < options.min_distinct_yaws || out.yaw_span < options.min_yaw_span)
     throw Error("yaw readings span only " + fixed(out.yaw_span / kDeg, 1) + " deg over " +
-                std::to_string(out.distinct_yaws) + " distinct value(s) in the " + std::to_string(n) +
+                std::to_string(out.distinct_yaws) + " distinct value(s) in the " + std::to_string(samples.size()) +
                 " usable views: the camera offset and the yaw axis need at least " +
                 std::to_string(options.min_distinct_yaws) + " distinct yaws spanning " +
                 fixed(options.min_yaw_span / kDeg, 0) + " deg");
+}
 
-  // Robot poses.
+/* The robot poses in the first view's vision frame and the yaw readings into pb; the largest
+   distance between two robot positions into out.baseline. */
+void setRobotPoses(const std::vector<MotionSample> &samples, RigProblem &pb, RigCalibration &out)
+{
   const Eigen::Isometry3d wMv0 = isoWMV(samples.front());
   for (const auto &s : samples) {
     pb.v0Mv.push_back(wMv0.inverse() * isoWMV(s));
     pb.readings.push_back(s.yaw);
   }
+  const std::size_t n = samples.size();
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = i + 1; j < n; ++j)
       out.baseline = std::max(out.baseline, (pb.v0Mv[i].translation() - pb.v0Mv[j].translation()).norm());
-  const bool motion = out.baseline >= options.min_baseline;
+}
 
-  // Views sharing the first view's robot pose (static group) for the closed-form start.
+/* The views sharing the first view's robot pose (the static group of the closed-form start). */
+std::vector<std::size_t> staticGroup(const RigProblem &pb)
+{
   std::vector<std::size_t> group;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < pb.v0Mv.size(); ++i) {
     const Eigen::Isometry3d &M = pb.v0Mv[i];
     if (M.translation().norm() < 1e-6 && (M.linear() - Eigen::Matrix3d::Identity()).norm() < 1e-9)
       group.push_back(i);
   }
+  return group;
+}
 
+/* The camera offset's x and z from the static group's own board poses (y kept at pb.t0y): the
+   camera centre C_i = O + bRc_i t0 in the board frame, so (bRc_i - bRc_lo) t0 = C_i - C_lo.
+   False when the least-squares solution is not finite. */
+bool offsetFromGroup(const RigProblem &pb, const std::vector<Eigen::Isometry3d> &cMb0,
+                     const std::vector<std::size_t> &group, std::size_t lo, Eigen::Vector3d &t0)
+{
+  Eigen::MatrixXd A(3 * (group.size() - 1), 2);
+  Eigen::VectorXd b(3 * (group.size() - 1));
+  Eigen::Index row = 0;
+  const Eigen::Isometry3d bMc_ref = cMb0[lo].inverse();
+  for (std::size_t i : group) {
+    if (i == lo)
+      continue;
+    const Eigen::Isometry3d bMc = cMb0[i].inverse();
+    const Eigen::Matrix3d D = bMc.linear() - bMc_ref.linear();
+    A.block(row, 0, 3, 1) = D.col(0);
+    A.block(row, 1, 3, 1) = D.col(2);
+    b.segment(row, 3) = bMc.translation() - bMc_ref.translation() - D.col(1) * pb.t0y;
+    row += 3;
+  }
+  const Eigen::Vector2d xz = A.colPivHouseholderQr().solve(b);
+  if (!xz.allFinite())
+    return false;
+  t0 = Eigen::Vector3d(xz.x(), pb.t0y, xz.y());
+  return true;
+}
+
+/* The closed-form start of the offset and the axis from the static group, when its yaws span
+   more than 2 degrees (t0 and axis untouched otherwise). */
+void closedFormStart(const RigProblem &pb, const std::vector<Eigen::Isometry3d> &cMb0,
+                     const RigCalibrationOptions &options, Eigen::Vector3d &t0, Eigen::Vector3d &axis)
+{
+  const std::vector<std::size_t> group = staticGroup(pb);
+  if (group.size() < 2)
+    return;
+  std::size_t lo = group.front(), hi = group.front();
+  for (std::size_t i : group) {
+    if (pb.readings[i] < pb.readings[lo])
+      lo = i;
+    if (pb.readings[i] > pb.readings[hi])
+      hi = i;
+  }
+  if (!(pb.readings[hi] - pb.readings[lo] > 2 * kDeg))
+    return;
+  if (!options.use_initial_offset)
+    offsetFromGroup(pb, cMb0, group, lo, t0);
+  if (options.estimate_axis) {
+    // Relative rotation between the extreme yaws: about the axis (in the camera frame).
+    const Eigen::Matrix3d Rrel = cMb0[hi].linear() * cMb0[lo].linear().transpose();
+    const Eigen::AngleAxisd aa(Rrel);
+    Eigen::Vector3d a = aa.axis();
+    if (a.y() < 0)
+      a = -a;
+    if (a.y() > 0.5)
+      axis = a;
+  }
+}
+
+/* The starting parameters: the closed-form offset and axis (or the options' values), the yaw
+   offset asked for, and the board placed by the first view's pose (square to the robot with
+   options.board_square, its heading then absorbed by the yaw offset). */
+Eigen::VectorXd initialParameters(const RigProblem &pb, const std::vector<Eigen::Isometry3d> &cMb0,
+                                  const RigCalibrationOptions &options)
+{
   Eigen::VectorXd p = Eigen::VectorXd::Zero(kParams);
-  pb.t0y = options.initial_offset.y();
   Eigen::Vector3d t0 = options.initial_offset;
   Eigen::Vector3d axis = Eigen::Vector3d::UnitY();
-  if (group.size() >= 2) {
-    // Camera centre C_i = O + bRc_i t0 in the board frame: (bRc_i - bRc_k) t0 = C_i - C_k.
-    std::size_t lo = group.front(), hi = group.front();
-    for (std::size_t i : group) {
-      if (pb.readings[i] < pb.readings[lo])
-        lo = i;
-      if (pb.readings[i] > pb.readings[hi])
-        hi = i;
-    }
-    if (pb.readings[hi] - pb.readings[lo] > 2 * kDeg) {
-      if (!options.use_initial_offset) {
-        Eigen::MatrixXd A(3 * (group.size() - 1), 2);
-        Eigen::VectorXd b(3 * (group.size() - 1));
-        Eigen::Index row = 0;
-        const Eigen::Isometry3d bMc_ref = cMb0[lo].inverse();
-        for (std::size_t i : group) {
-          if (i == lo)
-            continue;
-          const Eigen::Isometry3d bMc = cMb0[i].inverse();
-          const Eigen::Matrix3d D = bMc.linear() - bMc_ref.linear();
-          A.block(row, 0, 3, 1) = D.col(0);
-          A.block(row, 1, 3, 1) = D.col(2);
-          b.segment(row, 3) = bMc.translation() - bMc_ref.translation() - D.col(1) * pb.t0y;
-          row += 3;
-        }
-        const Eigen::Vector2d xz = A.colPivHouseholderQr().solve(b);
-        if (xz.allFinite())
-          t0 = Eigen::Vector3d(xz.x(), pb.t0y, xz.y());
-      }
-      if (options.estimate_axis) {
-        // Relative rotation between the extreme yaws: about the axis (in the camera frame).
-        const Eigen::Matrix3d Rrel = cMb0[hi].linear() * cMb0[lo].linear().transpose();
-        const Eigen::AngleAxisd aa(Rrel);
-        Eigen::Vector3d a = aa.axis();
-        if (a.y() < 0)
-          a = -a;
-        if (a.y() > 0.5)
-          axis = a;
-      }
-    }
-  }
+  closedFormStart(pb, cMb0, options, t0, axis);
   axis /= axis.y();
   p[P_AX] = axis.x();
   p[P_AZ] = axis.z();
@@ -263,9 +265,13 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
     setBoard(p, boardFromView(p));
     p[P_PSI] = 0;
   }
+  return p;
+}
 
-  out.yaw_zero = options.board_square ? YawZeroSource::BoardSquare
-                                      : (motion ? YawZeroSource::RobotMotion : YawZeroSource::Fixed);
+/* The parameters the fit moves: the axis when estimated, the offset's x and z, the yaw offset
+   unless fixed, the board's heading unless square, and the board's other angles and position. */
+std::vector<int> freeParameters(const RigCalibrationOptions &options, YawZeroSource yaw_zero)
+{
   std::vector<int> free;
   if (options.estimate_axis) {
     free.push_back(P_AX);
@@ -273,19 +279,22 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
   }
   free.push_back(P_TX);
   free.push_back(P_TZ);
-  if (out.yaw_zero != YawZeroSource::Fixed)
+  if (yaw_zero != YawZeroSource::Fixed)
     free.push_back(P_DELTA);
   if (!options.board_square)
     free.push_back(P_PSI);
   for (int k : {P_ALPHA, P_GAMMA, P_BX, P_BY, P_BZ})
     free.push_back(k);
-  const Eigen::Index nf = static_cast<Eigen::Index>(free.size());
-  if (pb.residuals <= free.size())
-    throw Error("too few points for the rig calibration");
+  return free;
+}
 
-  // Levenberg–Marquardt.
-  Eigen::VectorXd r = pb.residual(p);
-  double cost = r.squaredNorm();
+/* Levenberg–Marquardt on the free parameters from p (p, r and cost: the solution, its residuals
+   and their squared norm); the number of iterations. */
+int refineRig(const RigProblem &pb, const std::vector<int> &free, Eigen::VectorXd &p, Eigen::VectorXd &r, double &cost)
+{
+  const Eigen::Index nf = static_cast<Eigen::Index>(free.size());
+  r = pb.residual(p);
+  cost = r.squaredNorm();
   double lambda = 1e-3;
   int it = 0;
   for (; it < 200; ++it) {
@@ -295,10 +304,7 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
     bool improved = false;
     double rel = 0;
     for (int tries = 0; tries < 20 && !improved; ++tries) {
-      Eigen::MatrixXd A = H;
-      for (Eigen::Index k = 0; k < nf; ++k)
-        A(k, k) += lambda * std::max(H(k, k), 1e-12);
-      const Eigen::VectorXd dx = A.ldlt().solve(-g);
+      const Eigen::VectorXd dx = calibration_detail::dampedStep(H, g, lambda);
       Eigen::VectorXd q = p;
       for (Eigen::Index k = 0; k < nf; ++k)
         q[free[static_cast<std::size_t>(k)]] += dx[k];
@@ -320,27 +326,15 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
     if (!improved || rel < 1e-14)
       break;
   }
-  out.iterations = it + 1;
-  if (!std::isfinite(cost))
-    throw Error("rig calibration failed: no finite solution");
+  return it + 1;
+}
 
-  const std::size_t m = pb.residuals;
-  const std::size_t pairs = m / 2; // residuals come in (u, v) pairs: one per feature
-  out.rms_px = std::sqrt(cost / static_cast<double>(pairs));
-  {
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      double s = 0;
-      for (std::size_t j = 0; j < pb.points[i].size(); ++j, k += 2)
-        s += r[static_cast<Eigen::Index>(k)] * r[static_cast<Eigen::Index>(k)] +
-             r[static_cast<Eigen::Index>(k + 1)] * r[static_cast<Eigen::Index>(k + 1)];
-      out.view_rms_px.push_back(std::sqrt(s / static_cast<double>(pb.points[i].size())));
-    }
-  }
-
-  // Covariance: sigma^2 (J^T J)^-1 on the free parameters.
+/* The solution's estimates and their 1-sigma (sigma^2 (J^T J)^-1 on the free parameters) into out. */
+void storeRigEstimates(const RigProblem &pb, const std::vector<int> &free, const Eigen::VectorXd &p, double cost,
+                       const RigCalibrationOptions &options, RigCalibration &out)
+{
   const Eigen::MatrixXd J = pb.jacobian(p, free);
-  const double sigma2 = cost / static_cast<double>(m - free.size());
+  const double sigma2 = cost / static_cast<double>(pb.residuals - free.size());
   const Eigen::MatrixXd cov = sigma2 * (J.transpose() * J).inverse();
   auto sd = [&](int param) {
     for (std::size_t k = 0; k < free.size(); ++k)
@@ -368,8 +362,11 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
     out.yaw_axis_sigma = Ca.diagonal().cwiseMax(0.0).cwiseSqrt();
   }
   out.v0Mb = pb.board(p);
+}
 
-  // A failed fit is an error, not a rig file: its RMS, size or uncertainty says so.
+/* A failed fit is an error, not a rig file: its RMS, offset or offset's uncertainty says so. */
+void checkRigFit(const RigCalibration &out, const RigCalibrationOptions &options)
+{
   auto mm = [](double v) { return std::to_string(static_cast<long long>(std::llround(1000 * v))) + " mm"; };
   if (!(out.rms_px <= options.max_rms_px))
     throw Error("calibrate-rig: the fit failed: reprojection RMS " + std::to_string(out.rms_px) + " px (at most " +
@@ -381,6 +378,56 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
   if (!(out.camera_offset_sigma.maxCoeff() <= options.max_offset_sigma))
     throw Error("calibrate-rig: the offset is not determined: 1-sigma " + mm(out.camera_offset_sigma.maxCoeff()) +
                 " (at most " + mm(options.max_offset_sigma) + "); take images over a wider span of yaws");
+}
+
+} // namespace
+
+RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board, const std::vector<RigView> &views,
+                            const RigCalibrationOptions &options)
+{
+  RigProblem pb;
+  pb.camera = &camera;
+  std::vector<Eigen::Isometry3d> cMb0; // per view, from its own pose estimate
+  std::vector<MotionSample> samples;
+  collectRigViews(camera, board, views, options.min_points_per_view, pb, cMb0, samples);
+  const std::size_t n = samples.size();
+  if (n < 3)
+    throw Error("too few views: the board was usable in " + std::to_string(n) +
+                " image(s); at least 3 at different yaw readings are needed");
+
+  RigCalibration out;
+  out.views = static_cast<int>(n);
+  out.points = static_cast<int>(pb.residuals / 2);
+  checkYawReadings(samples, options, out);
+  setRobotPoses(samples, pb, out);
+  const bool motion = out.baseline >= options.min_baseline;
+
+  pb.t0y = options.initial_offset.y();
+  Eigen::VectorXd p = initialParameters(pb, cMb0, options);
+  out.yaw_zero = options.board_square ? YawZeroSource::BoardSquare
+                                      : (motion ? YawZeroSource::RobotMotion : YawZeroSource::Fixed);
+  const std::vector<int> free = freeParameters(options, out.yaw_zero);
+  if (pb.residuals <= free.size())
+    throw Error("too few points for the rig calibration");
+
+  Eigen::VectorXd r;
+  double cost = 0;
+  out.iterations = refineRig(pb, free, p, r, cost);
+  if (!std::isfinite(cost))
+    throw Error("rig calibration failed: no finite solution");
+
+  const std::size_t pairs = pb.residuals / 2; // residuals come in (u, v) pairs: one per feature
+  out.rms_px = std::sqrt(cost / static_cast<double>(pairs));
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double s = 0;
+    for (std::size_t j = 0; j < pb.points[i].size(); ++j, k += 2)
+      s += r[static_cast<Eigen::Index>(k)] * r[static_cast<Eigen::Index>(k)] +
+           r[static_cast<Eigen::Index>(k + 1)] * r[static_cast<Eigen::Index>(k + 1)];
+    out.view_rms_px.push_back(std::sqrt(s / static_cast<double>(pb.points[i].size())));
+  }
+  storeRigEstimates(pb, free, p, cost, options, out);
+  checkRigFit(out, options);
   return out;
 }
 
