@@ -331,6 +331,111 @@ int runHandEye(const RigArgs &a, const CameraModel &camera, const BoardLayout &b
   return 0;
 }
 
+/* The board's views: one per image of the motion log where the pattern is found, for the yaw rig
+   (`views`) and for --hand-eye (`hand_eye_views`); the frames skipped on stderr unless --quiet. */
+void detectRigViews(const RigArgs &a, const CameraModel &camera, const BoardLayout &board, const MotionLog &motion,
+                    std::vector<RigView> &views, std::vector<HandEyeView> &hand_eye_views)
+{
+  PatternDetector detector(board.pattern);
+  detector.setCamera(camera);
+  std::vector<std::string> failures;
+  for (std::size_t i = 0; i < motion.samples.size(); ++i) {
+    const long frame = motion.samples[i].frame;
+    if (motion.images[i].empty()) {
+      failures.push_back("frame " + std::to_string(frame) + ": no image");
+      continue;
+    }
+    const cv::Mat image = readGrayImage(motion.images[i], camera);
+    const FrameDetection d = detector.detect(image, frame);
+    if (!d.found) {
+      failures.push_back("frame " + std::to_string(frame) + ": " + d.reason);
+      continue;
+    }
+    views.push_back({motion.samples[i], d.features});
+    hand_eye_views.push_back({wMv(motion.samples[i]), d.features, motion.images[i]});
+  }
+  if (views.empty())
+    throw Error("the pattern " + board.pattern.toString() + " was not found in any of the " +
+                std::to_string(motion.samples.size()) + " images" +
+                (failures.empty() ? std::string() : " (" + failures.front() + ")"));
+  if (!a.quiet)
+    for (const std::string &f : failures)
+      std::cerr << "calibrate-rig: " << f << " (frame skipped)\n";
+}
+
+/* The yaw rig fit's options: --initial-offset, --initial-yaw-offset, --board-square, --fixed-axis,
+   --min-yaw-span, --max-rms-px. */
+RigCalibrationOptions rigCalibrationOptions(const RigArgs &a)
+{
+  RigCalibrationOptions opt;
+  if (!a.initial_offset.empty()) {
+    opt.initial_offset = Eigen::Vector3d(a.initial_offset[0], a.initial_offset[1], a.initial_offset[2]);
+    opt.use_initial_offset = true;
+  }
+  opt.initial_yaw_offset = a.initial_yaw_offset;
+  opt.board_square = a.board_square;
+  opt.estimate_axis = !a.fixed_axis;
+  opt.min_yaw_span = a.min_yaw_span_deg * kDeg;
+  opt.max_rms_px = a.max_rms_px;
+  return opt;
+}
+
+/* The yaw rig as fitted, with its uncertainties. */
+void printRigCalibration(const RigArgs &a, const RigCalibration &rig)
+{
+  const Eigen::Vector3d &t = rig.camera_offset, &st = rig.camera_offset_sigma;
+  const Eigen::Vector3d &ax = rig.yaw_axis, &sa = rig.yaw_axis_sigma;
+  std::cout << "calibrate-rig: " << rig.views << " views, " << rig.points << " points, yaw readings spanning "
+            << fixed(rig.yaw_span / kDeg, 1) << " deg (" << rig.distinct_yaws << " distinct), robot translation "
+            << fixed(1000 * rig.baseline, 1) << " mm\n";
+  std::cout << "camera offset t0 (mm, 1-sigma): x = " << fixed(1000 * t.x(), 2) << " +- " << fixed(1000 * st.x(), 2)
+            << ", y = " << fixed(1000 * t.y(), 2) << " (along the yaw axis: not observable, kept), z = "
+            << fixed(1000 * t.z(), 2) << " +- " << fixed(1000 * st.z(), 2) << "; distance from the axis "
+            << fixed(1000 * std::hypot(t.x(), t.z()), 2) << " mm\n";
+  std::cout << "yaw offset (true yaw = reading + offset): " << fixed(rig.yaw_offset / kDeg, 4) << " deg";
+  if (rig.yaw_zero == YawZeroSource::Fixed)
+    std::cout << " (not observable: the robot did not move and --board-square was not given; kept)\n";
+  else
+    std::cout << " +- " << fixed(rig.yaw_offset_sigma / kDeg, 4) << " deg ("
+              << (rig.yaw_zero == YawZeroSource::RobotMotion ? "from the robot's translation"
+                                                             : "from the board standing square")
+              << ")\n";
+  std::cout << "yaw axis (vision frame): (" << fixed(ax.x(), 5) << ", " << fixed(ax.y(), 5) << ", " << fixed(ax.z(), 5)
+            << ") +- (" << fixed(sa.x(), 5) << ", " << fixed(sa.y(), 5) << ", " << fixed(sa.z(), 5) << "), "
+            << fixed(std::acos(std::min(1.0, ax.y())) / kDeg, 3) << " deg from +Y"
+            << (a.fixed_axis ? " (fixed)" : "") << "\n";
+  std::cout << "RMS reprojection error: " << fixed(rig.rms_px, 4) << " px\n";
+  std::cout << "wrote " << a.out << "\n";
+}
+
+int runCalibrateRig(const RigArgs &a)
+{
+  const BoardLayout board = makeBoard(a.pattern, a.tags, a.tag_gap, a.first_tag_id);
+  const CameraModel camera = loadCameraFile(a.camera, a.camera_name);
+  const MotionLog motion = readMotionCsv(a.motion, std::nullopt, a.input.limits());
+  if (motion.images.empty())
+    throw Error(a.motion + ": no 'image' column: calibrate-rig needs the image of each frame");
+  if (!a.hand_eye.empty() && !motion.samples.front().six_dof)
+    throw Error(a.motion + ": --hand-eye needs the hand's 6-DoF poses (columns tx,ty,tz,tux,tuy,tuz), not a planar "
+                "log");
+  {
+    std::vector<NamedPath> inputs = {{"--camera", a.camera}, {"--motion", a.motion}};
+    for (const std::string &image : motion.images)
+      if (!image.empty())
+        inputs.push_back({"--motion's image", image});
+    checkOutputs(inputs, {{"--out", a.out}});
+  }
+  std::vector<RigView> views;
+  std::vector<HandEyeView> hand_eye_views;
+  detectRigViews(a, camera, board, motion, views, hand_eye_views);
+  if (!a.hand_eye.empty())
+    return runHandEye(a, camera, board, hand_eye_views);
+  const RigCalibration rig = calibrateRig(camera, board, views, rigCalibrationOptions(a));
+  writeFileAtomically(a.out, rigCalibrationYaml(rig));
+  printRigCalibration(a, rig);
+  return 0;
+}
+
 } // namespace
 
 Runner addCalibrateRig(CLI::App &app)
@@ -380,92 +485,7 @@ Runner addCalibrateRig(CLI::App &app)
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
   for (const char *rig_only : {"--initial-offset", "--initial-yaw-offset", "--board-square", "--fixed-axis", "--min-yaw-span"})
     hand_eye->excludes(rig_only);
-
-  return [a]() {
-    const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
-    const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
-    const MotionLog motion = readMotionCsv(a->motion, std::nullopt, a->input.limits());
-    if (motion.images.empty())
-      throw Error(a->motion + ": no 'image' column: calibrate-rig needs the image of each frame");
-    if (!a->hand_eye.empty() && !motion.samples.front().six_dof)
-      throw Error(a->motion + ": --hand-eye needs the hand's 6-DoF poses (columns tx,ty,tz,tux,tuy,tuz), not a planar "
-                  "log");
-    {
-      std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};
-      for (const std::string &image : motion.images)
-        if (!image.empty())
-          inputs.push_back({"--motion's image", image});
-      checkOutputs(inputs, {{"--out", a->out}});
-    }
-    PatternDetector detector(board.pattern);
-    detector.setCamera(camera);
-    std::vector<RigView> views;
-    std::vector<HandEyeView> hand_eye_views;
-    std::vector<std::string> failures;
-    for (std::size_t i = 0; i < motion.samples.size(); ++i) {
-      const long frame = motion.samples[i].frame;
-      if (motion.images[i].empty()) {
-        failures.push_back("frame " + std::to_string(frame) + ": no image");
-        continue;
-      }
-      const cv::Mat image = readGrayImage(motion.images[i], camera);
-      const FrameDetection d = detector.detect(image, frame);
-      if (!d.found) {
-        failures.push_back("frame " + std::to_string(frame) + ": " + d.reason);
-        continue;
-      }
-      views.push_back({motion.samples[i], d.features});
-      hand_eye_views.push_back({wMv(motion.samples[i]), d.features, motion.images[i]});
-    }
-    if (views.empty())
-      throw Error("the pattern " + board.pattern.toString() + " was not found in any of the " +
-                  std::to_string(motion.samples.size()) + " images" +
-                  (failures.empty() ? std::string() : " (" + failures.front() + ")"));
-    if (!a->quiet)
-      for (const std::string &f : failures)
-        std::cerr << "calibrate-rig: " << f << " (frame skipped)\n";
-
-    if (!a->hand_eye.empty())
-      return runHandEye(*a, camera, board, hand_eye_views);
-
-    RigCalibrationOptions opt;
-    if (!a->initial_offset.empty()) {
-      opt.initial_offset = Eigen::Vector3d(a->initial_offset[0], a->initial_offset[1], a->initial_offset[2]);
-      opt.use_initial_offset = true;
-    }
-    opt.initial_yaw_offset = a->initial_yaw_offset;
-    opt.board_square = a->board_square;
-    opt.estimate_axis = !a->fixed_axis;
-    opt.min_yaw_span = a->min_yaw_span_deg * kDeg;
-    opt.max_rms_px = a->max_rms_px;
-    const RigCalibration rig = calibrateRig(camera, board, views, opt);
-    writeFileAtomically(a->out, rigCalibrationYaml(rig));
-
-    const Eigen::Vector3d &t = rig.camera_offset, &st = rig.camera_offset_sigma;
-    const Eigen::Vector3d &ax = rig.yaw_axis, &sa = rig.yaw_axis_sigma;
-    std::cout << "calibrate-rig: " << rig.views << " views, " << rig.points << " points, yaw readings spanning "
-              << fixed(rig.yaw_span / kDeg, 1) << " deg (" << rig.distinct_yaws << " distinct), robot translation "
-              << fixed(1000 * rig.baseline, 1) << " mm\n";
-    std::cout << "camera offset t0 (mm, 1-sigma): x = " << fixed(1000 * t.x(), 2) << " +- " << fixed(1000 * st.x(), 2)
-              << ", y = " << fixed(1000 * t.y(), 2) << " (along the yaw axis: not observable, kept), z = "
-              << fixed(1000 * t.z(), 2) << " +- " << fixed(1000 * st.z(), 2) << "; distance from the axis "
-              << fixed(1000 * std::hypot(t.x(), t.z()), 2) << " mm\n";
-    std::cout << "yaw offset (true yaw = reading + offset): " << fixed(rig.yaw_offset / kDeg, 4) << " deg";
-    if (rig.yaw_zero == YawZeroSource::Fixed)
-      std::cout << " (not observable: the robot did not move and --board-square was not given; kept)\n";
-    else
-      std::cout << " +- " << fixed(rig.yaw_offset_sigma / kDeg, 4) << " deg ("
-                << (rig.yaw_zero == YawZeroSource::RobotMotion ? "from the robot's translation"
-                                                               : "from the board standing square")
-                << ")\n";
-    std::cout << "yaw axis (vision frame): (" << fixed(ax.x(), 5) << ", " << fixed(ax.y(), 5) << ", " << fixed(ax.z(), 5)
-              << ") +- (" << fixed(sa.x(), 5) << ", " << fixed(sa.y(), 5) << ", " << fixed(sa.z(), 5) << "), "
-              << fixed(std::acos(std::min(1.0, ax.y())) / kDeg, 3) << " deg from +Y"
-              << (a->fixed_axis ? " (fixed)" : "") << "\n";
-    std::cout << "RMS reprojection error: " << fixed(rig.rms_px, 4) << " px\n";
-    std::cout << "wrote " << a->out << "\n";
-    return 0;
-  };
+  return [a]() { return runCalibrateRig(*a); };
 }
 
 } // namespace yawdepth::cli
