@@ -315,24 +315,27 @@ void usage(const char *argv0)
   std::fprintf(stderr, "usage: %s [--trials N] [--seed S] [--quick] [--frames F] [--window K]\n", argv0);
 }
 
-} // namespace
-
-int main(int argc, char **argv)
-{
+/*! The command line. */
+struct BenchArgs {
   long trials = 200;
   std::uint64_t seed = 1;
-  bool quick = false;
   int frames = 10, window = WindowOptions().window;
+};
+
+/*! Parse the command line into `args`: -1 to go on, else the exit status (usage or a bad value said). */
+int parseArguments(int argc, char **argv, BenchArgs &args)
+{
+  bool quick = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--trials" && i + 1 < argc) {
-      trials = std::strtol(argv[++i], nullptr, 10);
+      args.trials = std::strtol(argv[++i], nullptr, 10);
     } else if (a == "--seed" && i + 1 < argc) {
-      seed = std::strtoull(argv[++i], nullptr, 10);
+      args.seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (a == "--window" && i + 1 < argc) {
-      window = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
+      args.window = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
     } else if (a == "--frames" && i + 1 < argc) {
-      frames = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
+      args.frames = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
     } else if (a == "--quick") {
       quick = true;
     } else if (a == "--help" || a == "-h") {
@@ -344,47 +347,58 @@ int main(int argc, char **argv)
     }
   }
   if (quick)
-    trials = 40;
-  if (trials < 1) {
+    args.trials = 40;
+  if (args.trials < 1) {
     std::fprintf(stderr, "bench_accuracy: --trials must be >= 1\n");
     return 2;
   }
-  if (window < 2 || window > 1000) {
+  if (args.window < 2 || args.window > 1000) {
     std::fprintf(stderr, "bench_accuracy: --window must be between 2 and 1000\n");
     return 2;
   }
-  if (frames < 2 || frames > 1000) {
+  if (args.frames < 2 || args.frames > 1000) {
     std::fprintf(stderr, "bench_accuracy: --frames must be between 2 and 1000\n");
     return 2;
   }
+  return -1;
+}
 
-  const CameraModel paper_camera =
+/*! What the benchmark runs on: the scenes and, for planar and arm scenes, camera, rig and noise. */
+struct Setup {
+  CameraModel paper_camera =
       CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-  const YawRig paper_rig(Eigen::Vector3d(-0.1503, 0, 0));
-  const NoiseModel paper_noise{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg};
-  const std::vector<SceneSpec> specs = {{0, 0},     {45, 0},    {90, 0},    {0, 1},   {45, 1},
-                                        {90, 1},    {0, 0, 0},  {0, 0, 1},  {0, 0, 2}};
+  YawRig paper_rig{Eigen::Vector3d(-0.1503, 0, 0)};
+  NoiseModel paper_noise{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg};
+  std::vector<SceneSpec> specs = {{0, 0},     {45, 0},    {90, 0},    {0, 1},   {45, 1},
+                                  {90, 1},    {0, 0, 0},  {0, 0, 1},  {0, 0, 2}};
   // Arm scenes: the franka set's camera (RealSense, 600 px) and a hand-eye mount like its eMc;
   // 1 mm and 0.05 deg per increment per axis, no pan joint (the yaw is exact).
-  const CameraModel arm_camera =
-      CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
-  const YawRig arm_rig(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818));
-  NoiseModel arm_noise = paper_noise;
-  arm_noise.sigma_yaw = 0.0;
-  arm_noise.sigma_rot = 0.05 * kDeg;
-  const double outlier_fraction = 0.05;
-  const bool refine_ok = refineAvailable();
+  CameraModel arm_camera = CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
+  YawRig arm_rig{vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818)};
+  NoiseModel arm_noise = armNoise(paper_noise);
+  double outlier_fraction = 0.05;
+  bool refine_ok = refineAvailable();
 
+  static NoiseModel armNoise(NoiseModel n)
+  {
+    n.sigma_yaw = 0.0;
+    n.sigma_rot = 0.05 * kDeg;
+    return n;
+  }
+};
+
+void printHeader(const BenchArgs &args, bool refine_ok)
+{
   std::printf("yawdepth accuracy benchmark: depth zc of each point at its last observed frame\n");
   std::printf("================================================================================\n");
   std::printf("Methods: paper (eq. 5, last increment), exact (two-view, last increment), fused (per-feature\n"
               "  filter over all frames), window (sliding-window smoother of points + motion, %d frames, older ones\n"
               "  marginalised; frame by frame, each point read when its last frame leaves the window), refine (joint\n"
               "  MAP of points + motion over all frames, initialised with fused), opencv (cv::triangulatePoints on\n"
-              "  the first and last observation, measured motion).\n", window);
+              "  the first and last observation, measured motion).\n", args.window);
   std::printf("Scenes: paper's camera (fx 1734.1, fy 1734.5, u0 319.2, v0 241.4, Brown distortion, 640x480),\n"
               "  rig offset (-0.1503, 0, 0) m; yaw 0/45/90 deg x straight / turning 1 deg per frame;\n"
-              "  %d frames, 0.02 m forward per frame; 30 points, depth 0.5 to 3 m in the first frame.\n", frames);
+              "  %d frames, 0.02 m forward per frame; 30 points, depth 0.5 to 3 m in the first frame.\n", args.frames);
   std::printf("Noise (simulation = estimators' model): pixels 0.3 px, odometry 1 mm per axis per increment,\n"
               "  heading 0.05 deg per increment, yaw reading 0.05 deg.\n");
   std::printf("Arm scenes (6-DoF motion log): camera fx 601.7, fy 602.1, u0 324.4, v0 239.6, Brown distortion,\n"
@@ -398,298 +412,374 @@ int main(int argc, char **argv)
               "  fraction of points with |e| <= 2 sigma_zc (the method's own covariance).\n");
   std::printf("Points of one trial share the motion noise, hence many trials: %ld per scene; trial t of scene s\n"
               "  (s = 0..5 in the order of the tables) uses seed %llu + 100000 s + t.\n",
-              trials, static_cast<unsigned long long>(seed));
+              args.trials, static_cast<unsigned long long>(args.seed));
   std::printf("Reproduce: cmake -S . -B build-acc -DYAWDEPTH_BUILD_TESTS=OFF -DYAWDEPTH_BUILD_EXAMPLES=OFF &&\n"
               "  cmake --build build-acc --target bench_accuracy && build-acc/benchmarks/bench_accuracy --trials %ld --seed %llu"
               " --frames %d --window %d\n",
-              trials, static_cast<unsigned long long>(seed), frames, window);
+              args.trials, static_cast<unsigned long long>(args.seed), args.frames, args.window);
   std::printf("refine: %s\n", refine_ok ? "available (Ceres)" : "unavailable (built without Ceres)");
   std::fflush(stdout);
+}
 
-  PipelineOptions opt; // every method through the one entry point, as the command line runs them
-
-  const auto t_start = Clock::now();
-  std::vector<CleanStats> clean(specs.size());
-  std::vector<OutlierStats> dirty(specs.size());
+/*! Run times and refine's failures, over every trial. */
+struct Timings {
   std::vector<double> refine_ms, refine_arm_ms;
   double fused_ms = 0, window_ms = 0;
   long fused_obs = 0, window_frames = 0;
   long refine_errors = 0;
+};
 
-  for (std::size_t si = 0; si < specs.size(); ++si) {
-    const bool arm = specs[si].isArm();
-    const CameraModel &camera = arm ? arm_camera : paper_camera;
-    const YawRig &rig = arm ? arm_rig : paper_rig;
-    const NoiseModel &noise = arm ? arm_noise : paper_noise;
-    opt.noise = noise;
-    opt.window = window;
-    SceneOptions so;
-    so.frames = frames;
-    so.step = 0.02;
-    so.yaw = specs[si].yaw_deg * kDeg;
-    so.turn_rate = specs[si].turn_deg * kDeg;
-    so.points = 30;
-    so.min_depth = arm ? 0.4 : 0.5;
-    so.max_depth = arm ? 0.8 : 3.0;
-    so.noise = noise;
-    CleanStats &cs = clean[si];
-    OutlierStats &os = dirty[si];
+/*! One scene's estimators: camera, rig, noise and the methods through the one entry point, as the
+    command line runs them. */
+struct SceneRun {
+  const SceneSpec &spec;
+  const CameraModel &camera;
+  const YawRig &rig;
+  PipelineOptions opt;
+  bool refine_ok;
+  double outlier_fraction;
 
-    for (long trial = 0; trial < trials; ++trial) {
-      so.seed = seed + 100000ULL * si + static_cast<std::uint64_t>(trial);
-      if (arm)
-        so.vision_poses = armTrajectory(rig, static_cast<ArmPath>(specs[si].arm), so.frames, 0.6, so.seed);
-      const Scene scene = simulateScene(camera, rig, so);
-      std::map<long, std::size_t> row;
-      for (std::size_t k = 0; k < scene.truth.size(); ++k)
-        row[scene.truth[k].frame] = k;
-      const std::size_t n = scene.tracks.size();
-
-      const std::vector<double> crlb_joint =
-          depthCramerRao(camera, rig, scene.truth, scene.tracks, scene.w_points, noise, true);
-      const std::vector<double> crlb_pp =
-          depthCramerRao(camera, rig, scene.truth, scene.tracks, scene.w_points, noise, false);
-
-      // True zc at each track's last observation.
-      std::vector<double> z_true(n, NAN);
-      for (std::size_t i = 0; i < n; ++i)
-        if (!scene.tracks[i].observations.empty())
-          z_true[i] = scene.cameraPoint(rig, scene.tracks[i].id, row.at(scene.tracks[i].observations.back().frame)).z();
-
-      // ---- Clean scene: every method.
-      std::array<std::vector<double>, kMethods> z, sig;
-      for (int m = 0; m < kMethods; ++m) {
-        z[m].assign(n, NAN);
-        sig[m].assign(n, NAN);
-      }
-      auto take = [&](int m, const std::vector<PointEstimate> &est) {
-        for (std::size_t i = 0; i < n && i < est.size(); ++i)
-          if (est[i].ok()) {
-            z[m][i] = est[i].c_P.z();
-            sig[m][i] = est[i].sigmaZ();
-          }
-      };
-      auto estimate = [&](Method m, const std::vector<Track> &tracks) {
-        opt.method = m;
-        return estimatePoints(camera, rig, scene.measured, tracks, opt);
-      };
-      take(kPaper, estimate(Method::Paper, scene.tracks).points);
-      take(kExact, estimate(Method::Exact, scene.tracks).points);
-      auto t0 = Clock::now();
-      take(kFused, estimate(Method::Fused, scene.tracks).points);
-      fused_ms += msSince(t0);
-      for (const Track &tr : scene.tracks)
-        fused_obs += static_cast<long>(tr.observations.size());
-      t0 = Clock::now();
-      take(kWindow, estimate(Method::Window, scene.tracks).points);
-      window_ms += msSince(t0);
-      window_frames += static_cast<long>(scene.measured.size());
-      if (refine_ok) {
-        try {
-          t0 = Clock::now();
-          const PipelineResult rr = estimate(Method::Refine, scene.tracks);
-          (arm ? refine_arm_ms : refine_ms).push_back(msSince(t0));
-          take(kRefine, rr.points);
-        } catch (const std::exception &e) {
-          if (refine_errors++ == 0)
-            std::fprintf(stderr, "refine threw: %s\n", e.what());
-        }
-      }
-      z[kOpenCV] = triangulateOpenCV(camera, rig, scene.measured, row, scene.tracks);
-
-      for (std::size_t i = 0; i < n; ++i) {
-        ++cs.points;
-        if (scene.tracks[i].observations.size() < 2) {
-          ++cs.few_obs;
-          continue;
-        }
-        bool all_ok = true;
-        for (int m = 0; m < kMethods; ++m) {
-          if (m == kRefine && !refine_ok)
-            continue;
-          if (!std::isfinite(z[m][i])) {
-            ++cs.acc[m].not_ok;
-            all_ok = false;
-          }
-        }
-        if (!all_ok)
-          continue;
-        if (!(std::isfinite(crlb_joint[i]) && crlb_joint[i] > 0 && std::isfinite(crlb_pp[i]) && crlb_pp[i] > 0)) {
-          ++cs.no_bound;
-          continue;
-        }
-        ++cs.used;
-        cs.crlb_joint_sq += crlb_joint[i] * crlb_joint[i];
-        cs.crlb_pp_sq += crlb_pp[i] * crlb_pp[i];
-        for (int m = 0; m < kMethods; ++m)
-          if (std::isfinite(z[m][i]))
-            cs.acc[m].add(z[m][i] - z_true[i], crlb_joint[i], crlb_pp[i], sig[m][i]);
-      }
-
-      // ---- Same scene with 5 % gross outliers: fused and refine.
-      std::vector<Track> tracks = scene.tracks;
-      std::mt19937_64 rng(so.seed * 0x9E3779B97F4A7C15ULL + 12345);
-      const std::vector<std::vector<bool>> corrupted =
-          corrupt(tracks, outlier_fraction, camera.width(), camera.height(), rng);
-      for (const auto &c : corrupted)
-        os.corrupted += std::count(c.begin(), c.end(), true);
-      const PipelineResult fused_r = estimate(Method::Fused, tracks);
-      const std::vector<PointEstimate> &fused_o = fused_r.points;
-      countFlags(fused_r.outliers, corrupted, os.tp[0], os.fp[0]);
-      const PipelineResult window_r = estimate(Method::Window, tracks);
-      const std::vector<PointEstimate> &window_o = window_r.points;
-      countFlags(window_r.outliers, corrupted, os.tp[2], os.fp[2]);
-      std::vector<PointEstimate> refine_o(n);
-      if (refine_ok) {
-        try {
-          const PipelineResult rr = estimate(Method::Refine, tracks);
-          refine_o = rr.points;
-          countFlags(rr.outliers, corrupted, os.tp[1], os.fp[1]);
-        } catch (const std::exception &e) {
-          if (refine_errors++ == 0)
-            std::fprintf(stderr, "refine threw: %s\n", e.what());
-        }
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        ++os.points;
-        if (tracks[i].observations.size() < 2)
-          continue;
-        const bool f_ok = fused_o[i].ok(), r_ok = !refine_ok || refine_o[i].ok(), w_ok = window_o[i].ok();
-        if (!f_ok)
-          ++os.acc[0].not_ok;
-        if (!r_ok)
-          ++os.acc[1].not_ok;
-        if (!w_ok)
-          ++os.acc[2].not_ok;
-        if (!f_ok || !r_ok || !w_ok)
-          continue;
-        if (!(std::isfinite(crlb_joint[i]) && crlb_joint[i] > 0 && std::isfinite(crlb_pp[i]) && crlb_pp[i] > 0))
-          continue;
-        ++os.used;
-        os.acc[0].add(fused_o[i].c_P.z() - z_true[i], crlb_joint[i], crlb_pp[i], fused_o[i].sigmaZ());
-        if (refine_ok)
-          os.acc[1].add(refine_o[i].c_P.z() - z_true[i], crlb_joint[i], crlb_pp[i], refine_o[i].sigmaZ());
-        os.acc[2].add(window_o[i].c_P.z() - z_true[i], crlb_joint[i], crlb_pp[i], window_o[i].sigmaZ());
-      }
+  PipelineResult estimate(Method m, const Scene &scene, const std::vector<Track> &tracks)
+  {
+    opt.method = m;
+    return estimatePoints(camera, rig, scene.measured, tracks, opt);
+  }
+  /*! refine's result through `take`, or, when it throws, the first message on stderr and a count. */
+  template <class Take> void estimateRefine(const Scene &scene, const std::vector<Track> &tracks, Timings &timings, Take take)
+  {
+    try {
+      const auto t0 = Clock::now();
+      const PipelineResult rr = estimate(Method::Refine, scene, tracks);
+      take(rr, msSince(t0));
+    } catch (const std::exception &e) {
+      if (timings.refine_errors++ == 0)
+        std::fprintf(stderr, "refine threw: %s\n", e.what());
     }
   }
-  const double total_s = msSince(t_start) / 1e3;
+};
 
-  // ---- Tables.
+/*! One trial's scene and what every method is measured against. */
+struct Trial {
+  Scene scene;
+  std::map<long, std::size_t> row;           // frame -> row of the motion
+  std::vector<double> crlb_joint, crlb_pp;   // per track
+  std::vector<double> z_true;                // true zc at each track's last observation
+};
+
+Trial makeTrial(const SceneRun &run, const SceneOptions &so)
+{
+  Trial t;
+  t.scene = simulateScene(run.camera, run.rig, so);
+  for (std::size_t k = 0; k < t.scene.truth.size(); ++k)
+    t.row[t.scene.truth[k].frame] = k;
+  const std::size_t n = t.scene.tracks.size();
+  t.crlb_joint = depthCramerRao(run.camera, run.rig, t.scene.truth, t.scene.tracks, t.scene.w_points, run.opt.noise, true);
+  t.crlb_pp = depthCramerRao(run.camera, run.rig, t.scene.truth, t.scene.tracks, t.scene.w_points, run.opt.noise, false);
+  t.z_true.assign(n, NAN);
+  for (std::size_t i = 0; i < n; ++i)
+    if (!t.scene.tracks[i].observations.empty())
+      t.z_true[i] =
+          t.scene.cameraPoint(run.rig, t.scene.tracks[i].id, t.row.at(t.scene.tracks[i].observations.back().frame)).z();
+  return t;
+}
+
+bool hasBound(const Trial &t, std::size_t i)
+{
+  return std::isfinite(t.crlb_joint[i]) && t.crlb_joint[i] > 0 && std::isfinite(t.crlb_pp[i]) && t.crlb_pp[i] > 0;
+}
+
+/*! The clean scene: every method's zc and sigma_zc (NaN where not ok), timed; then the points every
+    method reported ok into `cs`. */
+void cleanTrial(SceneRun &run, const Trial &t, CleanStats &cs, Timings &timings)
+{
+  const Scene &scene = t.scene;
+  const std::size_t n = scene.tracks.size();
+  std::array<std::vector<double>, kMethods> z, sig;
+  for (int m = 0; m < kMethods; ++m) {
+    z[m].assign(n, NAN);
+    sig[m].assign(n, NAN);
+  }
+  auto take = [&](int m, const std::vector<PointEstimate> &est) {
+    for (std::size_t i = 0; i < n && i < est.size(); ++i)
+      if (est[i].ok()) {
+        z[m][i] = est[i].c_P.z();
+        sig[m][i] = est[i].sigmaZ();
+      }
+  };
+  take(kPaper, run.estimate(Method::Paper, scene, scene.tracks).points);
+  take(kExact, run.estimate(Method::Exact, scene, scene.tracks).points);
+  auto t0 = Clock::now();
+  take(kFused, run.estimate(Method::Fused, scene, scene.tracks).points);
+  timings.fused_ms += msSince(t0);
+  for (const Track &tr : scene.tracks)
+    timings.fused_obs += static_cast<long>(tr.observations.size());
+  t0 = Clock::now();
+  take(kWindow, run.estimate(Method::Window, scene, scene.tracks).points);
+  timings.window_ms += msSince(t0);
+  timings.window_frames += static_cast<long>(scene.measured.size());
+  if (run.refine_ok)
+    run.estimateRefine(scene, scene.tracks, timings, [&](const PipelineResult &rr, double ms) {
+      (run.spec.isArm() ? timings.refine_arm_ms : timings.refine_ms).push_back(ms);
+      take(kRefine, rr.points);
+    });
+  z[kOpenCV] = triangulateOpenCV(run.camera, run.rig, scene.measured, t.row, scene.tracks);
+
+  for (std::size_t i = 0; i < n; ++i) {
+    ++cs.points;
+    if (scene.tracks[i].observations.size() < 2) {
+      ++cs.few_obs;
+      continue;
+    }
+    bool all_ok = true;
+    for (int m = 0; m < kMethods; ++m) {
+      if (m == kRefine && !run.refine_ok)
+        continue;
+      if (!std::isfinite(z[m][i])) {
+        ++cs.acc[m].not_ok;
+        all_ok = false;
+      }
+    }
+    if (!all_ok)
+      continue;
+    if (!hasBound(t, i)) {
+      ++cs.no_bound;
+      continue;
+    }
+    ++cs.used;
+    cs.crlb_joint_sq += t.crlb_joint[i] * t.crlb_joint[i];
+    cs.crlb_pp_sq += t.crlb_pp[i] * t.crlb_pp[i];
+    for (int m = 0; m < kMethods; ++m)
+      if (std::isfinite(z[m][i]))
+        cs.acc[m].add(z[m][i] - t.z_true[i], t.crlb_joint[i], t.crlb_pp[i], sig[m][i]);
+  }
+}
+
+/*! The same scene with gross outliers (seeded from `seed`): fused, window and refine, their flags
+    against the corrupted observations, their errors into `os`. */
+void outlierTrial(SceneRun &run, const Trial &t, std::uint64_t seed, OutlierStats &os, Timings &timings)
+{
+  const std::size_t n = t.scene.tracks.size();
+  std::vector<Track> tracks = t.scene.tracks;
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ULL + 12345);
+  const std::vector<std::vector<bool>> corrupted =
+      corrupt(tracks, run.outlier_fraction, run.camera.width(), run.camera.height(), rng);
+  for (const auto &c : corrupted)
+    os.corrupted += std::count(c.begin(), c.end(), true);
+  const PipelineResult fused_r = run.estimate(Method::Fused, t.scene, tracks);
+  const std::vector<PointEstimate> &fused_o = fused_r.points;
+  countFlags(fused_r.outliers, corrupted, os.tp[0], os.fp[0]);
+  const PipelineResult window_r = run.estimate(Method::Window, t.scene, tracks);
+  const std::vector<PointEstimate> &window_o = window_r.points;
+  countFlags(window_r.outliers, corrupted, os.tp[2], os.fp[2]);
+  std::vector<PointEstimate> refine_o(n);
+  if (run.refine_ok)
+    run.estimateRefine(t.scene, tracks, timings, [&](const PipelineResult &rr, double) {
+      refine_o = rr.points;
+      countFlags(rr.outliers, corrupted, os.tp[1], os.fp[1]);
+    });
+  for (std::size_t i = 0; i < n; ++i) {
+    ++os.points;
+    if (tracks[i].observations.size() < 2)
+      continue;
+    const bool f_ok = fused_o[i].ok(), r_ok = !run.refine_ok || refine_o[i].ok(), w_ok = window_o[i].ok();
+    if (!f_ok)
+      ++os.acc[0].not_ok;
+    if (!r_ok)
+      ++os.acc[1].not_ok;
+    if (!w_ok)
+      ++os.acc[2].not_ok;
+    if (!f_ok || !r_ok || !w_ok)
+      continue;
+    if (!hasBound(t, i))
+      continue;
+    ++os.used;
+    const double zt = t.z_true[i], cj = t.crlb_joint[i], cp = t.crlb_pp[i];
+    os.acc[0].add(fused_o[i].c_P.z() - zt, cj, cp, fused_o[i].sigmaZ());
+    if (run.refine_ok)
+      os.acc[1].add(refine_o[i].c_P.z() - zt, cj, cp, refine_o[i].sigmaZ());
+    os.acc[2].add(window_o[i].c_P.z() - zt, cj, cp, window_o[i].sigmaZ());
+  }
+}
+
+/*! Every trial of scene `si`: clean into `cs`, with outliers into `os`. */
+void runScene(const Setup &setup, const BenchArgs &args, std::size_t si, CleanStats &cs, OutlierStats &os,
+              Timings &timings)
+{
+  const SceneSpec &spec = setup.specs[si];
+  const bool arm = spec.isArm();
+  SceneRun run{spec, arm ? setup.arm_camera : setup.paper_camera, arm ? setup.arm_rig : setup.paper_rig, {},
+               setup.refine_ok, setup.outlier_fraction};
+  const NoiseModel &noise = arm ? setup.arm_noise : setup.paper_noise;
+  run.opt.noise = noise;
+  run.opt.window = args.window;
+  SceneOptions so;
+  so.frames = args.frames;
+  so.step = 0.02;
+  so.yaw = spec.yaw_deg * kDeg;
+  so.turn_rate = spec.turn_deg * kDeg;
+  so.points = 30;
+  so.min_depth = arm ? 0.4 : 0.5;
+  so.max_depth = arm ? 0.8 : 3.0;
+  so.noise = noise;
+  for (long trial = 0; trial < args.trials; ++trial) {
+    so.seed = args.seed + 100000ULL * si + static_cast<std::uint64_t>(trial);
+    if (arm)
+      so.vision_poses = armTrajectory(run.rig, static_cast<ArmPath>(spec.arm), so.frames, 0.6, so.seed);
+    const Trial t = makeTrial(run, so);
+    cleanTrial(run, t, cs, timings);
+    outlierTrial(run, t, so.seed, os, timings);
+  }
+}
+
+/*! Table 1: one table per scene, then pooled over the planar and over the arm scenes (returned). */
+void printCleanTables(const Setup &setup, const std::vector<CleanStats> &clean, long trials, CleanStats &pooled,
+                      CleanStats &pooled_arm)
+{
   std::printf("\n1. CLEAN SCENES: depth zc at the last observed frame\n");
   std::printf("   not ok = points (>= 2 observations) the method did not report ok; each is excluded for all methods.\n"
               "   gross = points with |e| > %.0f x their per-point CRLB (they dominate an RMSE; the median does not).\n",
               kGross);
-  CleanStats pooled, pooled_arm;
-  for (std::size_t si = 0; si < specs.size(); ++si) {
-    printCleanTable("Scene: " + specs[si].name(), clean[si], trials, refine_ok);
-    (specs[si].isArm() ? pooled_arm : pooled).merge(clean[si]);
+  for (std::size_t si = 0; si < setup.specs.size(); ++si) {
+    printCleanTable("Scene: " + setup.specs[si].name(), clean[si], trials, setup.refine_ok);
+    (setup.specs[si].isArm() ? pooled_arm : pooled).merge(clean[si]);
   }
-  printCleanTable("Pooled over the six planar scenes (normalised squared errors pooled)", pooled, trials, refine_ok);
-  printCleanTable("Pooled over the three arm scenes (normalised squared errors pooled)", pooled_arm, trials, refine_ok);
+  printCleanTable("Pooled over the six planar scenes (normalised squared errors pooled)", pooled, trials, setup.refine_ok);
+  printCleanTable("Pooled over the three arm scenes (normalised squared errors pooled)", pooled_arm, trials,
+                  setup.refine_ok);
+}
 
-  // Compact summary: RMSE/CRLB(joint) per scene and method.
-  {
-    std::printf("\nSummary: RMSE zc (mm) [RMSE/CRLB joint] per scene\n");
-    const int W = 16 + 21 * kMethods;
-    printRule(W);
-    std::printf("%-16s", "scene");
-    for (int m = 0; m < kMethods; ++m)
-      std::printf(" %20s", kMethodNames[m]);
-    std::printf("\n");
-    printRule(W);
-    auto row = [&](const std::string &name, const CleanStats &s) {
-      std::printf("%-16s", name.c_str());
-      for (int m = 0; m < kMethods; ++m) {
-        if (m == kRefine && !refine_ok) {
-          std::printf(" %20s", "unavailable");
-          continue;
-        }
-        const std::string cell =
-            fmt("%.2f", 1e3 * s.acc[m].rmse()) + " [" + fmt("%.2f", s.acc[m].ratioJoint()) + "]";
-        std::printf(" %20s", cell.c_str());
-      }
-      std::printf("\n");
-    };
-    for (std::size_t si = 0; si < specs.size(); ++si)
-      row(specs[si].shortName(), clean[si]);
-    printRule(W);
-    row("pooled planar", pooled);
-    row("pooled arm", pooled_arm);
-    printRule(W);
-  }
-
-  // ---- Outliers.
-  {
-    std::printf("\n2. OUTLIER SCENES: the same scenes, %.0f %% of observations moved by 10 to 50 px in a random\n"
-                "   direction (inside the image). Bound: CRLB of the clean tracks (inlier CRLB).\n"
-                "   recall = corrupted observations flagged / corrupted; precision = flagged and corrupted / flagged.\n",
-                100 * outlier_fraction);
-    OutlierStats op, op_arm;
-    for (std::size_t si = 0; si < specs.size(); ++si)
-      (specs[si].isArm() ? op_arm : op).merge(dirty[si]);
-    const int W = 112;
-    printRule(W);
-    std::printf("%-16s %-7s %7s %10s %9s %10s %10s %6s %9s %7s %9s\n", "scene", "method", "not ok", "RMSE zc", "median",
-                "RMSE/CRLB", "RMSE/CRLB", "gross", "2-sigma", "outlier", "outlier");
-    std::printf("%-16s %-7s %7s %10s %9s %10s %10s %6s %9s %7s %9s\n", "", "", "(pts)", "(mm)", "|e| (mm)", "joint",
-                "per-point", "(pts)", "coverage", "recall", "precision");
-    printRule(W);
-    auto rows = [&](const std::string &name, const OutlierStats &s) {
-      for (int m : {0, 2, 1}) {
-        const char *mname = m == 0 ? "fused" : m == 1 ? "refine" : "window";
-        if (m == 1 && !refine_ok) {
-          std::printf("%-16s %-7s %s\n", "", mname, "refine: unavailable");
-          continue;
-        }
-        const Acc &a = s.acc[m];
-        const double recall = s.corrupted ? double(s.tp[m]) / s.corrupted : NAN;
-        const long flagged = s.tp[m] + s.fp[m];
-        const double precision = flagged ? double(s.tp[m]) / flagged : NAN;
-        std::printf("%-16s %-7s %7ld %10s %9s %10s %10s %6ld %9s %7s %9s\n", m == 0 ? name.c_str() : "", mname,
-                    a.not_ok, fmt("%.2f", 1e3 * a.rmse()).c_str(), fmt("%.2f", 1e3 * a.medianAbs()).c_str(),
-                    fmt("%.3f", a.ratioJoint()).c_str(), fmt("%.3f", a.ratioPP()).c_str(), a.gross,
-                    fmt("%.3f", a.coverage()).c_str(), fmt("%.3f", recall).c_str(), fmt("%.3f", precision).c_str());
-      }
-    };
-    for (std::size_t si = 0; si < specs.size(); ++si)
-      rows(specs[si].shortName(), dirty[si]);
-    printRule(W);
-    rows("pooled planar", op);
-    rows("pooled arm", op_arm);
-    printRule(W);
-    std::printf("  pooled planar: %ld points, %ld used (fused, window and refine ok, >= 2 observations), %ld corrupted observations.\n",
-                op.points, op.used, op.corrupted);
-  }
-
-  // ---- Speed.
-  {
-    std::printf("\n3. SPEED (one thread, this machine)\n");
-    if (refine_ok && !refine_ms.empty()) {
-      std::vector<double> t = refine_ms;
-      std::sort(t.begin(), t.end());
-      const double median =
-          t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
-      std::printf("  refine (estimatePoints: fused start + refineWindow), 30 points x 10 frames, default options (%zu runs): "
-                  "min %.2f ms, median %.2f ms\n",
-                  t.size(), t.front(), median);
-      if (!refine_arm_ms.empty()) {
-        std::vector<double> ta = refine_arm_ms;
-        std::sort(ta.begin(), ta.end());
-        std::printf("  refine on the arm scenes (6-DoF chain, %zu runs): min %.2f ms, median %.2f ms\n", ta.size(),
-                    ta.front(), ta[ta.size() / 2]);
-      }
-    } else {
-      std::printf("  refine: unavailable\n");
+void printSummaryRow(const std::string &name, const CleanStats &s, bool refine_ok)
+{
+  std::printf("%-16s", name.c_str());
+  for (int m = 0; m < kMethods; ++m) {
+    if (m == kRefine && !refine_ok) {
+      std::printf(" %20s", "unavailable");
+      continue;
     }
-    std::printf("  fused (estimatePoints, Method::Fused): %.2f us per feature update (%ld observations)\n",
-                fused_obs ? 1e3 * fused_ms / fused_obs : NAN, fused_obs);
-    std::printf("  window (estimatePoints, Method::Window, 30 points): %.3f ms per frame (%ld frames; see bench_window for the cost table)\n",
-                window_frames ? window_ms / window_frames : NAN, window_frames);
-    if (refine_errors)
-      std::printf("  refine threw %ld times (counted as not ok)\n", refine_errors);
-    std::printf("\nTotal run time: %.1f s (%ld trials x %zu scenes, clean and with outliers)\n", total_s, trials,
-                specs.size());
+    const std::string cell = fmt("%.2f", 1e3 * s.acc[m].rmse()) + " [" + fmt("%.2f", s.acc[m].ratioJoint()) + "]";
+    std::printf(" %20s", cell.c_str());
   }
+  std::printf("\n");
+}
+
+/*! Compact summary: RMSE/CRLB(joint) per scene and method. */
+void printSummaryTable(const Setup &setup, const std::vector<CleanStats> &clean, const CleanStats &pooled,
+                       const CleanStats &pooled_arm)
+{
+  std::printf("\nSummary: RMSE zc (mm) [RMSE/CRLB joint] per scene\n");
+  const int W = 16 + 21 * kMethods;
+  printRule(W);
+  std::printf("%-16s", "scene");
+  for (int m = 0; m < kMethods; ++m)
+    std::printf(" %20s", kMethodNames[m]);
+  std::printf("\n");
+  printRule(W);
+  for (std::size_t si = 0; si < setup.specs.size(); ++si)
+    printSummaryRow(setup.specs[si].shortName(), clean[si], setup.refine_ok);
+  printRule(W);
+  printSummaryRow("pooled planar", pooled, setup.refine_ok);
+  printSummaryRow("pooled arm", pooled_arm, setup.refine_ok);
+  printRule(W);
+}
+
+void printOutlierRows(const std::string &name, const OutlierStats &s, bool refine_ok)
+{
+  for (int m : {0, 2, 1}) {
+    const char *mname = m == 0 ? "fused" : m == 1 ? "refine" : "window";
+    if (m == 1 && !refine_ok) {
+      std::printf("%-16s %-7s %s\n", "", mname, "refine: unavailable");
+      continue;
+    }
+    const Acc &a = s.acc[m];
+    const double recall = s.corrupted ? double(s.tp[m]) / s.corrupted : NAN;
+    const long flagged = s.tp[m] + s.fp[m];
+    const double precision = flagged ? double(s.tp[m]) / flagged : NAN;
+    std::printf("%-16s %-7s %7ld %10s %9s %10s %10s %6ld %9s %7s %9s\n", m == 0 ? name.c_str() : "", mname,
+                a.not_ok, fmt("%.2f", 1e3 * a.rmse()).c_str(), fmt("%.2f", 1e3 * a.medianAbs()).c_str(),
+                fmt("%.3f", a.ratioJoint()).c_str(), fmt("%.3f", a.ratioPP()).c_str(), a.gross,
+                fmt("%.3f", a.coverage()).c_str(), fmt("%.3f", recall).c_str(), fmt("%.3f", precision).c_str());
+  }
+}
+
+/*! Table 2: the outlier scenes, per scene and pooled. */
+void printOutlierTable(const Setup &setup, const std::vector<OutlierStats> &dirty)
+{
+  std::printf("\n2. OUTLIER SCENES: the same scenes, %.0f %% of observations moved by 10 to 50 px in a random\n"
+              "   direction (inside the image). Bound: CRLB of the clean tracks (inlier CRLB).\n"
+              "   recall = corrupted observations flagged / corrupted; precision = flagged and corrupted / flagged.\n",
+              100 * setup.outlier_fraction);
+  OutlierStats op, op_arm;
+  for (std::size_t si = 0; si < setup.specs.size(); ++si)
+    (setup.specs[si].isArm() ? op_arm : op).merge(dirty[si]);
+  const int W = 112;
+  printRule(W);
+  std::printf("%-16s %-7s %7s %10s %9s %10s %10s %6s %9s %7s %9s\n", "scene", "method", "not ok", "RMSE zc", "median",
+              "RMSE/CRLB", "RMSE/CRLB", "gross", "2-sigma", "outlier", "outlier");
+  std::printf("%-16s %-7s %7s %10s %9s %10s %10s %6s %9s %7s %9s\n", "", "", "(pts)", "(mm)", "|e| (mm)", "joint",
+              "per-point", "(pts)", "coverage", "recall", "precision");
+  printRule(W);
+  for (std::size_t si = 0; si < setup.specs.size(); ++si)
+    printOutlierRows(setup.specs[si].shortName(), dirty[si], setup.refine_ok);
+  printRule(W);
+  printOutlierRows("pooled planar", op, setup.refine_ok);
+  printOutlierRows("pooled arm", op_arm, setup.refine_ok);
+  printRule(W);
+  std::printf("  pooled planar: %ld points, %ld used (fused, window and refine ok, >= 2 observations), %ld corrupted observations.\n",
+              op.points, op.used, op.corrupted);
+}
+
+/*! Table 3: speed, and the total run time. */
+void printSpeed(const Timings &timings, bool refine_ok, double total_s, long trials, std::size_t scenes)
+{
+  std::printf("\n3. SPEED (one thread, this machine)\n");
+  if (refine_ok && !timings.refine_ms.empty()) {
+    std::vector<double> t = timings.refine_ms;
+    std::sort(t.begin(), t.end());
+    const double median = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
+    std::printf("  refine (estimatePoints: fused start + refineWindow), 30 points x 10 frames, default options (%zu runs): "
+                "min %.2f ms, median %.2f ms\n",
+                t.size(), t.front(), median);
+    if (!timings.refine_arm_ms.empty()) {
+      std::vector<double> ta = timings.refine_arm_ms;
+      std::sort(ta.begin(), ta.end());
+      std::printf("  refine on the arm scenes (6-DoF chain, %zu runs): min %.2f ms, median %.2f ms\n", ta.size(),
+                  ta.front(), ta[ta.size() / 2]);
+    }
+  } else {
+    std::printf("  refine: unavailable\n");
+  }
+  std::printf("  fused (estimatePoints, Method::Fused): %.2f us per feature update (%ld observations)\n",
+              timings.fused_obs ? 1e3 * timings.fused_ms / timings.fused_obs : NAN, timings.fused_obs);
+  std::printf("  window (estimatePoints, Method::Window, 30 points): %.3f ms per frame (%ld frames; see bench_window for the cost table)\n",
+              timings.window_frames ? timings.window_ms / timings.window_frames : NAN, timings.window_frames);
+  if (timings.refine_errors)
+    std::printf("  refine threw %ld times (counted as not ok)\n", timings.refine_errors);
+  std::printf("\nTotal run time: %.1f s (%ld trials x %zu scenes, clean and with outliers)\n", total_s, trials, scenes);
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+  BenchArgs args;
+  const int status = parseArguments(argc, argv, args);
+  if (status >= 0)
+    return status;
+  const Setup setup;
+  printHeader(args, setup.refine_ok);
+
+  const auto t_start = Clock::now();
+  std::vector<CleanStats> clean(setup.specs.size());
+  std::vector<OutlierStats> dirty(setup.specs.size());
+  Timings timings;
+  for (std::size_t si = 0; si < setup.specs.size(); ++si)
+    runScene(setup, args, si, clean[si], dirty[si], timings);
+  const double total_s = msSince(t_start) / 1e3;
+
+  CleanStats pooled, pooled_arm;
+  printCleanTables(setup, clean, args.trials, pooled, pooled_arm);
+  printSummaryTable(setup, clean, pooled, pooled_arm);
+  printOutlierTable(setup, dirty);
+  printSpeed(timings, setup.refine_ok, total_s, args.trials, setup.specs.size());
   return 0;
 }

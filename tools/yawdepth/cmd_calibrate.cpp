@@ -83,6 +83,181 @@ struct RigArgs {
   InputOptions input;
 };
 
+/* calibrate-camera's three outputs. */
+struct CameraOutputs {
+  std::string yaml, xml, coverage;
+};
+
+/* The outputs, checked before anything is read or written: none may be an input (an image) or
+   another output, and a prefix must name a file ("" or "folder/" would write hidden files such as ./.yaml). */
+CameraOutputs cameraOutputs(const CameraArgs &a, const CLI::App &sub)
+{
+  const std::filesystem::path prefix(a.out);
+  if (a.out.empty() || !prefix.has_filename() || prefix.filename() == "." || prefix.filename() == "..")
+    throw Error("--out '" + a.out + "': not a file prefix (e.g. --out calib/mycam writes calib/mycam.yaml and .xml)");
+  CameraOutputs o;
+  o.yaml = a.out + ".yaml";
+  o.xml = a.out + ".xml";
+  o.coverage = sub.count("--coverage") > 0 ? a.coverage : a.out + "_coverage.png";
+  std::vector<NamedPath> inputs;
+  for (const std::string &path : a.images)
+    inputs.push_back({"image", path});
+  std::vector<NamedPath> outputs = {{"--out (.yaml)", o.yaml}, {"--out (.xml)", o.xml}, {"--coverage", o.coverage}};
+  for (const std::string &f : debugFiles(a.debug_dir, a.images))
+    outputs.push_back({"--debug-dir", f});
+  checkOutputs(inputs, outputs);
+  return o;
+}
+
+/* The board's views in the images: skipped images and warnings on stderr, --debug-dir's pictures. */
+CalibrationDetections detectCameraViews(const CameraArgs &a, const BoardLayout &board)
+{
+  std::vector<cv::Mat> images;
+  for (const std::string &path : a.images)
+    images.push_back(readGrayImage(path));
+  CalibrationDetections det = detectCalibrationViews(board, a.images, images);
+  for (const std::string &f : det.failures)
+    std::cerr << "calibrate-camera: " << f << " (image skipped)\n";
+  for (const std::string &w : det.warnings)
+    std::cerr << "calibrate-camera: " << w << "\n";
+  if (!a.debug_dir.empty()) {
+    const std::vector<std::string> files = debugFiles(a.debug_dir, a.images);
+    for (std::size_t i = 0; i < images.size() && i < det.detections.size(); ++i)
+      writeDebugImage(files[i], images[i], det.detections[i]);
+  }
+  return det;
+}
+
+/* The options of the fit: --fix-aspect-ratio, --fix-principal-point, --drop-outliers, --distortion
+   (or --k3), --zero-tangent. */
+CameraCalibrationOptions cameraCalibrationOptions(const CameraArgs &a)
+{
+  CameraCalibrationOptions opt;
+  opt.fix_aspect_ratio = a.fix_aspect;
+  opt.fix_principal_point = a.fix_pp;
+  opt.drop_outliers = a.drop_outliers;
+  using D = CameraCalibrationOptions::Distortion;
+  if (a.k3 && a.distortion != "auto" && a.distortion != "k5")
+    throw Error("--k3 and --distortion " + a.distortion + " contradict each other");
+  opt.distortion = a.k3 || a.distortion == "k5" ? D::K5 : a.distortion == "k4" ? D::K4 : a.distortion == "k8" ? D::K8 : D::Auto;
+  opt.zero_tangential = a.zero_tangent;
+  return opt;
+}
+
+/* PREFIX.yaml, PREFIX.xml and the coverage picture: all three files or none. */
+void writeCameraFiles(const CameraArgs &a, const CameraOutputs &o, const BoardLayout &board,
+                      const CameraCalibration &cal, const CalibrationDetections &det)
+{
+  std::ostringstream info;
+  info << "<calibration_tool>yawdepth calibrate-camera</calibration_tool>"
+       << "<nb_calibration_images>" << cal.views_used << "</nb_calibration_images>"
+       << "<calibration_pattern>" << board.pattern.toString() << "</calibration_pattern>"
+       << "<global_reprojection_error><without_distortion>" << cal.visp_rms_without
+       << "</without_distortion><with_distortion>" << cal.visp_rms_with
+       << "</with_distortion></global_reprojection_error>";
+  AtomicFiles files;
+  files.add(o.yaml, cameraYamlText(cal.camera));
+  files.add(o.xml, vispCameraXmlText(cal, a.camera_name, info.str()));
+  const std::string ext = std::filesystem::path(o.coverage).extension().string();
+  files.add(o.coverage, coverageImageBytes(cal, det.views, ext.empty() ? std::string(".png") : ext));
+  files.commit();
+}
+
+/* The OpenCV model with its 1-sigma uncertainties, then the distortion models compared. */
+void printCameraModel(const CameraCalibration &cal, bool fixed_principal_point)
+{
+  const CameraModel &c = cal.camera;
+  const std::vector<double> &k = c.brownCoefficients();
+  const std::vector<double> &sd = cal.std_devs;
+  auto pm = [](double v, double s, int p) { return fixed(v, p) + " +- " + fixed(s, p); };
+  std::cout << "Camera (OpenCV, Brown model), 1-sigma:\n"
+            << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
+            << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
+            << (fixed_principal_point ? " (fixed)" : "") << "\n"
+            << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
+            << "  p1 = " << pm(k[2], sd[6], 6) << "   p2 = " << pm(k[3], sd[7], 6) << "\n"
+            << "  k3 = " << pm(k[4], sd[8], 5) << (k[4] != 0 ? "" : " (fixed)");
+  if (k[5] != 0 || k[6] != 0 || k[7] != 0)
+    std::cout << "   k4 = " << pm(k[5], sd[9], 5) << "   k5 = " << pm(k[6], sd[10], 5) << "   k6 = " << pm(k[7], sd[11], 5);
+  std::cout << "\n";
+  std::cout << "Distortion model: " << cal.model_reason << "\n";
+  if (cal.models.size() > 1)
+    for (const auto &m : cal.models)
+    {
+      std::cout << "  " << (m.chosen ? "* " : "  ") << m.name << ": RMS " << fixed(m.rms_px, 4)
+                << " px, on views left out " << fixed(m.heldout_rms_px, 4) << " px";
+      if (m.inadmissible.empty())
+        std::cout << ", projection uncertainty " << fixed(m.image_uncertainty_px, 4) << " px, expected error "
+                  << fixed(m.score_px, 4) << " px\n";
+      else
+        std::cout << "; not usable: " << m.inadmissible << "\n";
+    }
+}
+
+/* After the RMS line (unless --quiet): the model, the projection uncertainty, each view, ViSP's
+   models, the board's coverage, the notes, the files written. */
+void printCameraCalibration(const CameraArgs &a, const CameraOutputs &o, const CameraCalibration &cal)
+{
+  printCameraModel(cal, a.fix_pp);
+  const CameraModel &c = cal.camera;
+  if (cal.uncertainty_grid.size() == 48) {
+    const double centre = projectionUncertainty(cal, 0.5 * (c.width() - 1), 0.5 * (c.height() - 1));
+    const double worst = *std::max_element(cal.uncertainty_grid.begin(), cal.uncertainty_grid.end());
+    std::cout << "Projection uncertainty (1 sigma, px): " << fixed(centre, 4) << " at the centre, up to "
+              << fixed(worst, 4) << " over an 8 x 6 grid of the image (per cell in the coverage picture)\n";
+  }
+  std::cout << "Per view (RMS reprojection error, board tilt):\n";
+  for (const auto &v : cal.views) {
+    std::cout << "  " << v.name << ": " << v.points << " points";
+    if (v.points > 0 && (v.used || v.outlier))
+      std::cout << ", " << fixed(v.rms_px, 4) << " px, tilt " << fixed(v.tilt / kDeg, 1) << " deg";
+    if (v.outlier)
+      std::cout << (v.used ? "  OUTLIER" : "  OUTLIER, dropped");
+    else if (!v.used)
+      std::cout << "  not used";
+    std::cout << "\n";
+  }
+  const vpCameraParameters &w0 = cal.visp_without, &w1 = cal.visp_with;
+  std::cout << "ViSP model without distortion: px = " << fixed(w0.get_px(), 2) << " py = " << fixed(w0.get_py(), 2)
+            << " u0 = " << fixed(w0.get_u0(), 2) << " v0 = " << fixed(w0.get_v0(), 2) << ", RMS "
+            << fixed(cal.visp_rms_without, 4) << " px\n"
+            << "ViSP model with distortion:    px = " << fixed(w1.get_px(), 2) << " py = " << fixed(w1.get_py(), 2)
+            << " u0 = " << fixed(w1.get_u0(), 2) << " v0 = " << fixed(w1.get_v0(), 2)
+            << " kud = " << fixed(w1.get_kud(), 5) << " kdu = " << fixed(w1.get_kdu(), 5) << ", RMS "
+            << fixed(cal.visp_rms_with, 4) << " px (kud), " << fixed(cal.visp_rms_kdu, 4) << " px (kdu)\n";
+  std::cout << "Board orientations differ by up to " << fixed(cal.orientation_spread / kDeg, 1)
+            << " deg; corners cover " << fixed(100 * cal.coverage, 0) << " % of the image (" << o.coverage << ")\n";
+  for (const std::string &n : cal.notes)
+    std::cout << "note: " << n << "\n";
+  std::cout << "wrote " << o.yaml << ", " << o.xml << "\n";
+}
+
+int runCalibrateCamera(const CameraArgs &a, const CLI::App &sub)
+{
+  const CameraOutputs outputs = cameraOutputs(a, sub);
+  const BoardLayout board = makeBoard(a.pattern, a.tags, a.tag_gap, a.first_tag_id);
+  const CalibrationDetections det = detectCameraViews(a, board);
+  const CameraCalibrationOptions opt = cameraCalibrationOptions(a);
+  const CameraCalibration cal = calibrateCamera(board, det.views, det.width, det.height, opt);
+  if (!cal.visp_fitted) {
+    std::string why;
+    for (const auto &n : cal.notes)
+      if (n.rfind("ViSP", 0) == 0)
+        why = n;
+    throw Error("cannot fit ViSP's camera models" + (why.empty() ? std::string() : ": " + why));
+  }
+  std::size_t points = 0;
+  for (const auto &v : cal.views)
+    if (v.used)
+      points += static_cast<std::size_t>(v.points);
+  writeCameraFiles(a, outputs, board, cal, det);
+  std::cout << "RMS reprojection error: " << fixed(cal.rms_px, 4) << " px (" << cal.views_used << " views, "
+            << points << " points)\n";
+  if (!a.quiet)
+    printCameraCalibration(a, outputs, cal);
+  return 0;
+}
+
 } // namespace
 
 Runner addCalibrateCamera(CLI::App &app)
@@ -114,139 +289,7 @@ Runner addCalibrateCamera(CLI::App &app)
   sub->add_flag("--zero-tangent", a->zero_tangent, "Fix the tangential distortion p1 = p2 = 0");
   sub->add_flag("--quiet", a->quiet, "Print only the RMS reprojection error (and problems on stderr)");
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
-
-  return [a, sub]() {
-    // The three outputs, checked before anything is read or written: none may be an input (an
-    // image) or another output, and a prefix must name a file ("" or "folder/" would write hidden
-    // files such as ./.yaml).
-    const std::filesystem::path prefix(a->out);
-    if (a->out.empty() || !prefix.has_filename() || prefix.filename() == "." || prefix.filename() == "..")
-      throw Error("--out '" + a->out + "': not a file prefix (e.g. --out calib/mycam writes calib/mycam.yaml and .xml)");
-    const std::string yaml = a->out + ".yaml", xml = a->out + ".xml";
-    const std::string coverage = sub->count("--coverage") > 0 ? a->coverage : a->out + "_coverage.png";
-    {
-      std::vector<NamedPath> inputs;
-      for (const std::string &path : a->images)
-        inputs.push_back({"image", path});
-      std::vector<NamedPath> outputs = {{"--out (.yaml)", yaml}, {"--out (.xml)", xml}, {"--coverage", coverage}};
-      for (const std::string &f : debugFiles(a->debug_dir, a->images))
-        outputs.push_back({"--debug-dir", f});
-      checkOutputs(inputs, outputs);
-    }
-    const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
-    std::vector<cv::Mat> images;
-    for (const std::string &path : a->images)
-      images.push_back(readGrayImage(path));
-    const CalibrationDetections det = detectCalibrationViews(board, a->images, images);
-    for (const std::string &f : det.failures)
-      std::cerr << "calibrate-camera: " << f << " (image skipped)\n";
-    for (const std::string &w : det.warnings)
-      std::cerr << "calibrate-camera: " << w << "\n";
-    if (!a->debug_dir.empty()) {
-      const std::vector<std::string> files = debugFiles(a->debug_dir, a->images);
-      for (std::size_t i = 0; i < images.size() && i < det.detections.size(); ++i)
-        writeDebugImage(files[i], images[i], det.detections[i]);
-    }
-
-    CameraCalibrationOptions opt;
-    opt.fix_aspect_ratio = a->fix_aspect;
-    opt.fix_principal_point = a->fix_pp;
-    opt.drop_outliers = a->drop_outliers;
-    using D = CameraCalibrationOptions::Distortion;
-    if (a->k3 && a->distortion != "auto" && a->distortion != "k5")
-      throw Error("--k3 and --distortion " + a->distortion + " contradict each other");
-    opt.distortion = a->k3 || a->distortion == "k5" ? D::K5 : a->distortion == "k4" ? D::K4 : a->distortion == "k8" ? D::K8 : D::Auto;
-    opt.zero_tangential = a->zero_tangent;
-    const CameraCalibration cal = calibrateCamera(board, det.views, det.width, det.height, opt);
-    if (!cal.visp_fitted) {
-      std::string why;
-      for (const auto &n : cal.notes)
-        if (n.rfind("ViSP", 0) == 0)
-          why = n;
-      throw Error("cannot fit ViSP's camera models" + (why.empty() ? std::string() : ": " + why));
-    }
-
-    std::size_t points = 0;
-    for (const auto &v : cal.views)
-      if (v.used)
-        points += static_cast<std::size_t>(v.points);
-    std::ostringstream info;
-    info << "<calibration_tool>yawdepth calibrate-camera</calibration_tool>"
-         << "<nb_calibration_images>" << cal.views_used << "</nb_calibration_images>"
-         << "<calibration_pattern>" << board.pattern.toString() << "</calibration_pattern>"
-         << "<global_reprojection_error><without_distortion>" << cal.visp_rms_without
-         << "</without_distortion><with_distortion>" << cal.visp_rms_with
-         << "</with_distortion></global_reprojection_error>";
-    // All three files or none.
-    AtomicFiles files;
-    files.add(yaml, cameraYamlText(cal.camera));
-    files.add(xml, vispCameraXmlText(cal, a->camera_name, info.str()));
-    const std::string ext = std::filesystem::path(coverage).extension().string();
-    files.add(coverage, coverageImageBytes(cal, det.views, ext.empty() ? std::string(".png") : ext));
-    files.commit();
-
-    std::cout << "RMS reprojection error: " << fixed(cal.rms_px, 4) << " px (" << cal.views_used << " views, "
-              << points << " points)\n";
-    if (a->quiet)
-      return 0;
-    const CameraModel &c = cal.camera;
-    const std::vector<double> &k = c.brownCoefficients();
-    const std::vector<double> &sd = cal.std_devs;
-    auto pm = [](double v, double s, int p) { return fixed(v, p) + " +- " + fixed(s, p); };
-    std::cout << "Camera (OpenCV, Brown model), 1-sigma:\n"
-              << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
-              << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
-              << (a->fix_pp ? " (fixed)" : "") << "\n"
-              << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
-              << "  p1 = " << pm(k[2], sd[6], 6) << "   p2 = " << pm(k[3], sd[7], 6) << "\n"
-              << "  k3 = " << pm(k[4], sd[8], 5) << (k[4] != 0 ? "" : " (fixed)");
-    if (k[5] != 0 || k[6] != 0 || k[7] != 0)
-      std::cout << "   k4 = " << pm(k[5], sd[9], 5) << "   k5 = " << pm(k[6], sd[10], 5) << "   k6 = " << pm(k[7], sd[11], 5);
-    std::cout << "\n";
-    std::cout << "Distortion model: " << cal.model_reason << "\n";
-    if (cal.models.size() > 1)
-      for (const auto &m : cal.models)
-      {
-        std::cout << "  " << (m.chosen ? "* " : "  ") << m.name << ": RMS " << fixed(m.rms_px, 4)
-                  << " px, on views left out " << fixed(m.heldout_rms_px, 4) << " px";
-        if (m.inadmissible.empty())
-          std::cout << ", projection uncertainty " << fixed(m.image_uncertainty_px, 4) << " px, expected error "
-                    << fixed(m.score_px, 4) << " px\n";
-        else
-          std::cout << "; not usable: " << m.inadmissible << "\n";
-      }
-    if (cal.uncertainty_grid.size() == 48) {
-      const double centre = projectionUncertainty(cal, 0.5 * (c.width() - 1), 0.5 * (c.height() - 1));
-      const double worst = *std::max_element(cal.uncertainty_grid.begin(), cal.uncertainty_grid.end());
-      std::cout << "Projection uncertainty (1 sigma, px): " << fixed(centre, 4) << " at the centre, up to "
-                << fixed(worst, 4) << " over an 8 x 6 grid of the image (per cell in the coverage picture)\n";
-    }
-    std::cout << "Per view (RMS reprojection error, board tilt):\n";
-    for (const auto &v : cal.views) {
-      std::cout << "  " << v.name << ": " << v.points << " points";
-      if (v.points > 0 && (v.used || v.outlier))
-        std::cout << ", " << fixed(v.rms_px, 4) << " px, tilt " << fixed(v.tilt / kDeg, 1) << " deg";
-      if (v.outlier)
-        std::cout << (v.used ? "  OUTLIER" : "  OUTLIER, dropped");
-      else if (!v.used)
-        std::cout << "  not used";
-      std::cout << "\n";
-    }
-    const vpCameraParameters &w0 = cal.visp_without, &w1 = cal.visp_with;
-    std::cout << "ViSP model without distortion: px = " << fixed(w0.get_px(), 2) << " py = " << fixed(w0.get_py(), 2)
-              << " u0 = " << fixed(w0.get_u0(), 2) << " v0 = " << fixed(w0.get_v0(), 2) << ", RMS "
-              << fixed(cal.visp_rms_without, 4) << " px\n"
-              << "ViSP model with distortion:    px = " << fixed(w1.get_px(), 2) << " py = " << fixed(w1.get_py(), 2)
-              << " u0 = " << fixed(w1.get_u0(), 2) << " v0 = " << fixed(w1.get_v0(), 2)
-              << " kud = " << fixed(w1.get_kud(), 5) << " kdu = " << fixed(w1.get_kdu(), 5) << ", RMS "
-              << fixed(cal.visp_rms_with, 4) << " px (kud), " << fixed(cal.visp_rms_kdu, 4) << " px (kdu)\n";
-    std::cout << "Board orientations differ by up to " << fixed(cal.orientation_spread / kDeg, 1)
-              << " deg; corners cover " << fixed(100 * cal.coverage, 0) << " % of the image (" << coverage << ")\n";
-    for (const std::string &n : cal.notes)
-      std::cout << "note: " << n << "\n";
-    std::cout << "wrote " << yaml << ", " << xml << "\n";
-    return 0;
-  };
+  return [a, sub]() { return runCalibrateCamera(*a, *sub); };
 }
 
 namespace {
@@ -285,6 +328,111 @@ int runHandEye(const RigArgs &a, const CameraModel &camera, const BoardLayout &b
   for (double r : cal.view_rms_px)
     std::cout << " " << fixed(r, 2);
   std::cout << "\nwrote " << a.out << "\n";
+  return 0;
+}
+
+/* The board's views: one per image of the motion log where the pattern is found, for the yaw rig
+   (`views`) and for --hand-eye (`hand_eye_views`); the frames skipped on stderr unless --quiet. */
+void detectRigViews(const RigArgs &a, const CameraModel &camera, const BoardLayout &board, const MotionLog &motion,
+                    std::vector<RigView> &views, std::vector<HandEyeView> &hand_eye_views)
+{
+  PatternDetector detector(board.pattern);
+  detector.setCamera(camera);
+  std::vector<std::string> failures;
+  for (std::size_t i = 0; i < motion.samples.size(); ++i) {
+    const long frame = motion.samples[i].frame;
+    if (motion.images[i].empty()) {
+      failures.push_back("frame " + std::to_string(frame) + ": no image");
+      continue;
+    }
+    const cv::Mat image = readGrayImage(motion.images[i], camera);
+    const FrameDetection d = detector.detect(image, frame);
+    if (!d.found) {
+      failures.push_back("frame " + std::to_string(frame) + ": " + d.reason);
+      continue;
+    }
+    views.push_back({motion.samples[i], d.features});
+    hand_eye_views.push_back({wMv(motion.samples[i]), d.features, motion.images[i]});
+  }
+  if (views.empty())
+    throw Error("the pattern " + board.pattern.toString() + " was not found in any of the " +
+                std::to_string(motion.samples.size()) + " images" +
+                (failures.empty() ? std::string() : " (" + failures.front() + ")"));
+  if (!a.quiet)
+    for (const std::string &f : failures)
+      std::cerr << "calibrate-rig: " << f << " (frame skipped)\n";
+}
+
+/* The yaw rig fit's options: --initial-offset, --initial-yaw-offset, --board-square, --fixed-axis,
+   --min-yaw-span, --max-rms-px. */
+RigCalibrationOptions rigCalibrationOptions(const RigArgs &a)
+{
+  RigCalibrationOptions opt;
+  if (!a.initial_offset.empty()) {
+    opt.initial_offset = Eigen::Vector3d(a.initial_offset[0], a.initial_offset[1], a.initial_offset[2]);
+    opt.use_initial_offset = true;
+  }
+  opt.initial_yaw_offset = a.initial_yaw_offset;
+  opt.board_square = a.board_square;
+  opt.estimate_axis = !a.fixed_axis;
+  opt.min_yaw_span = a.min_yaw_span_deg * kDeg;
+  opt.max_rms_px = a.max_rms_px;
+  return opt;
+}
+
+/* The yaw rig as fitted, with its uncertainties. */
+void printRigCalibration(const RigArgs &a, const RigCalibration &rig)
+{
+  const Eigen::Vector3d &t = rig.camera_offset, &st = rig.camera_offset_sigma;
+  const Eigen::Vector3d &ax = rig.yaw_axis, &sa = rig.yaw_axis_sigma;
+  std::cout << "calibrate-rig: " << rig.views << " views, " << rig.points << " points, yaw readings spanning "
+            << fixed(rig.yaw_span / kDeg, 1) << " deg (" << rig.distinct_yaws << " distinct), robot translation "
+            << fixed(1000 * rig.baseline, 1) << " mm\n";
+  std::cout << "camera offset t0 (mm, 1-sigma): x = " << fixed(1000 * t.x(), 2) << " +- " << fixed(1000 * st.x(), 2)
+            << ", y = " << fixed(1000 * t.y(), 2) << " (along the yaw axis: not observable, kept), z = "
+            << fixed(1000 * t.z(), 2) << " +- " << fixed(1000 * st.z(), 2) << "; distance from the axis "
+            << fixed(1000 * std::hypot(t.x(), t.z()), 2) << " mm\n";
+  std::cout << "yaw offset (true yaw = reading + offset): " << fixed(rig.yaw_offset / kDeg, 4) << " deg";
+  if (rig.yaw_zero == YawZeroSource::Fixed)
+    std::cout << " (not observable: the robot did not move and --board-square was not given; kept)\n";
+  else
+    std::cout << " +- " << fixed(rig.yaw_offset_sigma / kDeg, 4) << " deg ("
+              << (rig.yaw_zero == YawZeroSource::RobotMotion ? "from the robot's translation"
+                                                             : "from the board standing square")
+              << ")\n";
+  std::cout << "yaw axis (vision frame): (" << fixed(ax.x(), 5) << ", " << fixed(ax.y(), 5) << ", " << fixed(ax.z(), 5)
+            << ") +- (" << fixed(sa.x(), 5) << ", " << fixed(sa.y(), 5) << ", " << fixed(sa.z(), 5) << "), "
+            << fixed(std::acos(std::min(1.0, ax.y())) / kDeg, 3) << " deg from +Y"
+            << (a.fixed_axis ? " (fixed)" : "") << "\n";
+  std::cout << "RMS reprojection error: " << fixed(rig.rms_px, 4) << " px\n";
+  std::cout << "wrote " << a.out << "\n";
+}
+
+int runCalibrateRig(const RigArgs &a)
+{
+  const BoardLayout board = makeBoard(a.pattern, a.tags, a.tag_gap, a.first_tag_id);
+  const CameraModel camera = loadCameraFile(a.camera, a.camera_name);
+  const MotionLog motion = readMotionCsv(a.motion, std::nullopt, a.input.limits());
+  if (motion.images.empty())
+    throw Error(a.motion + ": no 'image' column: calibrate-rig needs the image of each frame");
+  if (!a.hand_eye.empty() && !motion.samples.front().six_dof)
+    throw Error(a.motion + ": --hand-eye needs the hand's 6-DoF poses (columns tx,ty,tz,tux,tuy,tuz), not a planar "
+                "log");
+  {
+    std::vector<NamedPath> inputs = {{"--camera", a.camera}, {"--motion", a.motion}};
+    for (const std::string &image : motion.images)
+      if (!image.empty())
+        inputs.push_back({"--motion's image", image});
+    checkOutputs(inputs, {{"--out", a.out}});
+  }
+  std::vector<RigView> views;
+  std::vector<HandEyeView> hand_eye_views;
+  detectRigViews(a, camera, board, motion, views, hand_eye_views);
+  if (!a.hand_eye.empty())
+    return runHandEye(a, camera, board, hand_eye_views);
+  const RigCalibration rig = calibrateRig(camera, board, views, rigCalibrationOptions(a));
+  writeFileAtomically(a.out, rigCalibrationYaml(rig));
+  printRigCalibration(a, rig);
   return 0;
 }
 
@@ -337,92 +485,7 @@ Runner addCalibrateRig(CLI::App &app)
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
   for (const char *rig_only : {"--initial-offset", "--initial-yaw-offset", "--board-square", "--fixed-axis", "--min-yaw-span"})
     hand_eye->excludes(rig_only);
-
-  return [a]() {
-    const BoardLayout board = makeBoard(a->pattern, a->tags, a->tag_gap, a->first_tag_id);
-    const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
-    const MotionLog motion = readMotionCsv(a->motion, std::nullopt, a->input.limits());
-    if (motion.images.empty())
-      throw Error(a->motion + ": no 'image' column: calibrate-rig needs the image of each frame");
-    if (!a->hand_eye.empty() && !motion.samples.front().six_dof)
-      throw Error(a->motion + ": --hand-eye needs the hand's 6-DoF poses (columns tx,ty,tz,tux,tuy,tuz), not a planar "
-                  "log");
-    {
-      std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};
-      for (const std::string &image : motion.images)
-        if (!image.empty())
-          inputs.push_back({"--motion's image", image});
-      checkOutputs(inputs, {{"--out", a->out}});
-    }
-    PatternDetector detector(board.pattern);
-    detector.setCamera(camera);
-    std::vector<RigView> views;
-    std::vector<HandEyeView> hand_eye_views;
-    std::vector<std::string> failures;
-    for (std::size_t i = 0; i < motion.samples.size(); ++i) {
-      const long frame = motion.samples[i].frame;
-      if (motion.images[i].empty()) {
-        failures.push_back("frame " + std::to_string(frame) + ": no image");
-        continue;
-      }
-      const cv::Mat image = readGrayImage(motion.images[i], camera);
-      const FrameDetection d = detector.detect(image, frame);
-      if (!d.found) {
-        failures.push_back("frame " + std::to_string(frame) + ": " + d.reason);
-        continue;
-      }
-      views.push_back({motion.samples[i], d.features});
-      hand_eye_views.push_back({wMv(motion.samples[i]), d.features, motion.images[i]});
-    }
-    if (views.empty())
-      throw Error("the pattern " + board.pattern.toString() + " was not found in any of the " +
-                  std::to_string(motion.samples.size()) + " images" +
-                  (failures.empty() ? std::string() : " (" + failures.front() + ")"));
-    if (!a->quiet)
-      for (const std::string &f : failures)
-        std::cerr << "calibrate-rig: " << f << " (frame skipped)\n";
-
-    if (!a->hand_eye.empty())
-      return runHandEye(*a, camera, board, hand_eye_views);
-
-    RigCalibrationOptions opt;
-    if (!a->initial_offset.empty()) {
-      opt.initial_offset = Eigen::Vector3d(a->initial_offset[0], a->initial_offset[1], a->initial_offset[2]);
-      opt.use_initial_offset = true;
-    }
-    opt.initial_yaw_offset = a->initial_yaw_offset;
-    opt.board_square = a->board_square;
-    opt.estimate_axis = !a->fixed_axis;
-    opt.min_yaw_span = a->min_yaw_span_deg * kDeg;
-    opt.max_rms_px = a->max_rms_px;
-    const RigCalibration rig = calibrateRig(camera, board, views, opt);
-    writeFileAtomically(a->out, rigCalibrationYaml(rig));
-
-    const Eigen::Vector3d &t = rig.camera_offset, &st = rig.camera_offset_sigma;
-    const Eigen::Vector3d &ax = rig.yaw_axis, &sa = rig.yaw_axis_sigma;
-    std::cout << "calibrate-rig: " << rig.views << " views, " << rig.points << " points, yaw readings spanning "
-              << fixed(rig.yaw_span / kDeg, 1) << " deg (" << rig.distinct_yaws << " distinct), robot translation "
-              << fixed(1000 * rig.baseline, 1) << " mm\n";
-    std::cout << "camera offset t0 (mm, 1-sigma): x = " << fixed(1000 * t.x(), 2) << " +- " << fixed(1000 * st.x(), 2)
-              << ", y = " << fixed(1000 * t.y(), 2) << " (along the yaw axis: not observable, kept), z = "
-              << fixed(1000 * t.z(), 2) << " +- " << fixed(1000 * st.z(), 2) << "; distance from the axis "
-              << fixed(1000 * std::hypot(t.x(), t.z()), 2) << " mm\n";
-    std::cout << "yaw offset (true yaw = reading + offset): " << fixed(rig.yaw_offset / kDeg, 4) << " deg";
-    if (rig.yaw_zero == YawZeroSource::Fixed)
-      std::cout << " (not observable: the robot did not move and --board-square was not given; kept)\n";
-    else
-      std::cout << " +- " << fixed(rig.yaw_offset_sigma / kDeg, 4) << " deg ("
-                << (rig.yaw_zero == YawZeroSource::RobotMotion ? "from the robot's translation"
-                                                               : "from the board standing square")
-                << ")\n";
-    std::cout << "yaw axis (vision frame): (" << fixed(ax.x(), 5) << ", " << fixed(ax.y(), 5) << ", " << fixed(ax.z(), 5)
-              << ") +- (" << fixed(sa.x(), 5) << ", " << fixed(sa.y(), 5) << ", " << fixed(sa.z(), 5) << "), "
-              << fixed(std::acos(std::min(1.0, ax.y())) / kDeg, 3) << " deg from +Y"
-              << (a->fixed_axis ? " (fixed)" : "") << "\n";
-    std::cout << "RMS reprojection error: " << fixed(rig.rms_px, 4) << " px\n";
-    std::cout << "wrote " << a->out << "\n";
-    return 0;
-  };
+  return [a]() { return runCalibrateRig(*a); };
 }
 
 } // namespace yawdepth::cli

@@ -2,7 +2,6 @@
 #include "commands.h"
 #include "method_options.h"
 
-#include <iostream>
 #include <memory>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/io/files.h>
@@ -60,24 +59,10 @@ Runner addEstimate(CLI::App &app)
     const std::vector<Track> tracks = readTracksCsv(args->tracks, args->input.limits());
     checkTracksAgainstMotion(tracks, motion, args->tracks);
 
-    std::vector<std::vector<bool>> flags;
-    MethodArgs method = args->method;
-    method.noise = noiseForLog(args->method, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
-    std::vector<MotionSample> motion_estimate;
-    const std::vector<PointEstimate> estimates =
-        runMethod(camera, rig, motion.samples, tracks, method, flags, &motion_estimate);
-    std::vector<PointRow> rows;
-    rows.reserve(tracks.size());
-    for (std::size_t i = 0; i < tracks.size(); ++i)
-      rows.push_back({tracks[i].id, estimates[i]});
+    const MethodRun run = runMethodOnLog(camera, rig, motion, tracks, args->method);
     if (args->outliers_given)
-      writeTracksCsv(args->outliers, rejectedObservations(tracks, flags));
-    if (args->ply_given)
-      writePointsPly(args->ply, plyPoints(rig, motion_estimate.empty() ? motion.samples : motion_estimate, rows));
-    if (args->out.empty() || args->out == "-")
-      writePointsCsv(std::cout, rows);
-    else
-      writePointsCsv(args->out, rows);
+      writeTracksCsv(args->outliers, rejectedObservations(tracks, run.outliers));
+    writePointOutputs(args->out, args->ply_given ? &args->ply : nullptr, rig, motion, run);
     return 0;
   };
 }

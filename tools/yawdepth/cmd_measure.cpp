@@ -28,6 +28,188 @@ struct MeasureArgs {
   std::string debug_dir;
 };
 
+/* Before anything is written: no output may replace an input (the images too) or another output. */
+void checkMeasureOutputs(const MeasureArgs &a, const CLI::App &sub, const MotionLog &motion)
+{
+  std::vector<NamedPath> inputs = {{"--camera", a.camera}, {"--rig", a.rig}, {"--motion", a.motion}};
+  for (const std::string &image : motion.images)
+    if (!image.empty())
+      inputs.push_back({"--motion's image", image});
+  std::vector<NamedPath> outputs = {{"--out", a.out.empty() ? std::string("-") : a.out}};
+  for (const auto &[option, value] : {std::pair<const char *, const std::string *>{"--tracks-out", &a.tracks_out},
+                                      {"--outliers", &a.outliers}, {"--ply", &a.ply}})
+    if (sub.count(option) > 0)
+      outputs.push_back({option, *value});
+  if (sub.count("--report") > 0) {
+    if (a.report.empty())
+      throw Error("--report: empty folder name");
+    for (const std::string &f : boardReportFiles(a.report))
+      outputs.push_back({"--report", f});
+  }
+  for (const std::string &f : debugFiles(a.debug_dir, motion.images))
+    outputs.push_back({"--debug-dir", f});
+  checkOutputs(inputs, outputs);
+}
+
+/* The pattern's tracks through the images of `motion`: per-frame problems on stderr (unless --quiet)
+   once the pattern was found somewhere, a progress line on a terminal, --debug-dir's pictures.
+   `found` receives the number of frames the pattern was found in, `gray` the gray level at each feature. */
+std::vector<Track> patternTracks(const MeasureArgs &a, const PatternSpec &pattern, const CameraModel &camera,
+                                 const MotionLog &motion, std::size_t &found, std::map<std::pair<long, long>, int> &gray)
+{
+  const std::vector<std::string> debug_files = debugFiles(a.debug_dir, motion.images);
+  const std::size_t n = motion.samples.size();
+  PatternDetector detector(pattern);
+  detector.setCamera(camera);
+  std::vector<FrameDetection> detections;
+  std::vector<std::string> failures; // per-frame reasons, printed once we know the run succeeds
+  // Progress for long sequences, only on a terminal: a caller capturing stderr gets one line per
+  // problem, not a progress bar.
+  const bool progress = !a.quiet && n >= 20 && isatty(STDERR_FILENO);
+  const std::size_t every = std::max<std::size_t>(1, n / 10);
+  for (std::size_t i = 0; i < n; ++i) {
+    const long frame = motion.samples[i].frame;
+    if (motion.images[i].empty()) {
+      failures.push_back("measure: frame " + std::to_string(frame) + ": no image");
+      continue;
+    }
+    const cv::Mat image = readGrayImage(motion.images[i], camera);
+    FrameDetection d = detector.detect(image, frame);
+    for (const FeatureObservation &f : d.features) // the gray level at each feature, for --ply
+      gray[{frame, f.id}] = grayLevelAt(image, f.u, f.v);
+    if (d.found)
+      ++found;
+    else
+      failures.push_back("measure: frame " + std::to_string(frame) + ": " + d.reason);
+    for (const std::string &w : d.warnings)
+      failures.push_back("measure: frame " + std::to_string(frame) + ": " + w);
+    if (!debug_files.empty())
+      writeDebugImage(debug_files[i], image, d);
+    detections.push_back(std::move(d));
+    if (progress && ((i + 1) % every == 0 || i + 1 == n))
+      std::cerr << "measure: " << i + 1 << "/" << n << " frames, pattern found in " << found << "\n";
+  }
+  if (found == 0)
+    throw Error("the pattern " + pattern.toString() + " was not found in any of the " + std::to_string(n) +
+                " images" + (failures.empty() ? std::string() : " (" + failures.front().substr(9) + ")"));
+  if (!a.quiet)
+    for (const std::string &f : failures)
+      std::cerr << f << "\n";
+  return PatternDetector::toTracks(detections);
+}
+
+/* No silent loss: every board feature not measured is named on stderr, with why. */
+void reportUnmeasured(const PatternSpec &pattern, const std::vector<Track> &tracks, const std::vector<PointRow> &rows)
+{
+  std::map<long, const PointEstimate *> by_id;
+  std::map<long, std::size_t> seen;
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    by_id[tracks[i].id] = &rows[i].estimate;
+    seen[tracks[i].id] = tracks[i].observations.size();
+  }
+  BoardLayout layout;
+  layout.pattern = pattern;
+  std::size_t expected = 0, ok = 0;
+  std::vector<std::string> lost;
+  if (pattern.kind == PatternSpec::Kind::Chessboard) {
+    for (const auto &f : layout.features()) {
+      ++expected;
+      auto it = by_id.find(f.first);
+      if (it == by_id.end())
+        lost.push_back("id " + std::to_string(f.first) + ": never detected");
+      else if (!it->second->ok())
+        lost.push_back("id " + std::to_string(f.first) + ": " + toString(it->second->status) + " (seen in " +
+                       std::to_string(seen[f.first]) + " frames)");
+      else
+        ++ok;
+    }
+  } else {
+    for (const auto &[id, e] : by_id) {
+      ++expected;
+      if (e->ok())
+        ++ok;
+      else
+        lost.push_back("id " + std::to_string(id) + ": " + toString(e->status) + " (seen in " +
+                       std::to_string(seen[id]) + " frames)");
+    }
+  }
+  if (lost.empty())
+    return;
+  std::cerr << "measure: " << ok << " of " << expected
+            << (pattern.kind == PatternSpec::Kind::Chessboard ? " board features" : " detected features")
+            << " measured; not measured:";
+  for (std::size_t k = 0; k < lost.size() && k < 20; ++k)
+    std::cerr << (k ? ", " : " ") << lost[k];
+  if (lost.size() > 20)
+    std::cerr << ", and " << lost.size() - 20 << " more";
+  std::cerr << "\n";
+}
+
+/* --report: the board's metrics in the world of the motion log, through the motion as the method
+   estimated it; their summary on stderr unless --quiet. */
+void writeMeasureReport(const MeasureArgs &a, const PatternSpec &pattern, const YawRig &rig, const MethodRun &run,
+                        std::size_t found, std::size_t frames)
+{
+  std::vector<std::pair<long, PointEstimate>> pairs;
+  for (const PointRow &row : run.rows)
+    pairs.emplace_back(row.id, row.estimate);
+  const BoardMetrics m = boardMetrics(pattern, rig, run.motion_estimate, pairs);
+  const std::string title = "yawdepth measure: " + pattern.toString() + ", method " + a.method.method + ", " +
+                            std::to_string(found) + " of " + std::to_string(frames) + " frames";
+  writeBoardReport(a.report, m, title);
+  if (!a.quiet)
+    std::cerr << formatBoardMetrics(m) << "report: " << a.report << "/report.txt, " << a.report << "/figure.png\n";
+}
+
+int runMeasure(const MeasureArgs &a, const CLI::App &sub)
+{
+  a.method.noise.validate();
+  a.method.gates.validate();
+  const bool klt = !a.features.empty();
+  if (klt == (sub.count("--pattern") > 0))
+    throw Error(klt ? "give --pattern or --features klt, not both" : "give --pattern or --features klt");
+  if (klt && sub.count("--report") > 0)
+    throw Error("--report draws a pattern's blocks: it needs --pattern");
+  if (klt && sub.count("--debug-dir") > 0)
+    throw Error("--debug-dir draws pattern detections: it needs --pattern");
+  const PatternSpec pattern = klt ? PatternSpec() : PatternSpec::parse(a.pattern);
+  const CameraModel camera = loadCameraFile(a.camera, a.camera_name);
+  const RigFile rig_file = readRigFile(a.rig);
+  const YawRig rig = rigOf(rig_file);
+  MotionLog motion = readMotionCsv(a.motion, rig_file.yaw, a.input.limits());
+  checkMotionSteps(motion, a.motion);
+  applyRigFile(rig_file, motion.samples);
+  if (motion.images.empty())
+    throw Error(a.motion + ": no 'image' column: measure needs the image of each frame");
+  checkMeasureOutputs(a, sub, motion);
+
+  const std::size_t n = motion.samples.size();
+  std::size_t found = 0;
+  std::map<std::pair<long, long>, int> gray; // the gray level at each feature, for --ply
+  std::vector<Track> tracks;
+  if (klt) {
+    const bool six_dof = n > 0 && motion.samples.front().six_dof;
+    tracks = kltTracks(camera, rig, motion, noiseForLog(a.method, six_dof, motion.yaw_column), a.klt, a.quiet, &gray);
+    found = n;
+  } else {
+    tracks = patternTracks(a, pattern, camera, motion, found, gray);
+  }
+  if (sub.count("--tracks-out") > 0)
+    writeTracksCsv(a.tracks_out, tracks);
+
+  MethodArgs method = a.method;
+  method.progress = !a.quiet;
+  const MethodRun run = runMethodOnLog(camera, rig, motion, tracks, method);
+  if (sub.count("--outliers") > 0)
+    writeTracksCsv(a.outliers, rejectedObservations(tracks, run.outliers));
+  if (!a.quiet && !klt)
+    reportUnmeasured(pattern, tracks, run.rows);
+  if (!a.report.empty())
+    writeMeasureReport(a, pattern, rig, run, found, n);
+  writePointOutputs(a.out, sub.count("--ply") > 0 ? &a.ply : nullptr, rig, motion, run, gray);
+  return 0;
+}
+
 } // namespace
 
 Runner addMeasure(CLI::App &app)
@@ -58,177 +240,7 @@ Runner addMeasure(CLI::App &app)
   sub->add_option("--debug-dir", a->debug_dir,
                   "Write each image with its detected features and ids drawn (DIR/NNNN_NAME.png, NNNN its row in the log)");
   addInputOptions(sub, a->input);
-
-  return [a, sub]() {
-    a->method.noise.validate();
-    a->method.gates.validate();
-    const bool klt = !a->features.empty();
-    if (klt == (sub->count("--pattern") > 0))
-      throw Error(klt ? "give --pattern or --features klt, not both" : "give --pattern or --features klt");
-    if (klt && sub->count("--report") > 0)
-      throw Error("--report draws a pattern's blocks: it needs --pattern");
-    if (klt && sub->count("--debug-dir") > 0)
-      throw Error("--debug-dir draws pattern detections: it needs --pattern");
-    const PatternSpec pattern = klt ? PatternSpec() : PatternSpec::parse(a->pattern);
-    const CameraModel camera = loadCameraFile(a->camera, a->camera_name);
-    const RigFile rig_file = readRigFile(a->rig);
-    const YawRig rig = rigOf(rig_file);
-    MotionLog motion = readMotionCsv(a->motion, rig_file.yaw, a->input.limits());
-    checkMotionSteps(motion, a->motion);
-    applyRigFile(rig_file, motion.samples);
-    if (motion.images.empty())
-      throw Error(a->motion + ": no 'image' column: measure needs the image of each frame");
-    // Before anything is written: no output may replace an input (the images too) or another output.
-    {
-      std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--rig", a->rig}, {"--motion", a->motion}};
-      for (const std::string &image : motion.images)
-        if (!image.empty())
-          inputs.push_back({"--motion's image", image});
-      std::vector<NamedPath> outputs = {{"--out", a->out.empty() ? std::string("-") : a->out}};
-      for (const auto &[option, value] : {std::pair<const char *, std::string *>{"--tracks-out", &a->tracks_out},
-                                          {"--outliers", &a->outliers}, {"--ply", &a->ply}})
-        if (sub->count(option) > 0)
-          outputs.push_back({option, *value});
-      if (sub->count("--report") > 0) {
-        if (a->report.empty())
-          throw Error("--report: empty folder name");
-        for (const std::string &f : boardReportFiles(a->report))
-          outputs.push_back({"--report", f});
-      }
-      for (const std::string &f : debugFiles(a->debug_dir, motion.images))
-        outputs.push_back({"--debug-dir", f});
-      checkOutputs(inputs, outputs);
-    }
-    const std::vector<std::string> debug_files = debugFiles(a->debug_dir, motion.images);
-
-    const std::size_t n = motion.samples.size();
-    std::size_t found = 0;
-    std::map<std::pair<long, long>, int> gray; // the gray level at each feature, for --ply
-    std::vector<Track> tracks;
-    if (klt) {
-      const bool six_dof = n > 0 && motion.samples.front().six_dof;
-      tracks = kltTracks(camera, rig, motion, noiseForLog(a->method, six_dof, motion.yaw_column), a->klt, a->quiet, &gray);
-      found = n;
-    } else {
-      PatternDetector detector(pattern);
-      detector.setCamera(camera);
-      std::vector<FrameDetection> detections;
-      std::vector<std::string> failures; // per-frame reasons, printed once we know the run succeeds
-      // Progress for long sequences, only on a terminal: a caller capturing stderr gets one line per
-      // problem, not a progress bar.
-      const bool progress = !a->quiet && n >= 20 && isatty(STDERR_FILENO);
-      const std::size_t every = std::max<std::size_t>(1, n / 10);
-      for (std::size_t i = 0; i < n; ++i) {
-        const long frame = motion.samples[i].frame;
-        if (motion.images[i].empty()) {
-          failures.push_back("measure: frame " + std::to_string(frame) + ": no image");
-          continue;
-        }
-        const cv::Mat image = readGrayImage(motion.images[i], camera);
-        FrameDetection d = detector.detect(image, frame);
-        for (const FeatureObservation &f : d.features) // the gray level at each feature, for --ply
-          gray[{frame, f.id}] = grayLevelAt(image, f.u, f.v);
-        if (d.found)
-          ++found;
-        else
-          failures.push_back("measure: frame " + std::to_string(frame) + ": " + d.reason);
-        for (const std::string &w : d.warnings)
-          failures.push_back("measure: frame " + std::to_string(frame) + ": " + w);
-        if (!debug_files.empty())
-          writeDebugImage(debug_files[i], image, d);
-        detections.push_back(std::move(d));
-        if (progress && ((i + 1) % every == 0 || i + 1 == n))
-          std::cerr << "measure: " << i + 1 << "/" << n << " frames, pattern found in " << found << "\n";
-      }
-      if (found == 0)
-        throw Error("the pattern " + pattern.toString() + " was not found in any of the " + std::to_string(n) +
-                    " images" + (failures.empty() ? std::string() : " (" + failures.front().substr(9) + ")"));
-      if (!a->quiet)
-        for (const std::string &f : failures)
-          std::cerr << f << "\n";
-      tracks = PatternDetector::toTracks(detections);
-    }
-    if (sub->count("--tracks-out") > 0)
-      writeTracksCsv(a->tracks_out, tracks);
-
-    std::vector<std::vector<bool>> flags;
-    MethodArgs method = a->method;
-    method.noise = noiseForLog(a->method, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
-    method.progress = !a->quiet;
-    std::vector<MotionSample> motion_estimate;
-    const std::vector<PointEstimate> estimates =
-        runMethod(camera, rig, motion.samples, tracks, method, flags, &motion_estimate);
-    std::vector<PointRow> rows;
-    std::vector<std::pair<long, PointEstimate>> pairs;
-    for (std::size_t i = 0; i < tracks.size(); ++i) {
-      rows.push_back({tracks[i].id, estimates[i]});
-      pairs.emplace_back(tracks[i].id, estimates[i]);
-    }
-    if (sub->count("--outliers") > 0)
-      writeTracksCsv(a->outliers, rejectedObservations(tracks, flags));
-    // No silent loss: every board feature not measured is named, with why.
-    if (!a->quiet && !klt) {
-      std::map<long, const PointEstimate *> by_id;
-      std::map<long, std::size_t> seen;
-      for (std::size_t i = 0; i < tracks.size(); ++i) {
-        by_id[tracks[i].id] = &estimates[i];
-        seen[tracks[i].id] = tracks[i].observations.size();
-      }
-      BoardLayout layout;
-      layout.pattern = pattern;
-      std::size_t expected = 0, ok = 0;
-      std::vector<std::string> lost;
-      if (pattern.kind == PatternSpec::Kind::Chessboard) {
-        for (const auto &f : layout.features()) {
-          ++expected;
-          auto it = by_id.find(f.first);
-          if (it == by_id.end())
-            lost.push_back("id " + std::to_string(f.first) + ": never detected");
-          else if (!it->second->ok())
-            lost.push_back("id " + std::to_string(f.first) + ": " + toString(it->second->status) + " (seen in " +
-                           std::to_string(seen[f.first]) + " frames)");
-          else
-            ++ok;
-        }
-      } else {
-        for (const auto &[id, e] : by_id) {
-          ++expected;
-          if (e->ok())
-            ++ok;
-          else
-            lost.push_back("id " + std::to_string(id) + ": " + toString(e->status) + " (seen in " +
-                           std::to_string(seen[id]) + " frames)");
-        }
-      }
-      if (!lost.empty()) {
-        std::cerr << "measure: " << ok << " of " << expected
-                  << (pattern.kind == PatternSpec::Kind::Chessboard ? " board features" : " detected features")
-                  << " measured; not measured:";
-        for (std::size_t k = 0; k < lost.size() && k < 20; ++k)
-          std::cerr << (k ? ", " : " ") << lost[k];
-        if (lost.size() > 20)
-          std::cerr << ", and " << lost.size() - 20 << " more";
-        std::cerr << "\n";
-      }
-    }
-    if (!a->report.empty()) {
-      // In the world of the motion log, through the motion as the method estimated it.
-      const BoardMetrics m = boardMetrics(pattern, rig, motion_estimate, pairs);
-      const std::string title = "yawdepth measure: " + pattern.toString() + ", method " + a->method.method + ", " +
-                                std::to_string(found) + " of " + std::to_string(n) + " frames";
-      writeBoardReport(a->report, m, title);
-      if (!a->quiet)
-        std::cerr << formatBoardMetrics(m) << "report: " << a->report << "/report.txt, " << a->report
-                  << "/figure.png\n";
-    }
-    if (sub->count("--ply") > 0)
-      writePointsPly(a->ply, plyPoints(rig, motion_estimate.empty() ? motion.samples : motion_estimate, rows, gray));
-    if (a->out.empty() || a->out == "-")
-      writePointsCsv(std::cout, rows);
-    else
-      writePointsCsv(a->out, rows);
-    return 0;
-  };
+  return [a, sub]() { return runMeasure(*a, *sub); };
 }
 
 } // namespace yawdepth::cli

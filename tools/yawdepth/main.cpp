@@ -88,18 +88,12 @@ static std::string oneLine(std::string what)
   return what;
 }
 
-} // namespace yawdepth::cli
+using Command = std::pair<CLI::App *, Runner>;
 
-int main(int argc, char **argv)
+/* Every subcommand registered on `app`, with its runner. */
+static std::vector<Command> addCommands(CLI::App &app)
 {
-  using namespace yawdepth::cli;
-  CLI::App app{"yawdepth: 3D points from the motion of a yawing monocular camera (depth from "
-               "odometry and image motion, on ViSP).",
-               "yawdepth"};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("yawdepth 0.1.0"));
-
-  std::vector<std::pair<CLI::App *, Runner>> commands;
+  std::vector<Command> commands;
   auto add = [&](Runner (*adder)(CLI::App &)) {
     const std::size_t before = app.get_subcommands({}).size();
     Runner r = adder(app);
@@ -112,21 +106,65 @@ int main(int argc, char **argv)
   add(addSimulate);
   add(addCalibrateCamera);
   add(addCalibrateRig);
+  return commands;
+}
 
-  // Name an unknown command instead of CLI11's generic "A subcommand is required".
-  if (argc > 1 && argv[1][0] != '-') {
-    bool known = false;
-    std::string names;
-    for (const auto &c : commands) {
-      known = known || c.first->get_name() == argv[1];
-      names += (names.empty() ? "" : ", ") + c.first->get_name();
-    }
-    if (!known) {
-      std::cerr << "yawdepth: error: unknown command '" << oneLine(argv[1]) << "' (expected one of " << names
-                << "; see yawdepth --help)\n";
-      return 2;
-    }
+/* An unknown command named (instead of CLI11's generic "A subcommand is required"): false, after the
+   message on stderr, when `word` (the first argument, not an option) is no command's name. */
+static bool knownCommand(const std::vector<Command> &commands, const char *word)
+{
+  bool known = false;
+  std::string names;
+  for (const auto &c : commands) {
+    known = known || c.first->get_name() == word;
+    names += (names.empty() ? "" : ", ") + c.first->get_name();
   }
+  if (!known)
+    std::cerr << "yawdepth: error: unknown command '" << oneLine(word) << "' (expected one of " << names
+              << "; see yawdepth --help)\n";
+  return known;
+}
+
+/* Run the parsed subcommand `sub`: its status, or 1 with one line on stderr for an error (standard
+   output is an output too: a full disk or /dev/full is an error, not a success). */
+static int runCommand(const CLI::App &sub, const Runner &run)
+{
+  try {
+    const int status = run();
+    errno = 0;
+    std::cout.flush();
+    if (!std::cout || std::fflush(stdout) != 0 || std::ferror(stdout)) {
+      const int err = errno;
+      std::cerr << "yawdepth " << sub.get_name() << ": error: cannot write to standard output"
+                << (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) << "\n";
+      return 1;
+    }
+    return status;
+  } catch (const yawdepth::Error &e) {
+    std::cerr << "yawdepth " << sub.get_name() << ": error: " << oneLine(e.what()) << "\n";
+    return 1;
+  } catch (const std::bad_alloc &) {
+    std::cerr << "yawdepth " << sub.get_name() << ": error: out of memory\n";
+    return 1;
+  } catch (const std::exception &e) {
+    std::cerr << "yawdepth " << sub.get_name() << ": error: " << oneLine(e.what()) << "\n";
+    return 1;
+  }
+}
+
+} // namespace yawdepth::cli
+
+int main(int argc, char **argv)
+{
+  using namespace yawdepth::cli;
+  CLI::App app{"yawdepth: 3D points from the motion of a yawing monocular camera (depth from "
+               "odometry and image motion, on ViSP).",
+               "yawdepth"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("yawdepth 0.1.0"));
+  const std::vector<Command> commands = addCommands(app);
+  if (argc > 1 && argv[1][0] != '-' && !knownCommand(commands, argv[1]))
+    return 2;
 
   try {
     app.parse(argc, argv);
@@ -143,31 +181,8 @@ int main(int argc, char **argv)
 
   // An interrupted run leaves no temporary file behind (the outputs are written atomically).
   yawdepth::removeTemporaryFilesOnSignals();
-  for (auto &[sub, run] : commands) {
-    if (!sub->parsed())
-      continue;
-    try {
-      const int status = run();
-      // Standard output is an output too: a full disk or /dev/full is an error, not a success.
-      errno = 0;
-      std::cout.flush();
-      if (!std::cout || std::fflush(stdout) != 0 || std::ferror(stdout)) {
-        const int err = errno;
-        std::cerr << "yawdepth " << sub->get_name() << ": error: cannot write to standard output"
-                  << (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) << "\n";
-        return 1;
-      }
-      return status;
-    } catch (const yawdepth::Error &e) {
-      std::cerr << "yawdepth " << sub->get_name() << ": error: " << oneLine(e.what()) << "\n";
-      return 1;
-    } catch (const std::bad_alloc &) {
-      std::cerr << "yawdepth " << sub->get_name() << ": error: out of memory\n";
-      return 1;
-    } catch (const std::exception &e) {
-      std::cerr << "yawdepth " << sub->get_name() << ": error: " << oneLine(e.what()) << "\n";
-      return 1;
-    }
-  }
+  for (const auto &[sub, run] : commands)
+    if (sub->parsed())
+      return runCommand(*sub, run);
   return 2;
 }

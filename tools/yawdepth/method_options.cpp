@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <unistd.h>
 
 #include <yawdepth/error.h>
@@ -158,6 +159,32 @@ std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const 
       rejected.push_back(t);
   }
   return rejected;
+}
+
+MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
+                         const std::vector<Track> &tracks, const MethodArgs &args)
+{
+  MethodArgs method = args;
+  method.noise = noiseForLog(args, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
+  MethodRun run;
+  const std::vector<PointEstimate> estimates =
+      runMethod(camera, rig, motion.samples, tracks, method, run.outliers, &run.motion_estimate);
+  run.rows.reserve(tracks.size());
+  for (std::size_t i = 0; i < tracks.size(); ++i)
+    run.rows.push_back({tracks[i].id, estimates[i]});
+  return run;
+}
+
+void writePointOutputs(const std::string &out, const std::string *ply, const YawRig &rig, const MotionLog &motion,
+                       const MethodRun &run, const std::map<std::pair<long, long>, int> &gray)
+{
+  if (ply != nullptr)
+    writePointsPly(*ply, plyPoints(rig, run.motion_estimate.empty() ? motion.samples : run.motion_estimate, run.rows,
+                                   gray));
+  if (out.empty() || out == "-")
+    writePointsCsv(std::cout, run.rows);
+  else
+    writePointsCsv(out, run.rows);
 }
 
 } // namespace yawdepth::cli

@@ -71,4 +71,22 @@ std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &ri
 /*! \brief The observations flagged in `outliers`, as tracks (for --outliers). */
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers);
 
+/*! \brief What runMethodOnLog() gives: a points row per track (same order), the outlier flags and the
+    motion as the method estimated it (see runMethod()). */
+struct MethodRun {
+  std::vector<PointRow> rows;
+  std::vector<std::vector<bool>> outliers;
+  std::vector<MotionSample> motion_estimate;
+};
+/*! \brief runMethod() on the samples of `motion` with the noise model of that log (noiseForLog()). */
+MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
+                         const std::vector<Track> &tracks, const MethodArgs &args);
+/*!
+  \brief The points outputs, in this order: the PLY cloud when `ply` is given (through the motion as
+  estimated, or the measured one when there is none; `gray` the gray level at each feature, keyed (frame, id)),
+  then the points CSV to `out` (standard output when empty or "-").
+*/
+void writePointOutputs(const std::string &out, const std::string *ply, const YawRig &rig, const MotionLog &motion,
+                       const MethodRun &run, const std::map<std::pair<long, long>, int> &gray = {});
+
 } // namespace yawdepth::cli
