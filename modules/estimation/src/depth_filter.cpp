@@ -288,8 +288,8 @@ DepthFilter::Update DepthFilter::step(const IncrementModel &inc, const Eigen::Ve
   baseline_ = std::max(baseline_, anchor_centre_.norm());
 
   // Prior of the joint variable w = (state, increment noise): block diagonal, the state block is
-  // P_ and the noise block Q (the noise model, or what other features told about this increment).
-  // Products with it are done by blocks.
+  // P_ and the noise block Q (the noise model, or FusedEstimator's composed noise of the motion from
+  // a key frame). Products with it are done by blocks.
   const IncrementPrior np = prior ? *prior : defaultPrior(inc.six_dof, inc.distance, inc.angle);
   if (!np.mean.allFinite() || !np.cov.allFinite())
     throw Error("depth filter: non-finite increment prior");
