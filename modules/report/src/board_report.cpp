@@ -75,13 +75,12 @@ std::string mm(double metres, int decimals = 2)
   return buf;
 }
 
-} // namespace
-
-BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const std::vector<MotionSample> &motion,
-                          const std::vector<std::pair<long, PointEstimate>> &rows)
+/* The valid measured points of the board in the world frame, by id (AprilTag centres are not on
+   the block grid: left out). */
+std::map<long, BoardPoint> boardPointsInWorld(const PatternSpec &pattern, const YawRig &rig,
+                                              const std::vector<MotionSample> &motion,
+                                              const std::vector<std::pair<long, PointEstimate>> &rows)
 {
-  BoardMetrics m;
-  m.nominal = pattern.kind == PatternSpec::Kind::Chessboard ? pattern.square : pattern.tag_size;
   std::map<long, BoardPoint> pts;
   for (const auto &[id, e] : rows) {
     if (!e.ok())
@@ -98,24 +97,24 @@ BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const s
     p.w_P = R * e.c_P + t;
     pts[id] = p;
   }
-  if (pts.size() < 3)
-    throw Error("report: fewer than 3 valid points of the board were measured");
-  for (const auto &kv : pts)
-    m.points.push_back(kv.second);
+  return pts;
+}
 
-  std::vector<std::pair<long, long>> h, v;
-  neighbours(pattern, h, v, pts);
-  auto lengths = [&pts](const std::vector<std::pair<long, long>> &pairs, std::vector<BlockLength> &out) {
-    for (const auto &[a, b] : pairs) {
-      const auto ia = pts.find(a), ib = pts.find(b);
-      if (ia != pts.end() && ib != pts.end())
-        out.push_back({a, b, (ia->second.w_P - ib->second.w_P).norm()});
-    }
-  };
-  lengths(h, m.horizontal);
-  lengths(v, m.vertical);
+/* The blocks of the pairs whose two points were measured, with their lengths, into `out`. */
+void blockLengths(const std::vector<std::pair<long, long>> &pairs, const std::map<long, BoardPoint> &pts,
+                  std::vector<BlockLength> &out)
+{
+  for (const auto &[a, b] : pairs) {
+    const auto ia = pts.find(a), ib = pts.find(b);
+    if (ia != pts.end() && ib != pts.end())
+      out.push_back({a, b, (ia->second.w_P - ib->second.w_P).norm()});
+  }
+}
 
-  // Plane: centroid and the direction of least spread.
+/* The plane through m.points (centroid, direction of least spread), each point's distance to it
+   and the points' depth range. */
+void fitBoardPlane(BoardMetrics &m)
+{
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (const BoardPoint &p : m.points)
     c += p.w_P;
@@ -135,35 +134,60 @@ BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const s
     m.min_depth = std::min(m.min_depth, p.c_P.z());
     m.max_depth = std::max(m.max_depth, p.c_P.z());
   }
+}
 
-  // Chessboard: the nominal board (the layout's corners by id) fitted to the measured corners.
-  if (pattern.kind == PatternSpec::Kind::Chessboard && m.points.size() >= 3) {
-    BoardLayout layout;
-    layout.pattern = pattern;
-    const auto features = layout.features();
-    const std::map<long, Eigen::Vector3d> board(features.begin(), features.end());
-    Eigen::Matrix3Xd nominal(3, m.points.size()), measured(3, m.points.size());
-    Eigen::Index n = 0;
-    for (const BoardPoint &q : m.points) {
-      const auto it = board.find(q.id);
-      if (it == board.end())
-        continue;
-      nominal.col(n) = it->second;
-      measured.col(n++) = q.w_P;
-    }
-    nominal.conservativeResize(3, n);
-    measured.conservativeResize(3, n);
-    if (n >= 3) {
-      const Eigen::Matrix4d T = Eigen::umeyama(nominal, measured, false);
-      const Eigen::Matrix4d S = Eigen::umeyama(nominal, measured, true);
-      m.w_R_o = T.topLeftCorner<3, 3>();
-      m.w_t_o = T.topRightCorner<3, 1>();
-      m.board_scale = S.topLeftCorner<3, 3>().col(0).norm();
-      const Eigen::Matrix3Xd fitted = (m.w_R_o * nominal).colwise() + m.w_t_o;
-      m.board_fit_rms = std::sqrt((fitted - measured).colwise().squaredNorm().mean());
-      m.has_board_pose = m.w_R_o.allFinite() && m.w_t_o.allFinite() && std::isfinite(m.board_scale);
-    }
+/* Chessboard: the nominal board (the layout's corners by id) fitted to the measured corners: the
+   board's pose, scale and fit RMS (m.has_board_pose when at least 3 corners match). */
+void fitNominalBoard(const PatternSpec &pattern, BoardMetrics &m)
+{
+  if (pattern.kind != PatternSpec::Kind::Chessboard || m.points.size() < 3)
+    return;
+  BoardLayout layout;
+  layout.pattern = pattern;
+  const auto features = layout.features();
+  const std::map<long, Eigen::Vector3d> board(features.begin(), features.end());
+  Eigen::Matrix3Xd nominal(3, m.points.size()), measured(3, m.points.size());
+  Eigen::Index n = 0;
+  for (const BoardPoint &q : m.points) {
+    const auto it = board.find(q.id);
+    if (it == board.end())
+      continue;
+    nominal.col(n) = it->second;
+    measured.col(n++) = q.w_P;
   }
+  nominal.conservativeResize(3, n);
+  measured.conservativeResize(3, n);
+  if (n < 3)
+    return;
+  const Eigen::Matrix4d T = Eigen::umeyama(nominal, measured, false);
+  const Eigen::Matrix4d S = Eigen::umeyama(nominal, measured, true);
+  m.w_R_o = T.topLeftCorner<3, 3>();
+  m.w_t_o = T.topRightCorner<3, 1>();
+  m.board_scale = S.topLeftCorner<3, 3>().col(0).norm();
+  const Eigen::Matrix3Xd fitted = (m.w_R_o * nominal).colwise() + m.w_t_o;
+  m.board_fit_rms = std::sqrt((fitted - measured).colwise().squaredNorm().mean());
+  m.has_board_pose = m.w_R_o.allFinite() && m.w_t_o.allFinite() && std::isfinite(m.board_scale);
+}
+
+} // namespace
+
+BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const std::vector<MotionSample> &motion,
+                          const std::vector<std::pair<long, PointEstimate>> &rows)
+{
+  BoardMetrics m;
+  m.nominal = pattern.kind == PatternSpec::Kind::Chessboard ? pattern.square : pattern.tag_size;
+  const std::map<long, BoardPoint> pts = boardPointsInWorld(pattern, rig, motion, rows);
+  if (pts.size() < 3)
+    throw Error("report: fewer than 3 valid points of the board were measured");
+  for (const auto &kv : pts)
+    m.points.push_back(kv.second);
+
+  std::vector<std::pair<long, long>> h, v;
+  neighbours(pattern, h, v, pts);
+  blockLengths(h, pts, m.horizontal);
+  blockLengths(v, pts, m.vertical);
+  fitBoardPlane(m);
+  fitNominalBoard(pattern, m);
   return m;
 }
 
