@@ -83,6 +83,95 @@ double KltTracker::epipolarDistance(const Eigen::Vector2d &uv_prev, const Eigen:
   return std::hypot(d.x() * camera_.kx(), d.y() * camera_.ky());
 }
 
+namespace {
+
+/*! \brief The part of the image a feature may be in: `border` px from the edges. */
+struct ImageInterior {
+  double lo, hi_u, hi_v;
+  ImageInterior(const cv::Mat &image, double border)
+      : lo(border), hi_u(image.cols - 1 - border), hi_v(image.rows - 1 - border) {}
+  bool contains(const cv::Point2f &p) const { return p.x >= lo && p.y >= lo && p.x <= hi_u && p.y <= hi_v; }
+};
+
+/*! \brief Live features: pixels and their ids. */
+struct LiveFeatures {
+  std::vector<cv::Point2f> points;
+  std::vector<long> ids;
+};
+
+/*!
+  \brief The features at `points` (ids `ids`) of `previous` followed into `image` by pyramidal
+  Lucas-Kanade, forward and backward; those lost (no flow, forward-backward error, border, outside
+  the epipolar band when `motion` is given) are counted in `stats` and left out.
+*/
+LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
+                            const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
+                            const KltMotion *motion, const ImageInterior &interior, KltStats &stats)
+{
+  const cv::Size win(options.window, options.window);
+  const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
+  std::vector<cv::Point2f> next, back;
+  std::vector<unsigned char> status, status_back;
+  std::vector<float> err, err_back;
+  cv::calcOpticalFlowPyrLK(previous, image, points, next, status, err, win, options.pyramid_levels, term);
+  cv::calcOpticalFlowPyrLK(image, previous, next, back, status_back, err_back, win, options.pyramid_levels, term);
+  const double band = motion ? tracker.bandHalfWidth(*motion) : 0.0;
+  LiveFeatures kept;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!status[i] || !status_back[i] || !std::isfinite(next[i].x) || !std::isfinite(next[i].y)) {
+      ++stats.lost_flow;
+      continue;
+    }
+    if (std::hypot(back[i].x - points[i].x, back[i].y - points[i].y) > options.forward_backward_px) {
+      ++stats.lost_fb;
+      continue;
+    }
+    if (!interior.contains(next[i])) {
+      ++stats.lost_border;
+      continue;
+    }
+    if (motion) {
+      const double d = tracker.epipolarDistance(Eigen::Vector2d(points[i].x, points[i].y),
+                                                Eigen::Vector2d(next[i].x, next[i].y), motion->cMp);
+      if (!(d <= band)) { // NaN too: no depth in front of both cameras explains the match
+        ++stats.lost_epipolar;
+        continue;
+      }
+    }
+    kept.points.push_back(next[i]);
+    kept.ids.push_back(ids[i]);
+  }
+  stats.tracked = static_cast<int>(kept.points.size());
+  return kept;
+}
+
+/*!
+  \brief Up to `wanted` new corners (Shi-Tomasi, then cornerSubPix) in the interior of `image`, at
+  least min_distance from the `kept` features.
+*/
+std::vector<cv::Point2f> detectCorners(const cv::Mat &image, const KltOptions &options,
+                                       const std::vector<cv::Point2f> &kept, int wanted)
+{
+  cv::Mat mask(image.size(), CV_8UC1, cv::Scalar(0));
+  const int b = static_cast<int>(std::ceil(options.border_px));
+  if (image.cols > 2 * b && image.rows > 2 * b)
+    mask(cv::Rect(b, b, image.cols - 2 * b, image.rows - 2 * b)).setTo(255);
+  const int r = static_cast<int>(std::ceil(options.min_distance));
+  for (const cv::Point2f &p : kept)
+    cv::circle(mask, cv::Point(cvRound(p.x), cvRound(p.y)), r, cv::Scalar(0), cv::FILLED);
+  std::vector<cv::Point2f> corners;
+  if (wanted > 0)
+    cv::goodFeaturesToTrack(image, corners, wanted, options.quality, options.min_distance, mask, options.block_size);
+  if (!corners.empty()) {
+    const cv::Size half(std::max(2, options.window / 4), std::max(2, options.window / 4));
+    cv::cornerSubPix(image, corners, half, cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.01));
+  }
+  return corners;
+}
+
+} // namespace
+
 std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const KltMotion *motion)
 {
   if (image.empty() || image.type() != CV_8UC1)
@@ -91,86 +180,34 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
     throw Error("klt: the image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
                 " but the camera is " + std::to_string(camera_.width()) + "x" + std::to_string(camera_.height()));
   stats_ = KltStats();
-  const cv::Size win(options_.window, options_.window);
-  const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
-  const double lo = options_.border_px, hi_u = image.cols - 1 - options_.border_px,
-               hi_v = image.rows - 1 - options_.border_px;
-  const auto inside = [&](const cv::Point2f &p) { return p.x >= lo && p.y >= lo && p.x <= hi_u && p.y <= hi_v; };
+  const ImageInterior interior(image, options_.border_px);
 
-  std::vector<cv::Point2f> kept;
-  std::vector<long> kept_ids;
-  if (!points_.empty() && !previous_.empty()) {
-    std::vector<cv::Point2f> next, back;
-    std::vector<unsigned char> status, status_back;
-    std::vector<float> err, err_back;
-    cv::calcOpticalFlowPyrLK(previous_, image, points_, next, status, err, win, options_.pyramid_levels, term);
-    cv::calcOpticalFlowPyrLK(image, previous_, next, back, status_back, err_back, win, options_.pyramid_levels, term);
-    const double band = motion ? bandHalfWidth(*motion) : 0.0;
-    for (std::size_t i = 0; i < points_.size(); ++i) {
-      if (!status[i] || !status_back[i] || !std::isfinite(next[i].x) || !std::isfinite(next[i].y)) {
-        ++stats_.lost_flow;
-        continue;
-      }
-      if (std::hypot(back[i].x - points_[i].x, back[i].y - points_[i].y) > options_.forward_backward_px) {
-        ++stats_.lost_fb;
-        continue;
-      }
-      if (!inside(next[i])) {
-        ++stats_.lost_border;
-        continue;
-      }
-      if (motion) {
-        const double d = epipolarDistance(Eigen::Vector2d(points_[i].x, points_[i].y),
-                                           Eigen::Vector2d(next[i].x, next[i].y), motion->cMp);
-        if (!(d <= band)) { // NaN too: no depth in front of both cameras explains the match
-          ++stats_.lost_epipolar;
-          continue;
-        }
-      }
-      kept.push_back(next[i]);
-      kept_ids.push_back(ids_[i]);
-    }
-    stats_.tracked = static_cast<int>(kept.size());
-  }
+  LiveFeatures kept;
+  if (!points_.empty() && !previous_.empty())
+    kept = followFeatures(*this, options_, previous_, image, points_, ids_, motion, interior, stats_);
 
   // New corners where the tracks thinned out, away from the live ones.
-  const int alive = static_cast<int>(kept.size());
+  const int alive = static_cast<int>(kept.points.size());
   if (alive < options_.redetect_fraction * options_.max_features || alive == 0) {
-    cv::Mat mask(image.size(), CV_8UC1, cv::Scalar(0));
-    const int b = static_cast<int>(std::ceil(options_.border_px));
-    if (image.cols > 2 * b && image.rows > 2 * b)
-      mask(cv::Rect(b, b, image.cols - 2 * b, image.rows - 2 * b)).setTo(255);
-    const int r = static_cast<int>(std::ceil(options_.min_distance));
-    for (const cv::Point2f &p : kept)
-      cv::circle(mask, cv::Point(cvRound(p.x), cvRound(p.y)), r, cv::Scalar(0), cv::FILLED);
-    std::vector<cv::Point2f> corners;
-    const int wanted = options_.max_features - alive;
-    if (wanted > 0)
-      cv::goodFeaturesToTrack(image, corners, wanted, options_.quality, options_.min_distance, mask,
-                              options_.block_size);
-    if (!corners.empty()) {
-      const cv::Size half(std::max(2, options_.window / 4), std::max(2, options_.window / 4));
-      cv::cornerSubPix(image, corners, half, cv::Size(-1, -1),
-                       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.01));
-    }
+    const std::vector<cv::Point2f> corners = detectCorners(image, options_, kept.points, options_.max_features - alive);
     // Sub-pixel refinement can pull two detections onto one corner: keep the spacing.
     const double min_d2 = options_.min_distance * options_.min_distance;
     const auto crowded = [&](const cv::Point2f &c) {
-      return std::any_of(kept.begin(), kept.end(), [&](const cv::Point2f &p) {
+      return std::any_of(kept.points.begin(), kept.points.end(), [&](const cv::Point2f &p) {
         const double du = p.x - c.x, dv = p.y - c.y;
         return du * du + dv * dv < min_d2;
       });
     };
     for (const cv::Point2f &c : corners) {
-      if (!inside(c) || !std::isfinite(c.x) || !std::isfinite(c.y) || crowded(c))
+      if (!interior.contains(c) || !std::isfinite(c.x) || !std::isfinite(c.y) || crowded(c))
         continue;
-      kept.push_back(c);
-      kept_ids.push_back(next_id_++);
+      kept.points.push_back(c);
+      kept.ids.push_back(next_id_++);
       ++stats_.detected;
     }
   }
-  points_ = std::move(kept);
-  ids_ = std::move(kept_ids);
+  points_ = std::move(kept.points);
+  ids_ = std::move(kept.ids);
   previous_ = image.clone();
   std::vector<FeatureObservation> out;
   out.reserve(points_.size());

@@ -75,13 +75,12 @@ std::string mm(double metres, int decimals = 2)
   return buf;
 }
 
-} // namespace
-
-BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const std::vector<MotionSample> &motion,
-                          const std::vector<std::pair<long, PointEstimate>> &rows)
+/* The valid measured points of the board in the world frame, by id (AprilTag centres are not on
+   the block grid: left out). */
+std::map<long, BoardPoint> boardPointsInWorld(const PatternSpec &pattern, const YawRig &rig,
+                                              const std::vector<MotionSample> &motion,
+                                              const std::vector<std::pair<long, PointEstimate>> &rows)
 {
-  BoardMetrics m;
-  m.nominal = pattern.kind == PatternSpec::Kind::Chessboard ? pattern.square : pattern.tag_size;
   std::map<long, BoardPoint> pts;
   for (const auto &[id, e] : rows) {
     if (!e.ok())
@@ -98,24 +97,24 @@ BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const s
     p.w_P = R * e.c_P + t;
     pts[id] = p;
   }
-  if (pts.size() < 3)
-    throw Error("report: fewer than 3 valid points of the board were measured");
-  for (const auto &kv : pts)
-    m.points.push_back(kv.second);
+  return pts;
+}
 
-  std::vector<std::pair<long, long>> h, v;
-  neighbours(pattern, h, v, pts);
-  auto lengths = [&pts](const std::vector<std::pair<long, long>> &pairs, std::vector<BlockLength> &out) {
-    for (const auto &[a, b] : pairs) {
-      const auto ia = pts.find(a), ib = pts.find(b);
-      if (ia != pts.end() && ib != pts.end())
-        out.push_back({a, b, (ia->second.w_P - ib->second.w_P).norm()});
-    }
-  };
-  lengths(h, m.horizontal);
-  lengths(v, m.vertical);
+/* The blocks of the pairs whose two points were measured, with their lengths, into `out`. */
+void blockLengths(const std::vector<std::pair<long, long>> &pairs, const std::map<long, BoardPoint> &pts,
+                  std::vector<BlockLength> &out)
+{
+  for (const auto &[a, b] : pairs) {
+    const auto ia = pts.find(a), ib = pts.find(b);
+    if (ia != pts.end() && ib != pts.end())
+      out.push_back({a, b, (ia->second.w_P - ib->second.w_P).norm()});
+  }
+}
 
-  // Plane: centroid and the direction of least spread.
+/* The plane through m.points (centroid, direction of least spread), each point's distance to it
+   and the points' depth range. */
+void fitBoardPlane(BoardMetrics &m)
+{
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (const BoardPoint &p : m.points)
     c += p.w_P;
@@ -135,35 +134,60 @@ BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const s
     m.min_depth = std::min(m.min_depth, p.c_P.z());
     m.max_depth = std::max(m.max_depth, p.c_P.z());
   }
+}
 
-  // Chessboard: the nominal board (the layout's corners by id) fitted to the measured corners.
-  if (pattern.kind == PatternSpec::Kind::Chessboard && m.points.size() >= 3) {
-    BoardLayout layout;
-    layout.pattern = pattern;
-    const auto features = layout.features();
-    const std::map<long, Eigen::Vector3d> board(features.begin(), features.end());
-    Eigen::Matrix3Xd nominal(3, m.points.size()), measured(3, m.points.size());
-    Eigen::Index n = 0;
-    for (const BoardPoint &q : m.points) {
-      const auto it = board.find(q.id);
-      if (it == board.end())
-        continue;
-      nominal.col(n) = it->second;
-      measured.col(n++) = q.w_P;
-    }
-    nominal.conservativeResize(3, n);
-    measured.conservativeResize(3, n);
-    if (n >= 3) {
-      const Eigen::Matrix4d T = Eigen::umeyama(nominal, measured, false);
-      const Eigen::Matrix4d S = Eigen::umeyama(nominal, measured, true);
-      m.w_R_o = T.topLeftCorner<3, 3>();
-      m.w_t_o = T.topRightCorner<3, 1>();
-      m.board_scale = S.topLeftCorner<3, 3>().col(0).norm();
-      const Eigen::Matrix3Xd fitted = (m.w_R_o * nominal).colwise() + m.w_t_o;
-      m.board_fit_rms = std::sqrt((fitted - measured).colwise().squaredNorm().mean());
-      m.has_board_pose = m.w_R_o.allFinite() && m.w_t_o.allFinite() && std::isfinite(m.board_scale);
-    }
+/* Chessboard: the nominal board (the layout's corners by id) fitted to the measured corners: the
+   board's pose, scale and fit RMS (m.has_board_pose when at least 3 corners match). */
+void fitNominalBoard(const PatternSpec &pattern, BoardMetrics &m)
+{
+  if (pattern.kind != PatternSpec::Kind::Chessboard || m.points.size() < 3)
+    return;
+  BoardLayout layout;
+  layout.pattern = pattern;
+  const auto features = layout.features();
+  const std::map<long, Eigen::Vector3d> board(features.begin(), features.end());
+  Eigen::Matrix3Xd nominal(3, m.points.size()), measured(3, m.points.size());
+  Eigen::Index n = 0;
+  for (const BoardPoint &q : m.points) {
+    const auto it = board.find(q.id);
+    if (it == board.end())
+      continue;
+    nominal.col(n) = it->second;
+    measured.col(n++) = q.w_P;
   }
+  nominal.conservativeResize(3, n);
+  measured.conservativeResize(3, n);
+  if (n < 3)
+    return;
+  const Eigen::Matrix4d T = Eigen::umeyama(nominal, measured, false);
+  const Eigen::Matrix4d S = Eigen::umeyama(nominal, measured, true);
+  m.w_R_o = T.topLeftCorner<3, 3>();
+  m.w_t_o = T.topRightCorner<3, 1>();
+  m.board_scale = S.topLeftCorner<3, 3>().col(0).norm();
+  const Eigen::Matrix3Xd fitted = (m.w_R_o * nominal).colwise() + m.w_t_o;
+  m.board_fit_rms = std::sqrt((fitted - measured).colwise().squaredNorm().mean());
+  m.has_board_pose = m.w_R_o.allFinite() && m.w_t_o.allFinite() && std::isfinite(m.board_scale);
+}
+
+} // namespace
+
+BoardMetrics boardMetrics(const PatternSpec &pattern, const YawRig &rig, const std::vector<MotionSample> &motion,
+                          const std::vector<std::pair<long, PointEstimate>> &rows)
+{
+  BoardMetrics m;
+  m.nominal = pattern.kind == PatternSpec::Kind::Chessboard ? pattern.square : pattern.tag_size;
+  const std::map<long, BoardPoint> pts = boardPointsInWorld(pattern, rig, motion, rows);
+  if (pts.size() < 3)
+    throw Error("report: fewer than 3 valid points of the board were measured");
+  for (const auto &kv : pts)
+    m.points.push_back(kv.second);
+
+  std::vector<std::pair<long, long>> h, v;
+  neighbours(pattern, h, v, pts);
+  blockLengths(h, pts, m.horizontal);
+  blockLengths(v, pts, m.vertical);
+  fitBoardPlane(m);
+  fitNominalBoard(pattern, m);
   return m;
 }
 
@@ -250,48 +274,40 @@ void text(cv::Mat &img, const std::string &s, cv::Point p, double scale = 0.45, 
   cv::putText(img, s, p, cv::FONT_HERSHEY_SIMPLEX, scale, c, thickness, cv::LINE_AA);
 }
 
-} // namespace
-
-void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::string &title)
+/* blocks.csv: one row per block, its length and error against the nominal. */
+std::string blocksTable(const BoardMetrics &m)
 {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec)
-    throw Error(dir + ": cannot create the report folder: " + ec.message());
-  const std::filesystem::path d(dir);
-  // The four files are committed together, after the figure is drawn: all or nothing.
-  AtomicFiles files;
-
-  // Tables.
-  {
-    std::ostringstream blocks;
-    blocks << "direction,id_a,id_b,length,error\n";
-    char buf[160];
-    for (const auto *set : {&m.horizontal, &m.vertical})
-      for (const BlockLength &b : *set) {
-        std::snprintf(buf, sizeof buf, "%s,%ld,%ld,%.12g,%.12g\n", set == &m.horizontal ? "horizontal" : "vertical",
-                      b.id_a, b.id_b, b.length, b.length - m.nominal);
-        blocks << buf;
-      }
-    std::ostringstream plane;
-    plane << "id,frame,x,y,z,xc,yc,zc,plane_distance\n";
-    for (std::size_t i = 0; i < m.points.size(); ++i) {
-      const BoardPoint &p = m.points[i];
-      std::snprintf(buf, sizeof buf, "%ld,%ld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", p.id, p.frame, p.w_P.x(),
-                    p.w_P.y(), p.w_P.z(), p.c_P.x(), p.c_P.y(), p.c_P.z(), m.plane_distance[i]);
-      plane << buf;
+  std::ostringstream blocks;
+  blocks << "direction,id_a,id_b,length,error\n";
+  char buf[160];
+  for (const auto *set : {&m.horizontal, &m.vertical})
+    for (const BlockLength &b : *set) {
+      std::snprintf(buf, sizeof buf, "%s,%ld,%ld,%.12g,%.12g\n", set == &m.horizontal ? "horizontal" : "vertical",
+                    b.id_a, b.id_b, b.length, b.length - m.nominal);
+      blocks << buf;
     }
-    files.add((d / "report.txt").string(), title + "\n\n" + formatBoardMetrics(m));
-    files.add((d / "blocks.csv").string(), blocks.str());
-    files.add((d / "plane.csv").string(), plane.str());
+  return blocks.str();
+}
+
+/* plane.csv: one row per point, in the world and the camera, and its distance to the plane. */
+std::string planeTable(const BoardMetrics &m)
+{
+  std::ostringstream plane;
+  plane << "id,frame,x,y,z,xc,yc,zc,plane_distance\n";
+  char buf[160];
+  for (std::size_t i = 0; i < m.points.size(); ++i) {
+    const BoardPoint &p = m.points[i];
+    std::snprintf(buf, sizeof buf, "%ld,%ld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", p.id, p.frame, p.w_P.x(),
+                  p.w_P.y(), p.w_P.z(), p.c_P.x(), p.c_P.y(), p.c_P.z(), m.plane_distance[i]);
+    plane << buf;
   }
+  return plane.str();
+}
 
-  // Figure: 1200 x 640, three panels.
-  cv::Mat img(640, 1200, CV_8UC3, cv::Scalar(255, 255, 255));
-  text(img, title, cv::Point(20, 30), 0.7, cv::Scalar(0, 0, 0), 2);
-  const double err_scale = std::max(1e-4, 0.02 * m.nominal); // 2 % of the block is full red
-
-  // Panel 1: the points in the fitted plane, board-horizontal to the right.
+/* The points' coordinates in the fitted plane, from its point: x along the board's rows (the sum
+   of the horizontal blocks, else the world's x, projected on the plane), y = normal x x. */
+std::vector<Eigen::Vector2d> inPlaneCoordinates(const BoardMetrics &m)
+{
   Eigen::Vector3d ex = Eigen::Vector3d::UnitX();
   {
     std::map<long, Eigen::Vector3d> P;
@@ -306,12 +322,21 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
   ex = (ex - m.plane_normal * m.plane_normal.dot(ex)).normalized();
   const Eigen::Vector3d ey = m.plane_normal.cross(ex).normalized();
   std::vector<Eigen::Vector2d> q;
-  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
   for (const BoardPoint &p : m.points) {
     const Eigen::Vector3d r = p.w_P - m.plane_point;
     q.emplace_back(r.dot(ex), r.dot(ey));
-    lo = lo.cwiseMin(q.back());
-    hi = hi.cwiseMax(q.back());
+  }
+  return q;
+}
+
+/* Panel 1: the points in the fitted plane (q, board-horizontal to the right), the blocks coloured
+   by their error (full red at err_scale) and labelled with their lengths. */
+void drawPointsPanel(cv::Mat &img, const BoardMetrics &m, const std::vector<Eigen::Vector2d> &q, double err_scale)
+{
+  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  for (const Eigen::Vector2d &a : q) {
+    lo = lo.cwiseMin(a);
+    hi = hi.cwiseMax(a);
   }
   const cv::Rect p1(30, 60, 620, 560);
   cv::rectangle(img, p1, cv::Scalar(200, 200, 200));
@@ -342,8 +367,11 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
   }
   text(img, "colour: |length - " + mm(m.nominal) + " mm|, green 0 .. red " + mm(err_scale) + " mm",
        cv::Point(p1.x + 10, p1.y + p1.height - 10), 0.4);
+}
 
-  // Panel 2: distance of each point to the plane (mm).
+/* Panel 2: distance of each point to the plane (mm), a bar per point by id. */
+void drawPlaneDistancePanel(cv::Mat &img, const BoardMetrics &m)
+{
   const cv::Rect p2(680, 60, 490, 270);
   cv::rectangle(img, p2, cv::Scalar(200, 200, 200));
   text(img, "distance to the fitted plane (mm), by id", cv::Point(p2.x + 10, p2.y + 20));
@@ -361,8 +389,11 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
                   cv::Scalar(180, 120, 40), cv::FILLED);
   }
   text(img, "largest " + mm(m.max_plane_distance) + " mm", cv::Point(p2.x + 10, p2.y + p2.height - 4), 0.4);
+}
 
-  // Panel 3: seen from above: board-horizontal against camera depth.
+/* Panel 3: seen from above: board-horizontal (q's x) against camera depth. */
+void drawFromAbovePanel(cv::Mat &img, const BoardMetrics &m, const std::vector<Eigen::Vector2d> &q)
+{
   const cv::Rect p3(680, 350, 490, 270);
   cv::rectangle(img, p3, cv::Scalar(200, 200, 200));
   text(img, "from above: along the board (mm) vs depth zc (mm)", cv::Point(p3.x + 10, p3.y + 20));
@@ -380,8 +411,24 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
   }
   text(img, "zc " + mm(m.min_depth, 1) + " (top) .. " + mm(m.max_depth, 1) + " mm", cv::Point(p3.x + 10, p3.y + p3.height - 6),
        0.4);
+}
 
-  const std::string png = (d / "figure.png").string();
+/* The figure: 1200 x 640, the title and three panels. */
+cv::Mat boardFigure(const BoardMetrics &m, const std::string &title)
+{
+  cv::Mat img(640, 1200, CV_8UC3, cv::Scalar(255, 255, 255));
+  text(img, title, cv::Point(20, 30), 0.7, cv::Scalar(0, 0, 0), 2);
+  const double err_scale = std::max(1e-4, 0.02 * m.nominal); // 2 % of the block is full red
+  const std::vector<Eigen::Vector2d> q = inPlaneCoordinates(m);
+  drawPointsPanel(img, m, q, err_scale);
+  drawPlaneDistancePanel(img, m);
+  drawFromAbovePanel(img, m, q);
+  return img;
+}
+
+/* The figure's PNG bytes; `png` (its file name) for the messages. */
+std::string encodePng(const cv::Mat &img, const std::string &png)
+{
   std::vector<unsigned char> bytes;
   bool ok = false;
   try {
@@ -391,7 +438,25 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
   }
   if (!ok)
     throw Error(png + ": cannot encode the figure");
-  files.add(png, std::string(bytes.begin(), bytes.end()));
+  return std::string(bytes.begin(), bytes.end());
+}
+
+} // namespace
+
+void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::string &title)
+{
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec)
+    throw Error(dir + ": cannot create the report folder: " + ec.message());
+  const std::filesystem::path d(dir);
+  // The four files are committed together, after the figure is drawn: all or nothing.
+  AtomicFiles files;
+  files.add((d / "report.txt").string(), title + "\n\n" + formatBoardMetrics(m));
+  files.add((d / "blocks.csv").string(), blocksTable(m));
+  files.add((d / "plane.csv").string(), planeTable(m));
+  const std::string png = (d / "figure.png").string();
+  files.add(png, encodePng(boardFigure(m, title), png));
   files.commit();
 }
 
