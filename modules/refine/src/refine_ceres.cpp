@@ -224,6 +224,11 @@ private:
   void anchored(int row_a, int row_k, const double *point, double *q) const;
   bool candidateScore(const TrackData &t, const std::array<double, 3> &p, double &score) const;
   bool anchorFromCamera(const TrackData &t, int row, const Eigen::Vector3d &c_P, std::array<double, 3> &p) const;
+  void addMotionBlocks(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering);
+  void addMotionPriors(ceres::Problem &problem);
+  int addObservations(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering, bool robust);
+  void chooseLinearSolver(ceres::Solver::Options &so) const;
+  ceres::Solver::Options solverOptions(bool robust) const;
   ceres::Solver::Summary solve(bool robust, bool &solved);
   void flagOutliers();
   RefineProgress progressAt(RefineProgress::Stage stage) const;
@@ -488,16 +493,15 @@ void Refiner::initialise()
   }
 }
 
-ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
+/* One parameter block per motion-log row, with the parts that are known held constant. */
+void Refiner::addMotionBlocks(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering)
 {
-  ceres::Problem problem;
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   const int rows = static_cast<int>(state_.frames.size());
   const int block = blockSize(), pose_dim = block - 1;
   for (int r = 0; r < rows; ++r) {
     double *f = state_.frames[r].data();
     problem.AddParameterBlock(f, block);
-    ordering->AddElementToGroup(f, 1);
+    ordering.AddElementToGroup(f, 1);
     // Known parts: frame 0's pose (the gauge, for increment noise), every pose or yaw whose noise is
     // not modelled (and for a planar log in the general chain, the rotation off the heading axis).
     std::vector<int> known;
@@ -511,6 +515,12 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
     else if (!known.empty())
       problem.SetManifold(f, new ceres::SubsetManifold(block, known));
   }
+}
+
+/* The motion's priors: absolute poses or odometry increments, and the yaw readings, when free. */
+void Refiner::addMotionPriors(ceres::Problem &problem)
+{
+  const int rows = static_cast<int>(state_.frames.size());
   if (poses_free_ && model_.absolute)
     for (int r = 0; r < rows; ++r)
       problem.AddResidualBlock(model_.general ? PosePriorCost<6, 7>::Create(model_.pose_priors[r])
@@ -526,14 +536,19 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
       problem.AddResidualBlock(model_.general ? YawCost<7>::Create(motion_[r].yaw, 1.0 / o_.noise.sigma_yaw)
                                               : YawCost<5>::Create(motion_[r].yaw, 1.0 / o_.noise.sigma_yaw),
                                nullptr, state_.frames[r].data());
+}
 
+/* The active points' blocks and their inlier observations (Cauchy loss when robust); returns the
+   number of observations added. */
+int Refiner::addObservations(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering, bool robust)
+{
   const double scale = o_.robust_threshold_px / std::max(o_.noise.sigma_px, kMinSigmaPx);
   int observations = 0;
   for (TrackData &t : data_) {
     if (!t.active)
       continue;
     problem.AddParameterBlock(t.point.data(), 3);
-    ordering->AddElementToGroup(t.point.data(), 0);
+    ordering.AddElementToGroup(t.point.data(), 0);
     const int a = t.anchor_row;
     for (std::size_t j = 0; j < t.rows.size(); ++j) {
       if (t.outlier[j])
@@ -551,12 +566,13 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
       ++observations;
     }
   }
-  ceres::Solver::Summary summary;
-  solved = observations > 0;
-  if (!solved)
-    return summary;
+  return observations;
+}
 
-  ceres::Solver::Options so;
+/* The linear solver: dense Schur complement, or a sparse one for a long log whose points each see
+   a part of it. */
+void Refiner::chooseLinearSolver(ceres::Solver::Options &so) const
+{
   so.linear_solver_type = ceres::DENSE_SCHUR;
   // (model_ holds the chain and priors, not the rows: count the blocks of the problem itself.)
   const int motion_parameters = static_cast<int>(state_.frames.size()) * blockSize();
@@ -579,7 +595,13 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
         so.sparse_linear_algebra_library_type = library;
         break;
       }
-  so.linear_solver_ordering = ordering;
+}
+
+/* The solver's options for the robust or the final solve (without the ordering and callbacks). */
+ceres::Solver::Options Refiner::solverOptions(bool robust) const
+{
+  ceres::Solver::Options so;
+  chooseLinearSolver(so);
   so.max_num_iterations = o_.max_iterations;
   so.num_threads = std::max(1, o_.threads);
   // The robust solve only has to separate gross errors from inliers; its tail converges slowly
@@ -590,6 +612,23 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
   so.parameter_tolerance = robust ? 1e-6 : 1e-8;
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
+  return so;
+}
+
+ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
+{
+  ceres::Problem problem;
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  addMotionBlocks(problem, *ordering);
+  addMotionPriors(problem);
+  const int observations = addObservations(problem, *ordering, robust);
+  ceres::Solver::Summary summary;
+  solved = observations > 0;
+  if (!solved)
+    return summary;
+
+  ceres::Solver::Options so = solverOptions(robust);
+  so.linear_solver_ordering = ordering;
   std::unique_ptr<ProgressCallback> callback;
   if (o_.progress) {
     callback = std::make_unique<ProgressCallback>(
