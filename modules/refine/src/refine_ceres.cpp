@@ -231,6 +231,12 @@ private:
   ceres::Solver::Options solverOptions(bool robust) const;
   ceres::Solver::Summary solve(bool robust, bool &solved);
   void flagOutliers();
+  void checkOptions() const;
+  void optimise(RefineResult &result);
+  void gateRefined();
+  void computeCovariances(std::vector<Eigen::Matrix3d> &cov, std::vector<int> &index);
+  void writePoints(RefineResult &result, const std::vector<Eigen::Matrix3d> &cov, const std::vector<int> &index) const;
+  void writeMotion(RefineResult &result) const;
   RefineProgress progressAt(RefineProgress::Stage stage) const;
   Eigen::Vector3d cameraPoint(const TrackData &t, int row) const;
   double pixelError(const TrackData &t, std::size_t j) const;
@@ -669,17 +675,18 @@ void Refiner::flagOutliers()
   }
 }
 
-RefineResult Refiner::run()
+void Refiner::checkOptions() const
 {
   o_.noise.validate();
   o_.gates.validate();
   if (!(o_.robust_threshold_px > 0) || !(o_.outlier_threshold_px > 0) || o_.max_iterations < 0)
     throw Error("refine: the robust and outlier thresholds must be positive, max_iterations non-negative");
-  prepare();
-  initialise();
+}
 
-  RefineResult result;
-  result.available = true;
+/* The robust solve, the outliers it shows, then the final solve on the inliers: the iterations,
+   costs and convergence into result. */
+void Refiner::optimise(RefineResult &result)
+{
   bool solved = false;
   const ceres::Solver::Summary robust = solve(true, solved);
   if (solved)
@@ -693,8 +700,11 @@ RefineResult Refiner::run()
     result.final_cost = final_summary.final_cost;
     result.converged = final_summary.termination_type == ceres::CONVERGENCE;
   }
+}
 
-  // Gates on the refined motion and inliers.
+/* Gates on the refined motion and inliers. */
+void Refiner::gateRefined()
+{
   for (TrackData &t : data_) {
     if (!t.active)
       continue;
@@ -702,37 +712,42 @@ RefineResult Refiner::run()
     if (t.status == Status::Ok && (!(t.point[2] > 0) || !(cameraPoint(t, t.report_row).z() > 0)))
       t.status = Status::Behind;
   }
+}
 
-  // Covariance of every point in the final problem.
-  std::vector<Eigen::Matrix3d> cov;
-  std::vector<int> index(data_.size(), -1);
-  if (o_.compute_covariance) {
-    if (o_.progress)
-      o_.progress(progressAt(RefineProgress::Stage::Covariance));
-    Model m = model_;
-    for (const auto &f : state_.frames) {
-      m.poses.push_back({f[0], f[1], f[2], f[3], model_.general ? f[4] : 0.0, model_.general ? f[5] : 0.0});
-      m.yaws.push_back(f[yawIndex()]);
-    }
-    for (std::size_t i = 0; i < data_.size(); ++i) {
-      const TrackData &t = data_[i];
-      if (!t.active)
-        continue;
-      index[i] = static_cast<int>(m.points.size());
-      for (std::size_t j = 0; j < t.rows.size(); ++j)
-        if (!t.outlier[j])
-          m.observations.push_back({index[i], t.rows[j], t.w[j]});
-      m.points.push_back(t.point);
-      m.anchor_row.push_back(t.anchor_row);
-      m.report_row.push_back(t.report_row);
-    }
-    std::vector<char> ok;
-    pointCovariances(m, true, cov, ok);
-    for (std::size_t i = 0; i < data_.size(); ++i)
-      if (index[i] >= 0 && !ok[index[i]] && data_[i].status == Status::Ok)
-        data_[i].status = Status::Degenerate;
+/* Covariance of every active point in the final problem (cov[index[i]] for track i, index -1 for
+   an inactive one); an Ok point whose covariance fails becomes Degenerate. */
+void Refiner::computeCovariances(std::vector<Eigen::Matrix3d> &cov, std::vector<int> &index)
+{
+  if (o_.progress)
+    o_.progress(progressAt(RefineProgress::Stage::Covariance));
+  Model m = model_;
+  for (const auto &f : state_.frames) {
+    m.poses.push_back({f[0], f[1], f[2], f[3], model_.general ? f[4] : 0.0, model_.general ? f[5] : 0.0});
+    m.yaws.push_back(f[yawIndex()]);
   }
+  for (std::size_t i = 0; i < data_.size(); ++i) {
+    const TrackData &t = data_[i];
+    if (!t.active)
+      continue;
+    index[i] = static_cast<int>(m.points.size());
+    for (std::size_t j = 0; j < t.rows.size(); ++j)
+      if (!t.outlier[j])
+        m.observations.push_back({index[i], t.rows[j], t.w[j]});
+    m.points.push_back(t.point);
+    m.anchor_row.push_back(t.anchor_row);
+    m.report_row.push_back(t.report_row);
+  }
+  std::vector<char> ok;
+  pointCovariances(m, true, cov, ok);
+  for (std::size_t i = 0; i < data_.size(); ++i)
+    if (index[i] >= 0 && !ok[index[i]] && data_[i].status == Status::Ok)
+      data_[i].status = Status::Degenerate;
+}
 
+/* Every track's estimate and outlier flags into result (cov and index from computeCovariances). */
+void Refiner::writePoints(RefineResult &result, const std::vector<Eigen::Matrix3d> &cov,
+                          const std::vector<int> &index) const
+{
   result.points.resize(data_.size());
   result.outliers.resize(data_.size());
   for (std::size_t i = 0; i < data_.size(); ++i) {
@@ -749,6 +764,11 @@ RefineResult Refiner::run()
     if (index[i] >= 0)
       e.c_cov = cov[index[i]];
   }
+}
+
+/* The motion log with the refined poses and yaws. */
+void Refiner::writeMotion(RefineResult &result) const
+{
   result.motion = motion_;
   for (std::size_t r = 0; r < motion_.size(); ++r) {
     const auto &f = state_.frames[r];
@@ -764,6 +784,26 @@ RefineResult Refiner::run()
     else
       s.heading += f[4]; // a planar log in the general chain: only dy is free
   }
+}
+
+RefineResult Refiner::run()
+{
+  checkOptions();
+  prepare();
+  initialise();
+
+  RefineResult result;
+  result.available = true;
+  optimise(result);
+  gateRefined();
+
+  std::vector<Eigen::Matrix3d> cov;
+  std::vector<int> index(data_.size(), -1);
+  if (o_.compute_covariance)
+    computeCovariances(cov, index);
+
+  writePoints(result, cov, index);
+  writeMotion(result);
   return result;
 }
 
