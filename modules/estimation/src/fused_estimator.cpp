@@ -7,6 +7,77 @@
 
 namespace yawdepth {
 
+namespace {
+
+/* An observation undistorted once: its normalised point and covariance, ok false when the pixel is
+   outside the distortion model. */
+struct UndistortedObservation {
+  long id;
+  Eigen::Vector2d m;
+  Eigen::Matrix2d cov;
+  bool ok;
+};
+
+std::vector<UndistortedObservation> undistortObservations(const CameraModel &camera, double sigma_px,
+                                                          const std::vector<FeatureObservation> &observations)
+{
+  std::vector<UndistortedObservation> obs;
+  obs.reserve(observations.size());
+  const double s2 = sigma_px * sigma_px;
+  for (const FeatureObservation &fo : observations) {
+    UndistortedObservation o{fo.id, Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity(), false};
+    Eigen::Matrix2d J;
+    if (std::isfinite(fo.u) && std::isfinite(fo.v) && camera.undistort(Eigen::Vector2d(fo.u, fo.v), o.m, &J)) {
+      o.cov = s2 * J * J.transpose() + 1e-24 * Eigen::Matrix2d::Identity();
+      o.ok = true;
+    }
+    obs.push_back(o);
+  }
+  return obs;
+}
+
+/* One result per observation, before any update: its id and whether it was undistorted. */
+std::vector<FusedEstimator::ObservationResult> initialResults(const std::vector<UndistortedObservation> &obs)
+{
+  std::vector<FusedEstimator::ObservationResult> results(obs.size());
+  for (std::size_t i = 0; i < obs.size(); ++i) {
+    results[i].id = obs[i].id;
+    results[i].undistorted = obs[i].ok;
+  }
+  return results;
+}
+
+/* The index in obs of every id observed and undistorted. */
+std::map<long, std::size_t> usableObservations(const std::vector<UndistortedObservation> &obs)
+{
+  std::map<long, std::size_t> observed;
+  for (std::size_t i = 0; i < obs.size(); ++i)
+    if (obs[i].ok)
+      observed[obs[i].id] = i;
+  return observed;
+}
+
+enum class KeyChange { None, Restart, NewKey };
+
+/* What a feature's key becomes after a step of its filter (counting the outliers in a row):
+   restarted after too many outliers, a new key when the filter restarted itself, or once the depth
+   is resolved and the step added enough information to it. */
+KeyChange keyChangeAfter(DepthFilter::Update u, int &consecutive_outliers, const DepthFilter &current,
+                         const DepthFilter &key, const FusedOptions &o)
+{
+  if (u == DepthFilter::Update::Outlier)
+    return ++consecutive_outliers >= o.filter.max_consecutive_outliers ? KeyChange::Restart : KeyChange::None;
+  consecutive_outliers = 0;
+  if (u == DepthFilter::Update::Restarted)
+    return KeyChange::NewKey;
+  const double sc = current.logDepthSigma(), sk = key.logDepthSigma();
+  if (sc <= o.key_log_depth_sigma && (key.inliers() < 2 || sc * sc * (1.0 + o.key_information_gain) <= sk * sk))
+    return KeyChange::NewKey;
+  return KeyChange::None;
+}
+
+} // namespace
+
 FusedEstimator::FusedEstimator(const CameraModel &camera, const YawRig &rig, const FusedOptions &options)
     : camera_(camera), rig_(rig), o_(options)
 {
@@ -107,30 +178,8 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
 {
   if (started_ && row.frame <= last_.frame)
     throw Error("fused: frame " + std::to_string(row.frame) + " does not follow frame " + std::to_string(last_.frame));
-  // Undistort the observations once.
-  struct Obs {
-    long id;
-    Eigen::Vector2d m;
-    Eigen::Matrix2d cov;
-    bool ok;
-  };
-  std::vector<Obs> obs;
-  obs.reserve(observations.size());
-  const double s2 = o_.sigma_px * o_.sigma_px;
-  for (const FeatureObservation &fo : observations) {
-    Obs o{fo.id, Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity(), false};
-    Eigen::Matrix2d J;
-    if (std::isfinite(fo.u) && std::isfinite(fo.v) && camera_.undistort(Eigen::Vector2d(fo.u, fo.v), o.m, &J)) {
-      o.cov = s2 * J * J.transpose() + 1e-24 * Eigen::Matrix2d::Identity();
-      o.ok = true;
-    }
-    obs.push_back(o);
-  }
-  std::vector<ObservationResult> results(obs.size());
-  for (std::size_t i = 0; i < obs.size(); ++i) {
-    results[i].id = obs[i].id;
-    results[i].undistorted = obs[i].ok;
-  }
+  const std::vector<UndistortedObservation> obs = undistortObservations(camera_, o_.sigma_px, observations);
+  std::vector<ObservationResult> results = initialResults(obs);
 
   if (started_)
     advanceKeys(row);
@@ -139,22 +188,19 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
   last_ = row;
 
   // A feature (re)starts at an observation: that frame is its key.
-  auto restart = [&](Feature &f, const Obs &o) {
+  auto restart = [&](Feature &f, const UndistortedObservation &o) {
     f.current.initialize(row.frame, row.yaw, o.m, o.cov);
     f.consecutive_outliers = 0;
     setKey(f, row.frame);
   };
 
-  std::map<long, std::size_t> observed;
-  for (std::size_t i = 0; i < obs.size(); ++i)
-    if (obs[i].ok)
-      observed[obs[i].id] = i;
+  std::map<long, std::size_t> observed = usableObservations(obs);
   for (auto it = features_.begin(); it != features_.end();) {
     Feature &f = it->second;
     const auto o = observed.find(it->first);
     if (o != observed.end()) {
       const std::size_t i = o->second;
-      const Obs &ob = obs[i];
+      const UndistortedObservation &ob = obs[i];
       observed.erase(o); // what is left in `observed` afterwards are the new features
       Key &k = keys_.at(f.key_frame);
       if (k.inc_frame != row.frame) {
@@ -166,20 +212,12 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
       const DepthFilter::Update u = f.current.step(k.inc, &ob.m, &ob.cov, &prior);
       results[i].update = u;
       f.last_seen = row.frame;
-      if (u == DepthFilter::Update::Outlier) {
-        if (++f.consecutive_outliers >= o_.filter.max_consecutive_outliers) {
-          restart(f, ob);
-          results[i].update = DepthFilter::Update::Restarted;
-        }
-      } else if (u == DepthFilter::Update::Restarted) {
-        f.consecutive_outliers = 0;
+      const KeyChange change = keyChangeAfter(u, f.consecutive_outliers, f.current, f.key, o_);
+      if (change == KeyChange::Restart) {
+        restart(f, ob);
+        results[i].update = DepthFilter::Update::Restarted;
+      } else if (change == KeyChange::NewKey) {
         setKey(f, row.frame);
-      } else {
-        f.consecutive_outliers = 0;
-        // A new key once the depth is resolved and the step added enough information to it.
-        const double sc = f.current.logDepthSigma(), sk = f.key.logDepthSigma();
-        if (sc <= o_.key_log_depth_sigma && (f.key.inliers() < 2 || sc * sc * (1.0 + o_.key_information_gain) <= sk * sk))
-          setKey(f, row.frame);
       }
     }
     if (row.frame - f.last_seen > o_.max_missing_frames) {
@@ -191,7 +229,7 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
   }
   // New features.
   for (const auto &kv : observed) {
-    const Obs &o = obs[kv.second];
+    const UndistortedObservation &o = obs[kv.second];
     Feature f{DepthFilter(o_.filter, camera_.kx(), camera_.ky()), DepthFilter(o_.filter, camera_.kx(), camera_.ky())};
     f.key_frame = -1;
     f.last_seen = row.frame;

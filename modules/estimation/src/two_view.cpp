@@ -104,16 +104,22 @@ double paperDepth(double x, double y, double du, double kx, const Eigen::Vector3
   return kx * Lv_d / (du - kx * Lw_w);
 }
 
-PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const MotionSample &prev,
-                            const MotionSample &cur, const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv_cur,
-                            const TwoViewOptions &options)
-{
-  Undistorted und;
-  if (!undistortBoth(camera, uv_prev, uv_cur, und))
-    return failed(Status::UndistortFailed, cur.frame);
+namespace {
 
-  // One forward-mode pass gives the row coefficients a, b and their derivatives with respect to
-  // every noisy input (perturbations around the observed values, all zero here).
+/* The exact rows a Z = b (u-row, v-row) as forward-mode scalars: values and derivatives with
+   respect to every noisy input. Also the current normalised point (with its derivatives), the
+   translation and the earlier bearing after the rotation (values). */
+struct RowCoefficients {
+  Eigen::Matrix<AD, 2, 1> m_cur;
+  AD a_u, b_u, a_v, b_v;
+  Eigen::Vector3d t_val, r_val;
+};
+
+/* One forward-mode pass gives the row coefficients a, b and their derivatives with respect to
+   every noisy input (perturbations around the observed values, all zero here). */
+RowCoefficients rowCoefficients(const YawRig &rig, const MotionSample &prev, const MotionSample &cur,
+                                const Undistorted &und)
+{
   IncrementPerturbation<AD> p;
   Eigen::Matrix<AD, 2, 1> duv_prev, duv_cur;
   for (int i = 0; i < 2; ++i) {
@@ -141,6 +147,77 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
     t_val(i) = t(i).value();
     r_val(i) = r(i).value();
   }
+  return RowCoefficients{m_cur, a_u, b_u, a_v, b_v, t_val, r_val};
+}
+
+/* The rows' values a, b and their Jacobians Da, Db with respect to the inputs. */
+struct LinearizedRows {
+  Eigen::Vector2d a, b;
+  Eigen::Matrix<double, 2, kInputs> Da, Db;
+};
+
+LinearizedRows linearizeRows(const RowCoefficients &c)
+{
+  LinearizedRows l;
+  l.a = Eigen::Vector2d(c.a_u.value(), c.a_v.value());
+  l.b = Eigen::Vector2d(c.b_u.value(), c.b_v.value());
+  l.Da.row(0) = c.a_u.derivatives().transpose();
+  l.Da.row(1) = c.a_v.derivatives().transpose();
+  l.Db.row(0) = c.b_u.derivatives().transpose();
+  l.Db.row(1) = c.b_v.derivatives().transpose();
+  return l;
+}
+
+/* Depth at the current frame from the two rows: pixel-scaled least squares, then generalised least
+   squares with the residual covariance Sigma_e = (Z Da - Db) Sigma (Z Da - Db)^T evaluated at the
+   current estimate. W: the last weights. */
+double generalisedLeastSquaresDepth(const CameraModel &camera, const LinearizedRows &l, const VecIn &var,
+                                    Eigen::Matrix2d &W)
+{
+  const Eigen::Vector2d &a = l.a, &b = l.b;
+  W = Eigen::Vector2d(camera.kx() * camera.kx(), camera.ky() * camera.ky()).asDiagonal();
+  double Z = a.dot(W * b) / a.dot(W * a);
+  for (int iter = 0; iter < 2 && std::isfinite(Z); ++iter) {
+    const Eigen::Matrix<double, 2, kInputs> Je = Z * l.Da - l.Db;
+    const Eigen::Matrix2d Se = Je * var.asDiagonal() * Je.transpose();
+    const double det = Se.determinant();
+    if (!(det > 1e-30 * Se.trace() * Se.trace()) || !std::isfinite(det))
+      break; // no noise information (e.g. all sigmas zero): keep the current weights
+    W = Se.inverse();
+    Z = a.dot(W * b) / a.dot(W * a);
+  }
+  return Z;
+}
+
+/* Covariance of the camera point Z (x_cur, y_cur, 1), with the weights W held fixed. */
+Eigen::Matrix3d exactPointCovariance(const LinearizedRows &l, const Eigen::Matrix2d &W, double Z,
+                                     const Undistorted &und, const Eigen::Matrix<AD, 2, 1> &m_cur, const VecIn &var)
+{
+  const Eigen::Vector2d &a = l.a, &b = l.b;
+  // dZ with the weights held fixed: [a^T W (Db - Z Da) + (b - Z a)^T W Da] / (a^T W a).
+  const double aWa = a.dot(W * a);
+  const Eigen::Matrix<double, 1, kInputs> dZ =
+      ((W * a).transpose() * (l.Db - Z * l.Da) + (W * (b - Z * a)).transpose() * l.Da) / aWa;
+  Eigen::Matrix<double, 3, kInputs> J;
+  J.row(0) = und.m_cur.x() * dZ;
+  J.row(1) = und.m_cur.y() * dZ;
+  J.row(2) = dZ;
+  J.row(0) += Z * m_cur(0).derivatives().transpose();
+  J.row(1) += Z * m_cur(1).derivatives().transpose();
+  return J * var.asDiagonal() * J.transpose();
+}
+
+} // namespace
+
+PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const MotionSample &prev,
+                            const MotionSample &cur, const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv_cur,
+                            const TwoViewOptions &options)
+{
+  Undistorted und;
+  if (!undistortBoth(camera, uv_prev, uv_cur, und))
+    return failed(Status::UndistortFailed, cur.frame);
+  const RowCoefficients rows = rowCoefficients(rig, prev, cur, und);
+  const Eigen::Vector3d &t_val = rows.t_val, &r_val = rows.r_val;
 
   // Gates on the geometry itself.
   if (!(t_val.norm() >= options.gates.min_baseline))
@@ -149,28 +226,11 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
   if (!(parallax >= options.gates.min_parallax_px))
     return failed(Status::Degenerate, cur.frame, parallax);
 
-  const Eigen::Vector2d a(a_u.value(), a_v.value()), b(b_u.value(), b_v.value());
-  Eigen::Matrix<double, 2, kInputs> Da, Db;
-  Da.row(0) = a_u.derivatives().transpose();
-  Da.row(1) = a_v.derivatives().transpose();
-  Db.row(0) = b_u.derivatives().transpose();
-  Db.row(1) = b_v.derivatives().transpose();
+  const LinearizedRows l = linearizeRows(rows);
   const bool six_dof = prev.six_dof || cur.six_dof;
   const VecIn var = twoViewInputVariances(options.noise, options.increments, six_dof, travel(prev, cur), turn(prev, cur));
-
-  // Start from pixel-scaled least squares, then generalised least squares with the residual
-  // covariance Sigma_e = (Z Da - Db) Sigma (Z Da - Db)^T evaluated at the current estimate.
-  Eigen::Matrix2d W = Eigen::Vector2d(camera.kx() * camera.kx(), camera.ky() * camera.ky()).asDiagonal();
-  double Z = a.dot(W * b) / a.dot(W * a);
-  for (int iter = 0; iter < 2 && std::isfinite(Z); ++iter) {
-    const Eigen::Matrix<double, 2, kInputs> Je = Z * Da - Db;
-    const Eigen::Matrix2d Se = Je * var.asDiagonal() * Je.transpose();
-    const double det = Se.determinant();
-    if (!(det > 1e-30 * Se.trace() * Se.trace()) || !std::isfinite(det))
-      break; // no noise information (e.g. all sigmas zero): keep the current weights
-    W = Se.inverse();
-    Z = a.dot(W * b) / a.dot(W * a);
-  }
+  Eigen::Matrix2d W;
+  const double Z = generalisedLeastSquaresDepth(camera, l, var, W);
   if (!std::isfinite(Z))
     return failed(Status::Degenerate, cur.frame, parallax);
 
@@ -185,19 +245,8 @@ PointEstimate estimateExact(const CameraModel &camera, const YawRig &rig, const 
   e.parallax_px = parallax;
   e.c_P = Z * m1h;
   e.v_P = rig.visionPoint(cur.yaw, e.c_P);
-  if (options.compute_covariance) {
-    // dZ with the weights held fixed: [a^T W (Db - Z Da) + (b - Z a)^T W Da] / (a^T W a).
-    const double aWa = a.dot(W * a);
-    const Eigen::Matrix<double, 1, kInputs> dZ =
-        ((W * a).transpose() * (Db - Z * Da) + (W * (b - Z * a)).transpose() * Da) / aWa;
-    Eigen::Matrix<double, 3, kInputs> J;
-    J.row(0) = und.m_cur.x() * dZ;
-    J.row(1) = und.m_cur.y() * dZ;
-    J.row(2) = dZ;
-    J.row(0) += Z * m_cur(0).derivatives().transpose();
-    J.row(1) += Z * m_cur(1).derivatives().transpose();
-    e.c_cov = J * var.asDiagonal() * J.transpose();
-  }
+  if (options.compute_covariance)
+    e.c_cov = exactPointCovariance(l, W, Z, und, rows.m_cur, var);
   return e;
 }
 

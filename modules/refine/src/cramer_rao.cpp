@@ -13,9 +13,10 @@ namespace yawdepth {
 
 using namespace refine_detail;
 
-std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &truth,
-                                   const std::vector<Track> &tracks, const std::vector<Eigen::Vector3d> &w_points,
-                                   const NoiseModel &noise, bool joint)
+namespace {
+
+void checkInputs(const std::vector<MotionSample> &truth, const std::vector<Track> &tracks,
+                 const std::vector<Eigen::Vector3d> &w_points, const NoiseModel &noise)
 {
   noise.validate();
   if (w_points.size() != tracks.size())
@@ -25,13 +26,19 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
   for (std::size_t i = 1; i < truth.size(); ++i)
     if (!(truth[i].frame > truth[i - 1].frame))
       throw Error("depthCramerRao: motion-log frames must be strictly increasing");
-  auto rowOf = [&](long frame) {
-    const long row = rowOfFrame(truth, frame);
-    if (row < 0)
-      throw Error("depthCramerRao: frame " + std::to_string(frame) + " is not in the motion log");
-    return static_cast<int>(row);
-  };
+}
 
+int rowOf(const std::vector<MotionSample> &truth, long frame)
+{
+  const long row = rowOfFrame(truth, frame);
+  if (row < 0)
+    throw Error("depthCramerRao: frame " + std::to_string(frame) + " is not in the motion log");
+  return static_cast<int>(row);
+}
+
+/* The model's motion at the truth, without points. */
+Model truthMotionModel(const YawRig &rig, const std::vector<MotionSample> &truth, const NoiseModel &noise)
+{
   Model m;
   setModelMotion(m, rig, truth, noise);
   for (const MotionSample &s : truth) {
@@ -41,65 +48,84 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
       m.poses.push_back({s.x, s.y, s.z, s.heading, 0.0, 0.0});
     m.yaws.push_back(s.yaw);
   }
-  // The camera's rotation and centre at a row.
-  auto cameraAt = [&](int row, Eigen::Matrix3d &R, Eigen::Vector3d &c) {
-    if (m.general) {
-      double f[7];
-      std::copy(m.poses[row].begin(), m.poses[row].end(), f);
-      f[6] = m.yaws[row];
-      cameraInWorldGeneral(f, m.Rref[row], m.mount, R, c);
-    } else {
-      cameraInWorld(m.poses[row].data(), m.yaws[row], rig.cameraOffset(), R, c);
-    }
-  };
+  return m;
+}
 
+/* The camera's rotation and centre at a row. */
+void cameraAt(const Model &m, const YawRig &rig, int row, Eigen::Matrix3d &R, Eigen::Vector3d &c)
+{
+  if (m.general) {
+    double f[7];
+    std::copy(m.poses[row].begin(), m.poses[row].end(), f);
+    f[6] = m.yaws[row];
+    cameraInWorldGeneral(f, m.Rref[row], m.mount, R, c);
+  } else {
+    cameraInWorld(m.poses[row].data(), m.yaws[row], rig.cameraOffset(), R, c);
+  }
+}
+
+/* Noise of the observed pixel mapped to normalised coordinates at the true camera point P. */
+WhitenedObservation whitenedAtTruth(const CameraModel &camera, const Eigen::Vector3d &P, double sigma_px)
+{
+  const Eigen::Vector2d mt = P.head<2>() / P.z();
+  Eigen::Matrix2d Jd;
+  camera.distortNormalized(mt, &Jd);
+  const Eigen::Matrix2d K = Eigen::Vector2d(camera.kx(), camera.ky()).asDiagonal();
+  const Eigen::Matrix2d J = (K * Jd).inverse(); // d(x, y) / d(u, v)
+  return whitenObservation(mt, J, sigma_px);
+}
+
+/* Adds a track's true point and its observations at the truth to m; returns the point's index, or
+   -1 when the track has fewer than two observations or the point is behind a camera. */
+int addTruePoint(Model &m, const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &truth,
+                 const Track &track, const Eigen::Vector3d &w_point, double sigma_px)
+{
+  if (track.observations.size() < 2)
+    return -1;
+  const int ra = rowOf(truth, track.observations.front().frame);
+  const int rk = rowOf(truth, track.observations.back().frame);
+  // The true point anchored in its first camera frame.
+  Eigen::Matrix3d Ra;
+  Eigen::Vector3d ca;
+  cameraAt(m, rig, ra, Ra, ca);
+  const Eigen::Vector3d Pa = Ra.transpose() * (w_point - ca);
+  if (!(Pa.z() > 0))
+    return -1;
+  std::vector<ModelObservation> obs;
+  for (const Observation &ob : track.observations) {
+    const int row = rowOf(truth, ob.frame);
+    Eigen::Matrix3d R;
+    Eigen::Vector3d c;
+    cameraAt(m, rig, row, R, c);
+    const Eigen::Vector3d P = R.transpose() * (w_point - c);
+    if (!(P.z() > 0))
+      return -1;
+    ModelObservation mo;
+    mo.point = static_cast<int>(m.points.size());
+    mo.row = row;
+    mo.w = whitenedAtTruth(camera, P, sigma_px);
+    obs.push_back(mo);
+  }
+  const int point = static_cast<int>(m.points.size());
+  m.points.push_back({Pa.x() / Pa.z(), Pa.y() / Pa.z(), 1.0 / Pa.z()});
+  m.anchor_row.push_back(ra);
+  m.report_row.push_back(rk);
+  m.observations.insert(m.observations.end(), obs.begin(), obs.end());
+  return point;
+}
+
+} // namespace
+
+std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &truth,
+                                   const std::vector<Track> &tracks, const std::vector<Eigen::Vector3d> &w_points,
+                                   const NoiseModel &noise, bool joint)
+{
+  checkInputs(truth, tracks, w_points, noise);
+  Model m = truthMotionModel(rig, truth, noise);
   std::vector<double> out(tracks.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<int> point_of_track(tracks.size(), -1);
-  for (std::size_t t = 0; t < tracks.size(); ++t) {
-    const Track &track = tracks[t];
-    if (track.observations.size() < 2)
-      continue;
-    const int ra = rowOf(track.observations.front().frame);
-    const int rk = rowOf(track.observations.back().frame);
-    // The true point anchored in its first camera frame.
-    Eigen::Matrix3d Ra;
-    Eigen::Vector3d ca;
-    cameraAt(ra, Ra, ca);
-    const Eigen::Vector3d Pa = Ra.transpose() * (w_points[t] - ca);
-    if (!(Pa.z() > 0))
-      continue;
-    std::vector<ModelObservation> obs;
-    bool valid = true;
-    for (const Observation &ob : track.observations) {
-      const int row = rowOf(ob.frame);
-      Eigen::Matrix3d R;
-      Eigen::Vector3d c;
-      cameraAt(row, R, c);
-      const Eigen::Vector3d P = R.transpose() * (w_points[t] - c);
-      if (!(P.z() > 0)) {
-        valid = false;
-        break;
-      }
-      // Noise of the observed pixel mapped to normalised coordinates at the true pixel.
-      const Eigen::Vector2d mt = P.head<2>() / P.z();
-      Eigen::Matrix2d Jd;
-      camera.distortNormalized(mt, &Jd);
-      const Eigen::Matrix2d K = Eigen::Vector2d(camera.kx(), camera.ky()).asDiagonal();
-      const Eigen::Matrix2d J = (K * Jd).inverse(); // d(x, y) / d(u, v)
-      ModelObservation mo;
-      mo.point = static_cast<int>(m.points.size());
-      mo.row = row;
-      mo.w = whitenObservation(mt, J, noise.sigma_px);
-      obs.push_back(mo);
-    }
-    if (!valid)
-      continue;
-    point_of_track[t] = static_cast<int>(m.points.size());
-    m.points.push_back({Pa.x() / Pa.z(), Pa.y() / Pa.z(), 1.0 / Pa.z()});
-    m.anchor_row.push_back(ra);
-    m.report_row.push_back(rk);
-    m.observations.insert(m.observations.end(), obs.begin(), obs.end());
-  }
+  for (std::size_t t = 0; t < tracks.size(); ++t)
+    point_of_track[t] = addTruePoint(m, camera, rig, truth, tracks[t], w_points[t], noise.sigma_px);
 
   std::vector<Eigen::Matrix3d> cov;
   std::vector<char> ok;

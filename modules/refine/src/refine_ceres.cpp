@@ -224,8 +224,19 @@ private:
   void anchored(int row_a, int row_k, const double *point, double *q) const;
   bool candidateScore(const TrackData &t, const std::array<double, 3> &p, double &score) const;
   bool anchorFromCamera(const TrackData &t, int row, const Eigen::Vector3d &c_P, std::array<double, 3> &p) const;
+  void addMotionBlocks(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering);
+  void addMotionPriors(ceres::Problem &problem);
+  int addObservations(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering, bool robust);
+  void chooseLinearSolver(ceres::Solver::Options &so) const;
+  ceres::Solver::Options solverOptions(bool robust) const;
   ceres::Solver::Summary solve(bool robust, bool &solved);
   void flagOutliers();
+  void checkOptions() const;
+  void optimise(RefineResult &result);
+  void gateRefined();
+  void computeCovariances(std::vector<Eigen::Matrix3d> &cov, std::vector<int> &index);
+  void writePoints(RefineResult &result, const std::vector<Eigen::Matrix3d> &cov, const std::vector<int> &index) const;
+  void writeMotion(RefineResult &result) const;
   RefineProgress progressAt(RefineProgress::Stage stage) const;
   Eigen::Vector3d cameraPoint(const TrackData &t, int row) const;
   double pixelError(const TrackData &t, std::size_t j) const;
@@ -488,16 +499,15 @@ void Refiner::initialise()
   }
 }
 
-ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
+/* One parameter block per motion-log row, with the parts that are known held constant. */
+void Refiner::addMotionBlocks(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering)
 {
-  ceres::Problem problem;
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   const int rows = static_cast<int>(state_.frames.size());
   const int block = blockSize(), pose_dim = block - 1;
   for (int r = 0; r < rows; ++r) {
     double *f = state_.frames[r].data();
     problem.AddParameterBlock(f, block);
-    ordering->AddElementToGroup(f, 1);
+    ordering.AddElementToGroup(f, 1);
     // Known parts: frame 0's pose (the gauge, for increment noise), every pose or yaw whose noise is
     // not modelled (and for a planar log in the general chain, the rotation off the heading axis).
     std::vector<int> known;
@@ -511,6 +521,12 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
     else if (!known.empty())
       problem.SetManifold(f, new ceres::SubsetManifold(block, known));
   }
+}
+
+/* The motion's priors: absolute poses or odometry increments, and the yaw readings, when free. */
+void Refiner::addMotionPriors(ceres::Problem &problem)
+{
+  const int rows = static_cast<int>(state_.frames.size());
   if (poses_free_ && model_.absolute)
     for (int r = 0; r < rows; ++r)
       problem.AddResidualBlock(model_.general ? PosePriorCost<6, 7>::Create(model_.pose_priors[r])
@@ -526,14 +542,19 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
       problem.AddResidualBlock(model_.general ? YawCost<7>::Create(motion_[r].yaw, 1.0 / o_.noise.sigma_yaw)
                                               : YawCost<5>::Create(motion_[r].yaw, 1.0 / o_.noise.sigma_yaw),
                                nullptr, state_.frames[r].data());
+}
 
+/* The active points' blocks and their inlier observations (Cauchy loss when robust); returns the
+   number of observations added. */
+int Refiner::addObservations(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering, bool robust)
+{
   const double scale = o_.robust_threshold_px / std::max(o_.noise.sigma_px, kMinSigmaPx);
   int observations = 0;
   for (TrackData &t : data_) {
     if (!t.active)
       continue;
     problem.AddParameterBlock(t.point.data(), 3);
-    ordering->AddElementToGroup(t.point.data(), 0);
+    ordering.AddElementToGroup(t.point.data(), 0);
     const int a = t.anchor_row;
     for (std::size_t j = 0; j < t.rows.size(); ++j) {
       if (t.outlier[j])
@@ -551,12 +572,13 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
       ++observations;
     }
   }
-  ceres::Solver::Summary summary;
-  solved = observations > 0;
-  if (!solved)
-    return summary;
+  return observations;
+}
 
-  ceres::Solver::Options so;
+/* The linear solver: dense Schur complement, or a sparse one for a long log whose points each see
+   a part of it. */
+void Refiner::chooseLinearSolver(ceres::Solver::Options &so) const
+{
   so.linear_solver_type = ceres::DENSE_SCHUR;
   // (model_ holds the chain and priors, not the rows: count the blocks of the problem itself.)
   const int motion_parameters = static_cast<int>(state_.frames.size()) * blockSize();
@@ -579,7 +601,13 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
         so.sparse_linear_algebra_library_type = library;
         break;
       }
-  so.linear_solver_ordering = ordering;
+}
+
+/* The solver's options for the robust or the final solve (without the ordering and callbacks). */
+ceres::Solver::Options Refiner::solverOptions(bool robust) const
+{
+  ceres::Solver::Options so;
+  chooseLinearSolver(so);
   so.max_num_iterations = o_.max_iterations;
   so.num_threads = std::max(1, o_.threads);
   // The robust solve only has to separate gross errors from inliers; its tail converges slowly
@@ -590,6 +618,23 @@ ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
   so.parameter_tolerance = robust ? 1e-6 : 1e-8;
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
+  return so;
+}
+
+ceres::Solver::Summary Refiner::solve(bool robust, bool &solved)
+{
+  ceres::Problem problem;
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  addMotionBlocks(problem, *ordering);
+  addMotionPriors(problem);
+  const int observations = addObservations(problem, *ordering, robust);
+  ceres::Solver::Summary summary;
+  solved = observations > 0;
+  if (!solved)
+    return summary;
+
+  ceres::Solver::Options so = solverOptions(robust);
+  so.linear_solver_ordering = ordering;
   std::unique_ptr<ProgressCallback> callback;
   if (o_.progress) {
     callback = std::make_unique<ProgressCallback>(
@@ -630,17 +675,18 @@ void Refiner::flagOutliers()
   }
 }
 
-RefineResult Refiner::run()
+void Refiner::checkOptions() const
 {
   o_.noise.validate();
   o_.gates.validate();
   if (!(o_.robust_threshold_px > 0) || !(o_.outlier_threshold_px > 0) || o_.max_iterations < 0)
     throw Error("refine: the robust and outlier thresholds must be positive, max_iterations non-negative");
-  prepare();
-  initialise();
+}
 
-  RefineResult result;
-  result.available = true;
+/* The robust solve, the outliers it shows, then the final solve on the inliers: the iterations,
+   costs and convergence into result. */
+void Refiner::optimise(RefineResult &result)
+{
   bool solved = false;
   const ceres::Solver::Summary robust = solve(true, solved);
   if (solved)
@@ -654,8 +700,11 @@ RefineResult Refiner::run()
     result.final_cost = final_summary.final_cost;
     result.converged = final_summary.termination_type == ceres::CONVERGENCE;
   }
+}
 
-  // Gates on the refined motion and inliers.
+/* Gates on the refined motion and inliers. */
+void Refiner::gateRefined()
+{
   for (TrackData &t : data_) {
     if (!t.active)
       continue;
@@ -663,37 +712,42 @@ RefineResult Refiner::run()
     if (t.status == Status::Ok && (!(t.point[2] > 0) || !(cameraPoint(t, t.report_row).z() > 0)))
       t.status = Status::Behind;
   }
+}
 
-  // Covariance of every point in the final problem.
-  std::vector<Eigen::Matrix3d> cov;
-  std::vector<int> index(data_.size(), -1);
-  if (o_.compute_covariance) {
-    if (o_.progress)
-      o_.progress(progressAt(RefineProgress::Stage::Covariance));
-    Model m = model_;
-    for (const auto &f : state_.frames) {
-      m.poses.push_back({f[0], f[1], f[2], f[3], model_.general ? f[4] : 0.0, model_.general ? f[5] : 0.0});
-      m.yaws.push_back(f[yawIndex()]);
-    }
-    for (std::size_t i = 0; i < data_.size(); ++i) {
-      const TrackData &t = data_[i];
-      if (!t.active)
-        continue;
-      index[i] = static_cast<int>(m.points.size());
-      for (std::size_t j = 0; j < t.rows.size(); ++j)
-        if (!t.outlier[j])
-          m.observations.push_back({index[i], t.rows[j], t.w[j]});
-      m.points.push_back(t.point);
-      m.anchor_row.push_back(t.anchor_row);
-      m.report_row.push_back(t.report_row);
-    }
-    std::vector<char> ok;
-    pointCovariances(m, true, cov, ok);
-    for (std::size_t i = 0; i < data_.size(); ++i)
-      if (index[i] >= 0 && !ok[index[i]] && data_[i].status == Status::Ok)
-        data_[i].status = Status::Degenerate;
+/* Covariance of every active point in the final problem (cov[index[i]] for track i, index -1 for
+   an inactive one); an Ok point whose covariance fails becomes Degenerate. */
+void Refiner::computeCovariances(std::vector<Eigen::Matrix3d> &cov, std::vector<int> &index)
+{
+  if (o_.progress)
+    o_.progress(progressAt(RefineProgress::Stage::Covariance));
+  Model m = model_;
+  for (const auto &f : state_.frames) {
+    m.poses.push_back({f[0], f[1], f[2], f[3], model_.general ? f[4] : 0.0, model_.general ? f[5] : 0.0});
+    m.yaws.push_back(f[yawIndex()]);
   }
+  for (std::size_t i = 0; i < data_.size(); ++i) {
+    const TrackData &t = data_[i];
+    if (!t.active)
+      continue;
+    index[i] = static_cast<int>(m.points.size());
+    for (std::size_t j = 0; j < t.rows.size(); ++j)
+      if (!t.outlier[j])
+        m.observations.push_back({index[i], t.rows[j], t.w[j]});
+    m.points.push_back(t.point);
+    m.anchor_row.push_back(t.anchor_row);
+    m.report_row.push_back(t.report_row);
+  }
+  std::vector<char> ok;
+  pointCovariances(m, true, cov, ok);
+  for (std::size_t i = 0; i < data_.size(); ++i)
+    if (index[i] >= 0 && !ok[index[i]] && data_[i].status == Status::Ok)
+      data_[i].status = Status::Degenerate;
+}
 
+/* Every track's estimate and outlier flags into result (cov and index from computeCovariances). */
+void Refiner::writePoints(RefineResult &result, const std::vector<Eigen::Matrix3d> &cov,
+                          const std::vector<int> &index) const
+{
   result.points.resize(data_.size());
   result.outliers.resize(data_.size());
   for (std::size_t i = 0; i < data_.size(); ++i) {
@@ -710,6 +764,11 @@ RefineResult Refiner::run()
     if (index[i] >= 0)
       e.c_cov = cov[index[i]];
   }
+}
+
+/* The motion log with the refined poses and yaws. */
+void Refiner::writeMotion(RefineResult &result) const
+{
   result.motion = motion_;
   for (std::size_t r = 0; r < motion_.size(); ++r) {
     const auto &f = state_.frames[r];
@@ -725,6 +784,26 @@ RefineResult Refiner::run()
     else
       s.heading += f[4]; // a planar log in the general chain: only dy is free
   }
+}
+
+RefineResult Refiner::run()
+{
+  checkOptions();
+  prepare();
+  initialise();
+
+  RefineResult result;
+  result.available = true;
+  optimise(result);
+  gateRefined();
+
+  std::vector<Eigen::Matrix3d> cov;
+  std::vector<int> index(data_.size(), -1);
+  if (o_.compute_covariance)
+    computeCovariances(cov, index);
+
+  writePoints(result, cov, index);
+  writeMotion(result);
   return result;
 }
 

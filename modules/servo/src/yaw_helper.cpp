@@ -176,19 +176,11 @@ Candidate evaluate(const Scene &sc, double target, const YawHelperOptions &o)
   return c;
 }
 
-} // namespace
-
-YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig, double yaw,
-                                   const Eigen::Vector3d &v_velocity, const std::vector<YawHelperFeature> &features,
-                                   const YawHelperOptions &options)
+/* The features as the candidates see them (each checked): vision-frame points, weights, priors and
+   whether each is in view now. */
+Scene makeScene(const CameraModel &camera, const YawRig &rig, double yaw, const Eigen::Vector3d &v_velocity,
+                const std::vector<YawHelperFeature> &features, const YawHelperOptions &options)
 {
-  options.validate();
-  if (camera.width() == 0 || camera.height() == 0)
-    throw Error("yaw helper: the camera needs an image size");
-  if (features.empty())
-    throw Error("yaw helper: no features");
-  if (!std::isfinite(yaw) || !v_velocity.allFinite())
-    throw Error("yaw helper: yaw and velocity must be finite");
   Scene sc{camera, rig, yaw, v_velocity, {}, {}, {}, {}, rig.visionPoint(yaw, Eigen::Vector3d::Zero()), validRadius(camera),
            features};
   for (const YawHelperFeature &f : features) {
@@ -205,6 +197,67 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
     Eigen::Vector2d uv;
     sc.in_view_now.push_back(inImage(camera, sc.valid_radius, c_P, options.margin_px, &uv));
   }
+  return sc;
+}
+
+// Below this, nothing is learnt (the round-off of a camera that does not translate): recentre only.
+constexpr double kNoInformation = 1e-6;
+
+/* The largest information among the candidates that keep the features in view (all when none does). */
+double maxInformation(const std::vector<Candidate> &cands, bool any_keeps)
+{
+  double jmax = 0;
+  for (const Candidate &c : cands)
+    if (c.keeps || !any_keeps)
+      jmax = std::max(jmax, c.information);
+  return jmax;
+}
+
+/* A candidate's score: its information relative to jmax less the centring penalty. */
+double candidateScore(const Candidate &c, double jmax, const YawHelperOptions &o)
+{
+  if (jmax > kNoInformation)
+    return c.information / jmax - o.centring_weight * c.centring;
+  return -c.centring; // nothing to learn: recentre the features
+}
+
+/* The best-scoring candidate among those that keep the features in view (all when none does); with
+   hysteresis, the current yaw's (cands.front()) unless the best is clearly better. */
+const Candidate &bestCandidate(const std::vector<Candidate> &cands, double yaw, double jmax, bool any_keeps,
+                               const YawHelperOptions &o)
+{
+  const Candidate *best = nullptr;
+  double best_score = -std::numeric_limits<double>::infinity();
+  for (const Candidate &c : cands) {
+    if (any_keeps && !c.keeps)
+      continue;
+    // Ties (e.g. no translation) go to the smallest change of yaw.
+    const double sc_c = candidateScore(c, jmax, o) - 1e-9 * std::abs(c.yaw - yaw);
+    if (sc_c > best_score) {
+      best_score = sc_c;
+      best = &c;
+    }
+  }
+  const Candidate &now = cands.front();
+  if (best != &now && (now.keeps || !any_keeps) && candidateScore(now, jmax, o) >= best_score - o.switch_margin)
+    best = &now;
+  return *best;
+}
+
+} // namespace
+
+YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig, double yaw,
+                                   const Eigen::Vector3d &v_velocity, const std::vector<YawHelperFeature> &features,
+                                   const YawHelperOptions &options)
+{
+  options.validate();
+  if (camera.width() == 0 || camera.height() == 0)
+    throw Error("yaw helper: the camera needs an image size");
+  if (features.empty())
+    throw Error("yaw helper: no features");
+  if (!std::isfinite(yaw) || !v_velocity.allFinite())
+    throw Error("yaw helper: yaw and velocity must be finite");
+  const Scene sc = makeScene(camera, rig, yaw, v_velocity, features, options);
 
   const double reach = options.max_rate * options.horizon;
   const double lo = std::max(options.min_yaw, yaw - reach), hi = std::min(options.max_yaw, yaw + reach);
@@ -230,36 +283,12 @@ YawRecommendation recommendYawRate(const CameraModel &camera, const YawRig &rig,
   for (int k = 0; k < options.candidates; ++k)
     cands.push_back(evaluate(sc, lo + (hi - lo) * k / (options.candidates - 1.0), options));
   const bool any_keeps = std::any_of(cands.begin(), cands.end(), [](const Candidate &c) { return c.keeps; });
-  double jmax = 0;
-  for (const Candidate &c : cands)
-    if (c.keeps || !any_keeps)
-      jmax = std::max(jmax, c.information);
-  // Below this, nothing is learnt (the round-off of a camera that does not translate): recentre only.
-  constexpr double kNoInformation = 1e-6;
-  const auto score = [&](const Candidate &c) {
-    if (jmax > kNoInformation)
-      return c.information / jmax - options.centring_weight * c.centring;
-    return -c.centring; // nothing to learn: recentre the features
-  };
-  const Candidate *best = nullptr;
-  double best_score = -std::numeric_limits<double>::infinity();
-  for (const Candidate &c : cands) {
-    if (any_keeps && !c.keeps)
-      continue;
-    // Ties (e.g. no translation) go to the smallest change of yaw.
-    const double sc_c = score(c) - 1e-9 * std::abs(c.yaw - yaw);
-    if (sc_c > best_score) {
-      best_score = sc_c;
-      best = &c;
-    }
-  }
-  // Hysteresis: hold the current yaw unless the best candidate is clearly better.
-  if (best != &cands.front() && (now.keeps || !any_keeps) && score(now) >= best_score - options.switch_margin)
-    best = &cands.front();
-  r.target_yaw = best->yaw;
+  const double jmax = maxInformation(cands, any_keeps);
+  const Candidate &best = bestCandidate(cands, yaw, jmax, any_keeps, options);
+  r.target_yaw = best.yaw;
   r.rate = rateToward(options, yaw, r.target_yaw);
-  r.parallax_target = best->parallax;
-  r.information_target = best->information;
+  r.parallax_target = best.parallax;
+  r.information_target = best.information;
   r.feasible = any_keeps;
   r.mode = jmax > kNoInformation ? YawMode::Measure : YawMode::Recentre;
   return r;

@@ -36,23 +36,22 @@ Eigen::Vector3d Scene::cameraPoint(const YawRig &rig, long id, std::size_t index
   return R * w_points.at(static_cast<std::size_t>(id)) + t;
 }
 
-Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOptions &o)
-{
-  o.validate();
-  const double width = camera.width() > 0 ? camera.width() : 640.0;
-  const double height = camera.height() > 0 ? camera.height() : 480.0;
-  std::mt19937_64 rng(o.seed);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::uniform_real_distribution<double> uni(0.0, 1.0);
+namespace {
 
-  Scene scene;
-  const bool six_dof = !o.vision_poses.empty();
-  // True trajectory: steps along the vision frame's own axes, so a turning robot curves.
+using Rng = std::mt19937_64;
+using Gauss = std::normal_distribution<double>;
+using Uniform = std::uniform_real_distribution<double>;
+
+/* True trajectory: the given vision poses, or steps along the vision frame's own axes, so a
+   turning robot curves. */
+std::vector<MotionSample> trueTrajectory(const SceneOptions &o, bool six_dof)
+{
+  std::vector<MotionSample> truth;
   MotionSample s;
   s.heading = o.heading;
   s.yaw = o.yaw;
   for (int k = 0; six_dof && k < o.frames; ++k)
-    scene.truth.push_back(MotionSample::fromPose(k, o.vision_poses[static_cast<std::size_t>(k)], o.yaw + k * o.yaw_rate));
+    truth.push_back(MotionSample::fromPose(k, o.vision_poses[static_cast<std::size_t>(k)], o.yaw + k * o.yaw_rate));
   for (int k = 0; !six_dof && k < o.frames; ++k) {
     s.frame = k;
     if (k > 0) {
@@ -63,15 +62,16 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
       s.heading += o.turn_rate;
       s.yaw += o.yaw_rate;
     }
-    scene.truth.push_back(s);
+    truth.push_back(s);
   }
-  // Dead reckoning: each increment (in the earlier vision frame) and heading change is perturbed
-  // and accumulated (or, for per-pose noise, each pose); each yaw reading is perturbed independently.
-  scene.measured = scene.truth;
-  const bool absolute = o.noise.motion_noise == MotionNoise::Absolute;
-  // Per-pose noise (kinematics, motion capture): each row errs independently about the truth.
-  for (int k = 0; absolute && k < o.frames; ++k) {
-    MotionSample &m = scene.measured[k];
+  return truth;
+}
+
+/* Per-pose noise (kinematics, motion capture): each row errs independently about the truth. */
+void perturbPoses(const SceneOptions &o, bool six_dof, Rng &rng, Gauss &gauss, std::vector<MotionSample> &measured)
+{
+  for (int k = 0; k < o.frames; ++k) {
+    MotionSample &m = measured[k];
     const Eigen::Vector3d p = m.position() + o.noise.sigma_odom * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
     m.x = p.x();
     m.y = p.y();
@@ -83,8 +83,15 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
       m.heading += o.noise.sigma_heading * gauss(rng);
     }
   }
-  for (int k = 1; !absolute && six_dof && k < o.frames; ++k) {
-    const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
+}
+
+/* Dead reckoning of a 6-DoF log: each increment (translation in the earlier vision frame, rotation)
+   is perturbed and accumulated. */
+void perturbIncrementsGeneral(const SceneOptions &o, const std::vector<MotionSample> &truth, Rng &rng, Gauss &gauss,
+                              std::vector<MotionSample> &measured)
+{
+  for (int k = 1; k < o.frames; ++k) {
+    const MotionSample &a = truth[k - 1], &b = truth[k];
     const Eigen::Matrix3d Ra = a.rotation();
     const Eigen::Vector3d d = Ra.transpose() * (b.position() - a.position());
     const double angle = Eigen::AngleAxisd(Ra.transpose() * b.rotation()).angle();
@@ -93,7 +100,7 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
     const Eigen::Vector3d n(gauss(rng), gauss(rng), gauss(rng));
     const Eigen::Matrix3d dR_noisy =
         Ra.transpose() * b.rotation() * expSO3<double>(incrementRotationSigma(o.noise, true, d.norm(), angle).cwiseProduct(n));
-    MotionSample &pm = scene.measured[k - 1], &m = scene.measured[k];
+    MotionSample &pm = measured[k - 1], &m = measured[k];
     const Eigen::Matrix3d Rpm = pm.rotation();
     const Eigen::Vector3d p = pm.position() + Rpm * d_noisy;
     m.x = p.x();
@@ -101,43 +108,58 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
     m.z = p.z();
     m.theta_u = logSO3(Rpm * dR_noisy);
   }
-  for (int k = 1; !absolute && !six_dof && k < o.frames; ++k) {
-    const MotionSample &a = scene.truth[k - 1], &b = scene.truth[k];
+}
+
+/* Dead reckoning of a planar log: each increment (in the earlier vision frame) and heading change is
+   perturbed and accumulated. */
+void perturbIncrementsPlanar(const SceneOptions &o, const std::vector<MotionSample> &truth, Rng &rng, Gauss &gauss,
+                             std::vector<MotionSample> &measured)
+{
+  for (int k = 1; k < o.frames; ++k) {
+    const MotionSample &a = truth[k - 1], &b = truth[k];
     const Eigen::Vector3d d = rotY(a.heading).transpose() * Eigen::Vector3d(b.x - a.x, b.y - a.y, b.z - a.z);
     const Eigen::Vector3d d_noisy =
         d + incrementTranslationSigma(o.noise, d.norm()) * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
     const double dh = b.heading - a.heading +
                       incrementRotationSigma(o.noise, false, d.norm(), std::fabs(b.heading - a.heading)).y() * gauss(rng);
-    MotionSample &pm = scene.measured[k - 1], &m = scene.measured[k];
+    MotionSample &pm = measured[k - 1], &m = measured[k];
     const Eigen::Vector3d w_d = rotY(pm.heading) * d_noisy;
     m.x = pm.x + w_d.x();
     m.y = pm.y + w_d.y();
     m.z = pm.z + w_d.z();
     m.heading = pm.heading + dh;
   }
-  for (auto &m : scene.measured)
-    m.yaw += o.noise.sigma_yaw * gauss(rng);
+}
 
-  // Points: uniform in the first image and in depth.
+/* Points uniform in the first image (inside the margin) and in depth, in the world frame. */
+std::vector<Eigen::Vector3d> randomPoints(const CameraModel &camera, const YawRig &rig, const MotionSample &first,
+                                          const SceneOptions &o, double width, double height, Rng &rng, Uniform &uni)
+{
   Eigen::Matrix3d R0;
   Eigen::Vector3d t0;
-  fromVisp(wMc(rig, scene.truth.front()), R0, t0);
-  for (int i = 0; o.world_points.empty() && i < o.points; ++i) {
+  fromVisp(wMc(rig, first), R0, t0);
+  std::vector<Eigen::Vector3d> w_points;
+  for (int i = 0; i < o.points; ++i) {
     const double u = o.margin_px + uni(rng) * std::max(0.0, width - 2 * o.margin_px);
     const double v = o.margin_px + uni(rng) * std::max(0.0, height - 2 * o.margin_px);
     const double Z = o.min_depth + uni(rng) * (o.max_depth - o.min_depth);
     Eigen::Vector2d m;
     if (!camera.undistort(Eigen::Vector2d(u, v), m))
       throw Error("simulate: the camera's distortion model cannot be inverted inside the image");
-    scene.w_points.emplace_back(R0 * (Z * Eigen::Vector3d(m.x(), m.y(), 1.0)) + t0);
+    w_points.emplace_back(R0 * (Z * Eigen::Vector3d(m.x(), m.y(), 1.0)) + t0);
   }
-  if (!o.world_points.empty())
-    scene.w_points = o.world_points;
-  // Observations.
+  return w_points;
+}
+
+/* One track per point: its noisy pixels in every frame where it is in front of the camera and
+   inside the image. */
+std::vector<Track> observeTracks(const Scene &scene, const CameraModel &camera, const YawRig &rig,
+                                 const SceneOptions &o, double width, double height, Rng &rng, Gauss &gauss)
+{
   const int points = static_cast<int>(scene.w_points.size());
-  scene.tracks.resize(static_cast<std::size_t>(points));
+  std::vector<Track> tracks(static_cast<std::size_t>(points));
   for (int i = 0; i < points; ++i)
-    scene.tracks[i].id = i;
+    tracks[i].id = i;
   for (std::size_t k = 0; k < scene.truth.size(); ++k) {
     for (int i = 0; i < points; ++i) {
       const Eigen::Vector3d c_P = scene.cameraPoint(rig, i, k);
@@ -150,9 +172,43 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
       ob.frame = scene.truth[k].frame;
       ob.u = uv.x() + o.noise.sigma_px * gauss(rng);
       ob.v = uv.y() + o.noise.sigma_px * gauss(rng);
-      scene.tracks[i].observations.push_back(ob);
+      tracks[i].observations.push_back(ob);
     }
   }
+  return tracks;
+}
+
+} // namespace
+
+Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOptions &o)
+{
+  o.validate();
+  const double width = camera.width() > 0 ? camera.width() : 640.0;
+  const double height = camera.height() > 0 ? camera.height() : 480.0;
+  Rng rng(o.seed);
+  Gauss gauss(0.0, 1.0);
+  Uniform uni(0.0, 1.0);
+
+  Scene scene;
+  const bool six_dof = !o.vision_poses.empty();
+  scene.truth = trueTrajectory(o, six_dof);
+  // The measured motion: per-pose noise, or dead reckoning (each increment perturbed and
+  // accumulated); each yaw reading is perturbed independently.
+  scene.measured = scene.truth;
+  if (o.noise.motion_noise == MotionNoise::Absolute)
+    perturbPoses(o, six_dof, rng, gauss, scene.measured);
+  else if (six_dof)
+    perturbIncrementsGeneral(o, scene.truth, rng, gauss, scene.measured);
+  else
+    perturbIncrementsPlanar(o, scene.truth, rng, gauss, scene.measured);
+  for (auto &m : scene.measured)
+    m.yaw += o.noise.sigma_yaw * gauss(rng);
+
+  if (o.world_points.empty())
+    scene.w_points = randomPoints(camera, rig, scene.truth.front(), o, width, height, rng, uni);
+  else
+    scene.w_points = o.world_points;
+  scene.tracks = observeTracks(scene, camera, rig, o, width, height, rng, gauss);
   return scene;
 }
 
