@@ -158,7 +158,7 @@ Eigen::Vector3d readYawAxis(const std::string &path, const YAML::Node &axis)
     a(static_cast<Eigen::Index>(i)) = finiteNumber(path, axis[i], "'yaw_axis' value " + std::to_string(i + 1));
   if (!(a.norm() > 1e-9))
     throwError(where(path, axis.Mark()) + "'yaw_axis' must not be zero");
-  const Eigen::Vector3d yaw_axis = a.normalized();
+  Eigen::Vector3d yaw_axis = a.normalized();
   // The estimators turn the camera about the vision frame's +Y: an axis far from it would be
   // silently wrong, so it is refused (a measured tilt of a degree or two is tolerated).
   constexpr double kMaxAxisTiltDeg = 2.0;
