@@ -9,7 +9,7 @@ set -euo pipefail
 build=${1:?usage: fine_log.sh BUILD_DIR [FIRST_SEED LAST_SEED [METHODS]]}
 first=${2:-1} last=${3:-8} methods=${4:-fused}
 here=$(cd "$(dirname "$0")/.." && pwd)
-yd="$build/tools/yawdepth/yawdepth"
+yd="$build/tools/yawdepth"
 [ -x "$yd" ] || { echo "fine_log.sh: $yd not found (build the yawdepth target)" >&2; exit 2; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
