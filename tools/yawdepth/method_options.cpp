@@ -126,26 +126,6 @@ private:
 
 } // namespace
 
-std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                                     const std::vector<Track> &tracks, const MethodArgs &args,
-                                     std::vector<std::vector<bool>> &outliers, std::vector<MotionSample> *motion_estimate)
-{
-  PipelineOptions po;
-  po.method = methodFromString(args.method);
-  po.noise = args.noise;
-  po.gates = args.gates;
-  po.robust_threshold_px = args.robust_px;
-  po.outlier_threshold_px = args.outlier_px;
-  po.threads = args.threads;
-  ProgressLine line(args.progress && po.method == Method::Refine);
-  po.progress = line.callback();
-  PipelineResult r = estimatePoints(camera, rig, motion, tracks, po);
-  outliers = std::move(r.outliers);
-  if (motion_estimate)
-    *motion_estimate = std::move(r.motion);
-  return std::move(r.points);
-}
-
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers)
 {
   std::vector<Track> rejected;
@@ -164,14 +144,22 @@ std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const 
 MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
                          const std::vector<Track> &tracks, const MethodArgs &args)
 {
-  MethodArgs method = args;
-  method.noise = noiseForLog(args, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
+  PipelineOptions po;
+  po.method = methodFromString(args.method);
+  po.noise = noiseForLog(args, !motion.samples.empty() && motion.samples.front().six_dof, motion.yaw_column);
+  po.gates = args.gates;
+  po.robust_threshold_px = args.robust_px;
+  po.outlier_threshold_px = args.outlier_px;
+  po.threads = args.threads;
+  ProgressLine line(args.progress && po.method == Method::Refine);
+  po.progress = line.callback();
+  PipelineResult r = estimatePoints(camera, rig, motion.samples, tracks, po);
   MethodRun run;
-  const std::vector<PointEstimate> estimates =
-      runMethod(camera, rig, motion.samples, tracks, method, run.outliers, &run.motion_estimate);
+  run.outliers = std::move(r.outliers);
+  run.motion_estimate = std::move(r.motion);
   run.rows.reserve(tracks.size());
   for (std::size_t i = 0; i < tracks.size(); ++i)
-    run.rows.push_back({tracks[i].id, estimates[i]});
+    run.rows.push_back({tracks[i].id, r.points[i]});
   return run;
 }
 

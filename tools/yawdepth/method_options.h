@@ -57,28 +57,20 @@ std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const
                              const NoiseModel &noise, const KltArgs &args, bool quiet,
                              std::map<std::pair<long, long>, int> *gray = nullptr);
 
-/*!
-  \brief Run the chosen method on every track (same order), through yawdepth::estimatePoints(): unusable
-  observations out and flagged, refine started from fused, a progress line for long refine solves.
-  \param outliers Receives, per track and observation, whether it was rejected as an outlier.
-  \param motion_estimate When given, receives the motion log as the method estimated it (refine's
-  refined rows; the measured rows for the other methods): where each point's frame is in the world.
-*/
-std::vector<PointEstimate> runMethod(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                                     const std::vector<Track> &tracks, const MethodArgs &args,
-                                     std::vector<std::vector<bool>> &outliers,
-                                     std::vector<MotionSample> *motion_estimate = nullptr);
 /*! \brief The observations flagged in `outliers`, as tracks (for --outliers). */
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers);
 
-/*! \brief What runMethodOnLog() gives: a points row per track (same order), the outlier flags and the
-    motion as the method estimated it (see runMethod()). */
+/*! \brief What runMethodOnLog() gives: a points row per track (same order), the outlier flags per
+    track and observation, and the motion as the method estimated it (refine's refined rows; the
+    measured rows for the other methods): where each point's frame is in the world. */
 struct MethodRun {
   std::vector<PointRow> rows;
   std::vector<std::vector<bool>> outliers;
   std::vector<MotionSample> motion_estimate;
 };
-/*! \brief runMethod() on the samples of `motion` with the noise model of that log (noiseForLog()). */
+/*! \brief The chosen method on every track of a motion log, with the noise model of that log
+    (noiseForLog()), through yawdepth::estimatePoints() (unusable observations out and flagged, refine
+    started from fused), with a progress line for long refine solves. */
 MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
                          const std::vector<Track> &tracks, const MethodArgs &args);
 /*!
