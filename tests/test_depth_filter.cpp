@@ -10,6 +10,14 @@
 
 using namespace yawdepth;
 
+// The filter's raw state and covariance, private to the library, read here to check the prediction.
+namespace yawdepth {
+struct DepthFilterTestAccess {
+  static const Eigen::Vector4d &state(const DepthFilter &f) { return f.s_; }
+  static const Eigen::Matrix4d &covariance(const DepthFilter &f) { return f.P_; }
+};
+} // namespace yawdepth
+
 namespace {
 
 constexpr double kFdTol = 1e-6;          // relative, central differences vs analytic derivatives
@@ -93,11 +101,11 @@ TEST_CASE("prediction: exact mean, covariance J P J^T + G Q G^T checked by finit
     Eigen::Matrix2d mcov;
     mcov << 3e-8, 1e-9, 1e-9, 2e-8;
     f.initialize(0, a.yaw, Eigen::Vector2d(0.05, -0.02), mcov);
-    const Eigen::Vector4d s0 = f.state();
-    const Eigen::Matrix4d P0 = f.covariance();
+    const Eigen::Vector4d s0 = DepthFilterTestAccess::state(f);
+    const Eigen::Matrix4d P0 = DepthFilterTestAccess::covariance(f);
     REQUIRE(f.step(inc) == DepthFilter::Update::PredictOnly);
     const Eigen::Vector3d expect = exactPrediction(a, b, s0.head<3>(), Eigen::Matrix<double, 8, 1>::Zero());
-    CHECK((f.state().head<3>() - expect).norm() < 1e-14);
+    CHECK((DepthFilterTestAccess::state(f).head<3>() - expect).norm() < 1e-14);
     // Finite-difference Jacobian with respect to w = (x, y, rho, e_prev, d(3), rot(3), e_cur).
     Eigen::Matrix<double, 4, 11> J = Eigen::Matrix<double, 4, 11>::Zero();
     const double h = 1e-7;
@@ -125,7 +133,7 @@ TEST_CASE("prediction: exact mean, covariance J P J^T + G Q G^T checked by finit
     Pw(9, 9) = six_dof ? sr2 : 0.0;
     Pw(10, 10) = o.noise.sigma_yaw * o.noise.sigma_yaw;
     const Eigen::Matrix4d P_fd = J * Pw * J.transpose();
-    CHECK((P_fd - f.covariance()).norm() < 1e-5 * P_fd.norm());
+    CHECK((P_fd - DepthFilterTestAccess::covariance(f)).norm() < 1e-5 * P_fd.norm());
   }
 }
 

@@ -162,12 +162,11 @@ public:
   int inliers() const { return inliers_; }   //!< Observations used, the first one included.
   int outliers() const { return outliers_; } //!< Observations rejected since the last (re)start.
   double parallaxPx() const { return parallax_px_; } //!< Largest rotation-compensated parallax so far (px).
-  /*! \brief The state vector (its third component is the log-inverse depth lambda). */
-  const Eigen::Vector4d &state() const { return s_; }
-  /*! \brief The state's covariance. */
-  const Eigen::Matrix4d &covariance() const { return P_; }
 
 private:
+  // The tests check the raw state (x, y, lambda, e) and its covariance against finite differences;
+  // users read the point through estimate(), depth() and logDepthSigma().
+  friend struct DepthFilterTestAccess;
   Options o_;
   double kx_, ky_;
   bool initialized_ = false;
