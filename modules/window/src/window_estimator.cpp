@@ -122,6 +122,14 @@ struct WindowEstimator::Impl {
   Layout layout;
   Eigen::LLT<Eigen::MatrixXd> llt;
   bool llt_ok = false;
+  // Workspaces, kept between frames: the solves' sizes barely change from frame to frame, and a
+  // fresh 100 kB matrix per solve costs more in page faults than its factorisation.
+  struct Workspace {
+    Eigen::MatrixXd H;
+    Eigen::VectorXd g, g_new;
+  };
+  Workspace ws_state, ws_align, ws_marg; // the state's solves, the new frame's alignment, marginalisation
+  Eigen::LLT<Eigen::MatrixXd> llt_align;
   double c_robust = 1;    // Cauchy scale in whitened units
   double c_outlier_sq = 4; // squared outlier threshold in whitened units
 
@@ -494,15 +502,17 @@ struct WindowEstimator::Impl {
     linearize()). After each step the gradient at the new point and the last factorisation predict
     what another iteration would gain; below options.convergence the solve stops (the remainder is carried
     into the next frame's solve, or into the prior exactly, with its gradient). Returns the
-    factorisations made; `llt` keeps the last one.
+    factorisations made; `L` keeps the last one and `L_ok` says whether it holds one.
   */
-  int gaussNewton(const Layout &l, Phase phase, int only_frame = -1)
+  int gaussNewton(const Layout &l, Phase phase, int only_frame, Workspace &ws, Eigen::LLT<Eigen::MatrixXd> &L,
+                  bool &L_ok)
   {
-    llt_ok = false;
+    L_ok = false;
     if (l.n == 0)
       return 0;
-    Eigen::MatrixXd H;
-    Eigen::VectorXd g;
+    Eigen::MatrixXd &H = ws.H;
+    Eigen::VectorXd &g = ws.g;
+    Eigen::VectorXd &g_new = ws.g_new;
     int factorisations = 0;
     bool refactor = true; // false: a chord step, with the last factorisation and the new gradient
     int chords = 0;
@@ -511,25 +521,24 @@ struct WindowEstimator::Impl {
       if (refactor) {
         if (it > 0)
           cost = linearize(l, phase, only_frame, &H, &g);
-        llt.compute(H);
+        L.compute(H);
         ++factorisations;
-        if (llt.info() != Eigen::Success) {
+        if (L.info() != Eigen::Success) {
           // A direction without information (the priors should prevent it): damp it.
           H.diagonal() += 1e-9 * H.diagonal().cwiseAbs() + Eigen::VectorXd::Constant(l.n, 1e-12);
-          llt.compute(H);
-          if (llt.info() != Eigen::Success)
+          L.compute(H);
+          if (L.info() != Eigen::Success)
             return factorisations;
         }
-        llt_ok = true;
+        L_ok = true;
       }
-      const Eigen::VectorXd dx = llt.solve(-g);
+      const Eigen::VectorXd dx = L.solve(-g);
       if (!dx.allFinite())
         return factorisations;
       const double predicted = -0.5 * g.dot(dx);
       const Saved s = save();
       double scale = 1.0;
       bool accepted = false;
-      Eigen::VectorXd g_new;
       for (int h = 0; h < (refactor ? 6 : 1); ++h, scale *= 0.5) {
         applyStep(l, dx, scale);
         // The full step usually holds: its gradient comes with its cost, for the next prediction.
@@ -551,8 +560,8 @@ struct WindowEstimator::Impl {
         continue;
       }
       // What would the next step gain? 0.5 g^T H^-1 g with the new gradient and the last factorisation.
-      g = std::move(g_new);
-      const double next = 0.5 * g.dot(llt.solve(g));
+      g.swap(g_new);
+      const double next = 0.5 * g.dot(L.solve(g));
       if (next < o.convergence || factorisations >= o.max_iterations)
         break;
       // Cheap chord steps while the last factorisation still predicts fast progress (the remainder
@@ -567,7 +576,7 @@ struct WindowEstimator::Impl {
   int solve(Phase phase)
   {
     layout = stateLayout();
-    return gaussNewton(layout, phase);
+    return gaussNewton(layout, phase, -1, ws_state, llt, llt_ok);
   }
 
   /* The new frame alone against the state (a 7-parameter solve): a start that the full solve
@@ -583,8 +592,9 @@ struct WindowEstimator::Impl {
       return;
     l.frame_offset.back() = 0;
     l.n = d;
-    gaussNewton(l, Phase::Robust, static_cast<int>(frames.size()) - 1);
-    llt_ok = false;
+    bool aligned = false;
+    gaussNewton(l, Phase::Robust, static_cast<int>(frames.size()) - 1, ws_align, llt_align, aligned);
+    llt_ok = false; // the state's last factorisation no longer matches it (a new frame)
   }
 
   /* Flag every observation of the state's features by its reprojection error; true if a flag changed. */
@@ -904,8 +914,8 @@ struct WindowEstimator::Impl {
         std::copy(ft.p, ft.p + 3, ft.p_fej);
       }
     }
-    Eigen::MatrixXd H;
-    Eigen::VectorXd g;
+    Eigen::MatrixXd &H = ws_marg.H;
+    Eigen::VectorXd &g = ws_marg.g;
     linearize(l, Phase::Inliers, 0, &H, &g);
 
     // Drop the oldest frame's components and the leaving features'.
@@ -913,8 +923,8 @@ struct WindowEstimator::Impl {
       return (v.is_frame && v.key == frame0) ||
              (!v.is_frame && std::find(leaving.begin(), leaving.end(), v.key) != leaving.end());
     });
-    Hp = std::move(H);
-    gp = std::move(g);
+    Hp.swap(H); // the old prior's storage is the next blanket system's
+    gp.swap(g);
 
     // Observations of the oldest frame leave the window: their flags are final; gates remember them.
     for (auto &kv : features) {
