@@ -32,6 +32,15 @@ MotionSample sample(long frame, double x, double z, double heading, double yaw)
   return s;
 }
 
+/* The row of `frame` in the scene's motion log. */
+std::size_t rowOf(const Scene &scene, long frame)
+{
+  std::size_t row = 0;
+  while (scene.truth[row].frame != frame)
+    ++row;
+  return row;
+}
+
 /* Options of the `fused` method. */
 TrackEstimatorOptions fusedOptions()
 {
@@ -176,10 +185,7 @@ TEST_CASE("fused converges to the truth on noise-free sequences, with rotation",
         if (!est[i].ok())
           continue;
         ++ok;
-        const auto &obs = scene.tracks[i].observations;
-        std::size_t row = 0;
-        while (scene.truth[row].frame != obs.back().frame)
-          ++row;
+        const std::size_t row = rowOf(scene, scene.tracks[i].observations.back().frame);
         const Eigen::Vector3d truth = scene.cameraPoint(kRig, static_cast<long>(i), row);
         INFO("yaw " << yaw << " turn " << turn << " id " << i);
         REQUIRE((est[i].c_P - truth).norm() < kNoiseFreeRelTol * truth.norm());
@@ -214,9 +220,7 @@ TEST_CASE("fused, exact and paper on noise-free 6-DoF arm paths with a hand-eye 
         if (!est[i].ok())
           continue;
         ++ok;
-        std::size_t row = 0;
-        while (scene.truth[row].frame != est[i].frame)
-          ++row;
+        const std::size_t row = rowOf(scene, est[i].frame);
         const Eigen::Vector3d truth = scene.cameraPoint(rig, static_cast<long>(i), row);
         INFO("path " << static_cast<int>(path) << " method " << static_cast<int>(method) << " id " << i);
         const double tol = kNoiseFreeRelTol;
