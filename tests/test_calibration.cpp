@@ -462,15 +462,34 @@ std::vector<double> yawReadings(double from_deg, double to_deg, int n)
   return r;
 }
 
-} // namespace
-
-TEST_CASE("calibrate-rig: offset, axis and yaw zero of a board standing square", "[calibration][rig][slow]")
-{
+/* The rig calibration scenes: the wide camera, a 6x5 board of 30 mm squares, the true rig. */
+struct RigScene {
   const CameraModel camera = wideCamera();
   const BoardLayout board = chessboard(6, 5, 0.03);
   const RigTruth truth;
-  const std::vector<RigView> views =
-      renderRig(camera, board, truth, boardAhead(board, 0.75, 0.0), {Eigen::Vector3d::Zero()}, yawReadings(-25, 25, 9));
+  /* The views of a static robot, the board 0.75 m ahead turned by `board_angle`, at `count` yaw
+     readings from `from_deg` to `to_deg`. */
+  std::vector<RigView> staticViews(double board_angle, double from_deg, double to_deg, int count) const
+  {
+    return renderRig(camera, board, truth, boardAhead(board, 0.75, board_angle), {Eigen::Vector3d::Zero()},
+                     yawReadings(from_deg, to_deg, count));
+  }
+};
+
+/* What calibrate-rig finds on every scene: the observable offset (x, z), the yaw axis, a small RMS. */
+void checkRigGeometry(const RigCalibration &rig, const RigTruth &truth)
+{
+  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < kRigOffsetTol);
+  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < kRigOffsetTol);
+  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < kRigAxisTol);
+  CHECK(rig.rms_px < kRigRmsTolPx);
+}
+
+} // namespace
+
+TEST_CASE_METHOD(RigScene, "calibrate-rig: offset, axis and yaw zero of a board standing square", "[calibration][rig][slow]")
+{
+  const std::vector<RigView> views = staticViews(0.0, -25, 25, 9);
   RigCalibrationOptions o;
   o.board_square = true;
   o.initial_offset = Eigen::Vector3d(0, truth.t0.y(), 0); // the unobservable component, as a user would give it
@@ -480,12 +499,9 @@ TEST_CASE("calibrate-rig: offset, axis and yaw zero of a board standing square",
              << rig.yaw_axis.transpose() << " +- " << rig.yaw_axis_sigma.transpose() << "; rms " << rig.rms_px
              << " px, " << rig.iterations << " iterations");
   CHECK(rig.yaw_zero == YawZeroSource::BoardSquare);
-  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < kRigOffsetTol);
-  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < kRigOffsetTol);
+  checkRigGeometry(rig, truth);
   CHECK(rig.camera_offset.y() == truth.t0.y());
   CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < kRigYawZeroTol);
-  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < kRigAxisTol);
-  CHECK(rig.rms_px < kRigRmsTolPx);
   // The uncertainties are honest: the errors are within 4 sigma, and the sigmas are small.
   CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < 4 * rig.camera_offset_sigma.x() + 1e-5);
   CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < 4 * rig.yaw_offset_sigma + 1e-5);
@@ -507,30 +523,20 @@ TEST_CASE("calibrate-rig: offset, axis and yaw zero of a board standing square",
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("calibrate-rig: static robot, board at an angle: offset found, yaw zero kept", "[calibration][rig]")
+TEST_CASE_METHOD(RigScene, "calibrate-rig: static robot, board at an angle: offset found, yaw zero kept", "[calibration][rig]")
 {
-  const CameraModel camera = wideCamera();
-  const BoardLayout board = chessboard(6, 5, 0.03);
-  const RigTruth truth;
-  const std::vector<RigView> views = renderRig(camera, board, truth, boardAhead(board, 0.75, 12 * kDeg),
-                                               {Eigen::Vector3d::Zero()}, yawReadings(-25, 25, 7));
+  const std::vector<RigView> views = staticViews(12 * kDeg, -25, 25, 7);
   const RigCalibration rig = calibrateRig(camera, board, views); // closed-form start, y kept at 0
   INFO("t0 " << rig.camera_offset.transpose() << "; axis " << rig.yaw_axis.transpose());
   CHECK(rig.yaw_zero == YawZeroSource::Fixed);
   CHECK(rig.yaw_offset == 0.0);
   CHECK(rig.yaw_offset_sigma == 0.0);
-  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < kRigOffsetTol);
-  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < kRigOffsetTol);
+  checkRigGeometry(rig, truth);
   CHECK(rig.camera_offset.y() == 0.0);
-  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < kRigAxisTol);
-  CHECK(rig.rms_px < kRigRmsTolPx);
 }
 
-TEST_CASE("calibrate-rig: the robot's translation gives the yaw zero", "[calibration][rig][slow]")
+TEST_CASE_METHOD(RigScene, "calibrate-rig: the robot's translation gives the yaw zero", "[calibration][rig][slow]")
 {
-  const CameraModel camera = wideCamera();
-  const BoardLayout board = chessboard(6, 5, 0.03);
-  const RigTruth truth;
   const std::vector<RigView> views =
       renderRig(camera, board, truth, boardAhead(board, 0.85, -10 * kDeg),
                 {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.0, 0, 0.12), Eigen::Vector3d(0.03, 0, 0.24)},
@@ -539,32 +545,21 @@ TEST_CASE("calibrate-rig: the robot's translation gives the yaw zero", "[calibra
   INFO("t0 " << rig.camera_offset.transpose() << "; yaw offset " << rig.yaw_offset / kDeg << " +- "
              << rig.yaw_offset_sigma / kDeg << " deg");
   CHECK(rig.yaw_zero == YawZeroSource::RobotMotion);
-  CHECK(std::abs(rig.camera_offset.x() - truth.t0.x()) < kRigOffsetTol);
-  CHECK(std::abs(rig.camera_offset.z() - truth.t0.z()) < kRigOffsetTol);
+  checkRigGeometry(rig, truth);
   CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < kRigYawZeroTol);
-  CHECK(std::acos(std::min(1.0, rig.yaw_axis.dot(truth.axis))) < kRigAxisTol);
-  CHECK(rig.rms_px < kRigRmsTolPx);
 }
 
-TEST_CASE("calibrate-rig rejects too small a yaw spread and too few views", "[calibration][rig]")
+TEST_CASE_METHOD(RigScene, "calibrate-rig rejects too small a yaw spread and too few views", "[calibration][rig]")
 {
-  const CameraModel camera = wideCamera();
-  const BoardLayout board = chessboard(6, 5, 0.03);
-  const RigTruth truth;
-  const std::vector<RigView> views = renderRig(camera, board, truth, boardAhead(board, 0.75, 0.0),
-                                               {Eigen::Vector3d::Zero()}, yawReadings(-5, 5, 4));
+  const std::vector<RigView> views = staticViews(0.0, -5, 5, 4);
   CHECK_THROWS_WITH(calibrateRig(camera, board, views), Catch::Contains("yaw readings span only 10.0 deg"));
   const std::vector<RigView> two(views.begin(), views.begin() + 2);
   CHECK_THROWS_WITH(calibrateRig(camera, board, two), Catch::Contains("too few views"));
 }
 
-TEST_CASE("calibrate-rig refuses a failed fit: wrong yaw sign, degrees, shuffled readings", "[calibration][rig]")
+TEST_CASE_METHOD(RigScene, "calibrate-rig refuses a failed fit: wrong yaw sign, degrees, shuffled readings", "[calibration][rig]")
 {
-  const CameraModel camera = wideCamera();
-  const BoardLayout board = chessboard(6, 5, 0.03);
-  const RigTruth truth;
-  const std::vector<RigView> views = renderRig(camera, board, truth, boardAhead(board, 0.75, 0.0),
-                                               {Eigen::Vector3d::Zero()}, yawReadings(-30, 30, 5));
+  const std::vector<RigView> views = staticViews(0.0, -30, 30, 5);
   REQUIRE_NOTHROW(calibrateRig(camera, board, views));
   std::vector<RigView> flipped = views, degrees = views, shuffled = views;
   for (std::size_t i = 0; i < views.size(); ++i) {

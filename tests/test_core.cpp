@@ -15,59 +15,13 @@
 #include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
+#include "file_support.h"
+
 using namespace yawdepth;
+using namespace yawdepth::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-struct TempDir {
-  fs::path path;
-  TempDir()
-  {
-    std::string templ = (fs::temp_directory_path() / "yawdepth_test_core_XXXXXX").string();
-    REQUIRE(::mkdtemp(templ.data()) != nullptr);
-    path = templ;
-  }
-  ~TempDir()
-  {
-    std::error_code ec;
-    fs::permissions(path, fs::perms::owner_all, fs::perm_options::add, ec);
-    fs::remove_all(path, ec);
-  }
-  std::string file(const std::string &name) const { return (path / name).string(); }
-  std::string write(const std::string &name, const std::string &text) const
-  {
-    std::ofstream(file(name), std::ios::binary) << text;
-    return file(name);
-  }
-  /* Names of the hidden temporary files left in the folder. */
-  std::vector<std::string> temporaries() const
-  {
-    std::vector<std::string> out;
-    for (const auto &e : fs::directory_iterator(path))
-      if (e.path().filename().string().find(".tmp") != std::string::npos)
-        out.push_back(e.path().filename().string());
-    return out;
-  }
-};
-
-std::string slurp(const std::string &path)
-{
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-template <class F> std::string errorOf(F &&f)
-{
-  try {
-    f();
-  } catch (const Error &e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 bool contains(const std::string &text, const std::string &part) { return text.find(part) != std::string::npos; }
 

@@ -40,6 +40,40 @@ MotionSample sample(long frame, double x, double z, double heading, double yaw)
   return s;
 }
 
+/* The row of `frame` in the scene's motion log. */
+std::size_t rowOf(const Scene &scene, long frame)
+{
+  std::size_t row = 0;
+  while (scene.truth[row].frame != frame)
+    ++row;
+  return row;
+}
+
+/* Options of the `fused` method. */
+TrackEstimatorOptions fusedOptions()
+{
+  TrackEstimatorOptions opt;
+  opt.method = Method::Fused;
+  return opt;
+}
+
+/* Three frames driving straight ahead by 20 mm, the camera looking forward. */
+std::vector<MotionSample> forwardMotion() { return {sample(0, 0, 0, 0, 0), sample(1, 0, 0.02, 0, 0), sample(2, 0, 0.04, 0, 0)}; }
+
+/* A finely sampled log: `frames` steps of 0.05 mm, the camera at 1 rad, `points` points, the
+   default NoiseModel. */
+SceneOptions finelySampled(int frames, int points, std::uint64_t seed)
+{
+  SceneOptions so;
+  so.frames = frames;
+  so.step = 0.00005;
+  so.yaw = 1.0;
+  so.points = points;
+  so.noise = NoiseModel();
+  so.seed = seed;
+  return so;
+}
+
 /* The exact map of the filter's prediction, for finite differences: a point in (x, y, log 1/Z)
    through a perturbed increment. */
 Eigen::Vector3d exactPrediction(const MotionSample &a, const MotionSample &b, const Eigen::Vector3d &xyr,
@@ -150,8 +184,7 @@ TEST_CASE("fused converges to the truth on noise-free sequences, with rotation",
       so.points = 40;
       so.seed = 5;
       const Scene scene = simulateScene(camera, kRig, so);
-      TrackEstimatorOptions opt;
-      opt.method = Method::Fused;
+      TrackEstimatorOptions opt = fusedOptions();
       // Noise-free data: tell the filter the noise is tiny, so that the diffuse prior weighs nothing.
       opt.two_view.noise = NoiseModel{1e-4, 1e-8, 1e-9, 1e-9};
       const std::vector<PointEstimate> est = estimateTracks(camera, kRig, scene.truth, scene.tracks, opt);
@@ -160,10 +193,7 @@ TEST_CASE("fused converges to the truth on noise-free sequences, with rotation",
         if (!est[i].ok())
           continue;
         ++ok;
-        const auto &obs = scene.tracks[i].observations;
-        std::size_t row = 0;
-        while (scene.truth[row].frame != obs.back().frame)
-          ++row;
+        const std::size_t row = rowOf(scene, scene.tracks[i].observations.back().frame);
         const Eigen::Vector3d truth = scene.cameraPoint(kRig, static_cast<long>(i), row);
         INFO("yaw " << yaw << " turn " << turn << " id " << i);
         REQUIRE((est[i].c_P - truth).norm() < kNoiseFreeRelTol * truth.norm());
@@ -198,9 +228,7 @@ TEST_CASE("fused, exact and paper on noise-free 6-DoF arm paths with a hand-eye 
         if (!est[i].ok())
           continue;
         ++ok;
-        std::size_t row = 0;
-        while (scene.truth[row].frame != est[i].frame)
-          ++row;
+        const std::size_t row = rowOf(scene, est[i].frame);
         const Eigen::Vector3d truth = scene.cameraPoint(rig, static_cast<long>(i), row);
         INFO("path " << static_cast<int>(path) << " method " << static_cast<int>(method) << " id " << i);
         const double tol = kNoiseFreeRelTol;
@@ -228,8 +256,7 @@ TEST_CASE("fused: honest sigma and better than the last increment alone (Monte C
       so.noise = NoiseModel();
       so.seed = 100 + static_cast<std::uint64_t>(trial);
       const Scene scene = simulateScene(camera, kRig, so);
-      TrackEstimatorOptions opt;
-      opt.method = Method::Fused;
+      TrackEstimatorOptions opt = fusedOptions();
       const auto fused = estimateTracks(camera, kRig, scene.measured, scene.tracks, opt);
       opt.method = Method::Exact;
       const auto exact = estimateTracks(camera, kRig, scene.measured, scene.tracks, opt);
@@ -265,8 +292,7 @@ TEST_CASE("fused rejects a gross outlier and restarts after a track jump", "[fus
   so.noise = NoiseModel();
   so.seed = 9;
   Scene scene = simulateScene(camera, kRig, so);
-  TrackEstimatorOptions opt;
-  opt.method = Method::Fused;
+  TrackEstimatorOptions opt = fusedOptions();
   std::vector<IncrementModel> inc;
   for (std::size_t k = 0; k + 1 < scene.measured.size(); ++k)
     inc.push_back(IncrementModel::between(kRig, scene.measured[k], scene.measured[k + 1]));
@@ -322,15 +348,14 @@ TEST_CASE("fused gates: too few frames, no motion, focus of expansion", "[fused]
 {
   const CameraModel camera = paperCamera();
   std::vector<MotionSample> still = {sample(0, 0, 0, 0, 0), sample(1, 0, 0, 0, 0), sample(2, 0, 0, 0, 0)};
-  TrackEstimatorOptions opt;
-  opt.method = Method::Fused;
+  TrackEstimatorOptions opt = fusedOptions();
   Track t;
   t.id = 1;
   t.observations = {{0, 400.0, 300.0}};
   CHECK(estimateTrack(camera, kRig, still, t, opt).status == Status::TooFewFrames);
   t.observations = {{0, 400.0, 300.0}, {1, 400.0, 300.0}, {2, 400.0, 300.0}};
   CHECK(estimateTrack(camera, kRig, still, t, opt).status == Status::NoMotion);
-  std::vector<MotionSample> forward = {sample(0, 0, 0, 0, 0), sample(1, 0, 0.02, 0, 0), sample(2, 0, 0.04, 0, 0)};
+  const std::vector<MotionSample> forward = forwardMotion();
   t.observations = {{0, 319.2, 241.4}, {1, 319.2, 241.4}, {2, 319.2, 241.4}};
   const PointEstimate e = estimateTrack(camera, kRig, forward, t, opt);
   CHECK(e.status == Status::Degenerate);
@@ -340,9 +365,8 @@ TEST_CASE("fused gates: too few frames, no motion, focus of expansion", "[fused]
 TEST_CASE("fused reports a point behind the camera", "[fused]")
 {
   const CameraModel camera = paperCamera();
-  std::vector<MotionSample> forward = {sample(0, 0, 0, 0, 0), sample(1, 0, 0.02, 0, 0), sample(2, 0, 0.04, 0, 0)};
-  TrackEstimatorOptions opt;
-  opt.method = Method::Fused;
+  const std::vector<MotionSample> forward = forwardMotion();
+  TrackEstimatorOptions opt = fusedOptions();
   Track t;
   t.id = 2;
   // Moving forward, the feature slides toward the principal point: only a point behind does that.
@@ -444,20 +468,13 @@ TEST_CASE("fused: honest sigma on a finely sampled log (key frames)", "[fused][m
   const CameraModel camera = paperCamera();
   int n = 0, within2 = 0, tracks = 0;
   for (int trial = 0; trial < 40; ++trial) {
-    SceneOptions so;
-    so.frames = 400;
-    so.step = 0.00005;
-    so.yaw = 1.0;
-    so.points = 6;
+    SceneOptions so = finelySampled(400, 6, 500 + static_cast<std::uint64_t>(trial));
     so.min_depth = 0.3;
     so.max_depth = 1.5;
-    so.noise = NoiseModel();
     so.noise.sigma_odom = 1e-4;
     so.noise.sigma_yaw = 0.0;
-    so.seed = 500 + static_cast<std::uint64_t>(trial);
     const Scene scene = simulateScene(camera, kRig, so);
-    TrackEstimatorOptions opt;
-    opt.method = Method::Fused;
+    TrackEstimatorOptions opt = fusedOptions();
     opt.two_view.noise = so.noise;
     const auto fused = estimateTracks(camera, kRig, scene.measured, scene.tracks, opt);
     for (std::size_t i = 0; i < fused.size(); ++i) {
@@ -483,14 +500,7 @@ TEST_CASE("fused key frames: one per feature at most, released with the feature"
 {
   // Fine steps: no feature resolves its depth, so each keeps the frame it started at.
   const CameraModel camera = paperCamera();
-  SceneOptions so;
-  so.frames = 60;
-  so.step = 0.00005;
-  so.yaw = 1.0;
-  so.points = 8;
-  so.noise = NoiseModel();
-  so.seed = 3;
-  const Scene scene = simulateScene(camera, kRig, so);
+  const Scene scene = simulateScene(camera, kRig, finelySampled(60, 8, 3));
   FusedOptions fo;
   fo.max_missing_frames = 5;
   FusedEstimator fused(camera, kRig, fo);

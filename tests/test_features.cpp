@@ -143,17 +143,37 @@ TEST_CASE("renderer: exact coverage, background and determinism", "[render]") {
 
 namespace {
 
+/*! Detect the board in `img` as frame `frame`, requiring it found with `expected` features (a failure
+    names `context` and the detector's reason). */
+FrameDetection detectAll(PatternDetector &det, const cv::Mat &img, long frame, std::size_t expected,
+                         const std::string &context = "") {
+  const FrameDetection d = det.detect(img, frame);
+  INFO(context << d.reason);
+  REQUIRE(d.found);
+  REQUIRE(d.features.size() == expected);
+  return d;
+}
+
 /*! Detect and compare every id with the truth; returns the largest error (px). */
 double maxIdError(PatternDetector &det, const cv::Mat &img, const std::map<long, Eigen::Vector2d> &truth,
                   std::size_t expected) {
-  const FrameDetection d = det.detect(img, 0);
-  INFO(d.reason);
-  REQUIRE(d.found);
-  REQUIRE(d.features.size() == expected);
+  const FrameDetection d = detectAll(det, img, 0, expected);
   double worst = 0;
   for (const auto &f : d.features)
     worst = std::max(worst, (Eigen::Vector2d(f.u, f.v) - truth.at(f.id)).norm());
   return worst;
+}
+
+/*! Place the board of `sc` at `depth` near the optical axis, tilted about two axes by up to
+    +-max_tilt_deg / 2, rolled by roll(), offset sideways; `draw` gives the uniform numbers in [0, 1).
+    False when a corner is behind the camera or closer than `margin` px to the image border. */
+template <class Roll, class Draw>
+bool placeBoard(AccuracyScene &sc, const YawRig &rig, double depth, double max_tilt_deg, const Roll &roll, double margin,
+                const Draw &draw) {
+  sc.wMb = boardPose(rig, sc.sample, sc.board, depth, (draw() - 0.5) * max_tilt_deg * kDeg,
+                     (draw() - 0.5) * max_tilt_deg * kDeg, roll(), (draw() - 0.5) * 0.2 * depth,
+                     (draw() - 0.5) * 0.15 * depth);
+  return truthPixels(sc.cam, rig, sc.sample, sc.board, sc.wMb, sc.truth) && allInside(sc.truth, sc.cam, margin);
 }
 
 } // namespace
@@ -201,6 +221,7 @@ TEST_CASE("chessboard corner accuracy on rendered images", "[features][slow]") {
   // blur 0.7 px, noise 2 gray levels; boards whose orientation the colours fix.
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> U(0.0, 1.0);
+  const auto draw = [&] { return U(rng); };
   const YawRig rig = paperRig();
   ErrorStats stats;
   int scenes = 0, attempts = 0;
@@ -212,9 +233,7 @@ TEST_CASE("chessboard corner accuracy on rendered images", "[features][slow]") {
     sc.board.pattern = PatternSpec::parse(scenes % 4 < 2 ? "chessboard:5x4:0.02" : "chessboard:7x6:0.015");
     sc.sample.yaw = (U(rng) - 0.5) * 90 * kDeg;
     const double depth = wide ? 0.25 + 0.3 * U(rng) : 0.5 + 0.4 * U(rng);
-    sc.wMb = boardPose(rig, sc.sample, sc.board, depth, (U(rng) - 0.5) * 80 * kDeg, (U(rng) - 0.5) * 80 * kDeg,
-                       U(rng) * 2 * M_PI, (U(rng) - 0.5) * 0.2 * depth, (U(rng) - 0.5) * 0.15 * depth);
-    if (!truthPixels(sc.cam, rig, sc.sample, sc.board, sc.wMb, sc.truth) || !allInside(sc.truth, sc.cam, 25))
+    if (!placeBoard(sc, rig, depth, 80, [&] { return U(rng) * 2 * M_PI; }, 25, draw))
       continue;
     RenderOptions ro;
     ro.blur_sigma_px = 0.7;
@@ -222,10 +241,7 @@ TEST_CASE("chessboard corner accuracy on rendered images", "[features][slow]") {
     ro.seed = 500 + scenes;
     const cv::Mat img = renderBoard(sc.cam, rig, sc.sample, sc.board, sc.wMb, ro);
     PatternDetector det(sc.board.pattern);
-    const FrameDetection d = det.detect(img, scenes);
-    INFO("scene " << scenes << ": " << d.reason);
-    REQUIRE(d.found);
-    REQUIRE(d.features.size() == sc.truth.size());
+    const FrameDetection d = detectAll(det, img, scenes, sc.truth.size(), "scene " + std::to_string(scenes) + ": ");
     for (const auto &f : d.features)
       stats.add(Eigen::Vector2d(f.u, f.v) - sc.truth.at(f.id));
     ++scenes;
@@ -251,6 +267,7 @@ TEST_CASE("chessboard corners on photo-like renders of a board with narrow outer
   // gradient, Bayer demosaicing, shot noise and depth-dependent defocus. Strong barrel distortion.
   std::mt19937_64 rng(23);
   std::uniform_real_distribution<double> U(0.0, 1.0);
+  const auto draw = [&] { return U(rng); };
   const YawRig rig = paperRig();
   ErrorStats ours, outer, peer;
   int scenes = 0, attempts = 0;
@@ -261,19 +278,14 @@ TEST_CASE("chessboard corners on photo-like renders of a board with narrow outer
     sc.board.pattern = PatternSpec::parse("chessboard:9x6:0.025");
     sc.board.outer_square = 0.45 * 0.025;
     const double depth = 0.3 + 0.3 * U(rng);
-    sc.wMb = boardPose(rig, sc.sample, sc.board, depth, (U(rng) - 0.5) * 70 * kDeg, (U(rng) - 0.5) * 70 * kDeg,
-                       (U(rng) - 0.5) * 30 * kDeg, (U(rng) - 0.5) * 0.2 * depth, (U(rng) - 0.5) * 0.15 * depth);
-    if (!truthPixels(sc.cam, rig, sc.sample, sc.board, sc.wMb, sc.truth) || !allInside(sc.truth, sc.cam, 30))
+    if (!placeBoard(sc, rig, depth, 70, [&] { return (U(rng) - 0.5) * 30 * kDeg; }, 30, draw))
       continue;
     RenderOptions ro = photoLikeRenderOptions(depth);
     ro.light_angle = U(rng) * 2 * M_PI;
     ro.seed = 900 + scenes;
     const cv::Mat img = renderBoard(sc.cam, rig, sc.sample, sc.board, sc.wMb, ro);
     PatternDetector det(sc.board.pattern);
-    const FrameDetection d = det.detect(img, scenes);
-    INFO("scene " << scenes << ": " << d.reason);
-    REQUIRE(d.found);
-    REQUIRE(d.features.size() == sc.truth.size());
+    const FrameDetection d = detectAll(det, img, scenes, sc.truth.size(), "scene " + std::to_string(scenes) + ": ");
     for (const auto &f : d.features) {
       const Eigen::Vector2d e = Eigen::Vector2d(f.u, f.v) - sc.truth.at(f.id);
       ours.add(e);

@@ -20,69 +20,15 @@
 #include <yawdepth/error.h>
 #include <yawdepth/io/files.h>
 
+#include "file_support.h"
+
 using namespace yawdepth;
+using namespace yawdepth::test;
 namespace fs = std::filesystem;
 
 namespace {
 
 const std::string kData = std::string(YAWDEPTH_TEST_DATA_DIR) + "/io/";
-
-/* A fresh folder under the system's temporary folder, removed with its contents. */
-struct TempDir {
-  fs::path path;
-  TempDir()
-  {
-    static std::atomic<int> counter{0};
-    const auto t = std::chrono::steady_clock::now().time_since_epoch().count();
-    path = fs::temp_directory_path() /
-           ("yawdepth_test_io_" + std::to_string(::getpid()) + "_" + std::to_string(t) + "_" +
-            std::to_string(counter++));
-    fs::create_directories(path);
-  }
-  ~TempDir()
-  {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string file(const std::string &name) const { return (path / name).string(); }
-  /* Write raw bytes to `name` and return its path. */
-  std::string write(const std::string &name, const std::string &bytes) const
-  {
-    const std::string p = file(name);
-    std::ofstream f(p, std::ios::binary);
-    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    return p;
-  }
-  std::size_t count() const
-  {
-    std::size_t n = 0;
-    for (auto it = fs::directory_iterator(path); it != fs::directory_iterator(); ++it)
-      ++n;
-    return n;
-  }
-};
-
-std::string slurp(const std::string &path)
-{
-  std::ifstream f(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-/* The message of the yawdepth::Error thrown by `f` (a test failure when there is none). */
-std::string errorOf(const std::function<void()> &f)
-{
-  try {
-    f();
-  } catch (const Error &e) {
-    return e.what();
-  } catch (const std::exception &e) {
-    FAIL("not a yawdepth::Error: " << e.what());
-  }
-  FAIL("no error thrown");
-  return {};
-}
 
 /* Checks that reading fails with a one-line message "<path>:<line>: ..." mentioning `words`. */
 void requireError(const std::string &message, const std::string &prefix, const std::string &words)
@@ -94,25 +40,53 @@ void requireError(const std::string &message, const std::string &prefix, const s
   CHECK(message.find(words) != std::string::npos);
 }
 
+/* Checks that read(path) fails as requireError says, the prefix being the path and then `where`. */
+template <class Read>
+void requireReadError(const std::string &path, const std::string &where, const std::string &words, const Read &read)
+{
+  requireError(errorOf([&] { read(path); }), path + where, words);
+}
+
+// The readers, each as a function of the path alone.
+const auto readMotion = [](const std::string &p) { readMotionCsv(p); };
+const auto readTracks = [](const std::string &p) { readTracksCsv(p); };
+const auto readRig = [](const std::string &p) { readRigFile(p); };
+const auto readPoints = [](const std::string &p) { readPointsCsv(p); };
+
 void requireMotionError(const TempDir &dir, const std::string &content, const std::string &where,
                         const std::string &words, std::optional<double> fixed_yaw = std::nullopt)
 {
-  const std::string p = dir.write("bad_motion.csv", content);
-  requireError(errorOf([&] { readMotionCsv(p, fixed_yaw); }), p + where, words);
+  requireReadError(dir.write("bad_motion.csv", content), where, words,
+                   [&](const std::string &p) { readMotionCsv(p, fixed_yaw); });
 }
 
 void requireTracksError(const TempDir &dir, const std::string &content, const std::string &where,
                         const std::string &words)
 {
-  const std::string p = dir.write("bad_tracks.csv", content);
-  requireError(errorOf([&] { readTracksCsv(p); }), p + where, words);
+  requireReadError(dir.write("bad_tracks.csv", content), where, words, readTracks);
 }
 
 void requireRigError(const TempDir &dir, const std::string &content, const std::string &where,
                      const std::string &words)
 {
-  const std::string p = dir.write("bad_rig.yaml", content);
-  requireError(errorOf([&] { readRigFile(p); }), p + where, words);
+  requireReadError(dir.write("bad_rig.yaml", content), where, words, readRig);
+}
+
+void requirePointsError(const TempDir &dir, const std::string &content, const std::string &where,
+                        const std::string &words)
+{
+  requireReadError(dir.write("bad_points.csv", content), where, words, readPoints);
+}
+
+/* Checks every field of a planar motion sample, exactly. */
+void checkSample(const MotionSample &s, long frame, double x, double y, double z, double heading, double yaw)
+{
+  CHECK(s.frame == frame);
+  CHECK(s.x == x);
+  CHECK(s.y == y);
+  CHECK(s.z == z);
+  CHECK(s.heading == heading);
+  CHECK(s.yaw == yaw);
 }
 
 bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -258,17 +232,11 @@ TEST_CASE("motion log: images round trip relative to the output folder", "[io][m
 TEST_CASE("motion log: column order, extra columns, BOM, CRLF, spaces", "[io][motion]")
 {
   TempDir dir;
-  const std::string p = dir.write("m.csv", "note, yaw ,heading,z,y,x,frame,extra\n"
-                                           "a,0.5,0.25,3,2,1,7,\n"
-                                           " b , 0.75 , 0.5 , 6 , 5 , 4 , 9 , zzz \n");
-  const MotionLog m = readMotionCsv(p);
+  const MotionLog m = readMotionCsv(dir.write("m.csv", "note, yaw ,heading,z,y,x,frame,extra\n"
+                                                      "a,0.5,0.25,3,2,1,7,\n"
+                                                      " b , 0.75 , 0.5 , 6 , 5 , 4 , 9 , zzz \n"));
   REQUIRE(m.samples.size() == 2);
-  CHECK(m.samples[0].frame == 7);
-  CHECK(m.samples[0].x == 1);
-  CHECK(m.samples[0].y == 2);
-  CHECK(m.samples[0].z == 3);
-  CHECK(m.samples[0].heading == 0.25);
-  CHECK(m.samples[0].yaw == 0.5);
+  checkSample(m.samples[0], 7, 1, 2, 3, 0.25, 0.5);
   CHECK(m.samples[1].frame == 9);
   CHECK(m.samples[1].x == 4);
   CHECK(m.samples[1].yaw == 0.75);
@@ -276,13 +244,8 @@ TEST_CASE("motion log: column order, extra columns, BOM, CRLF, spaces", "[io][mo
   // The fixture: BOM, CRLF, spaces around names, no yaw column, trailing empty line.
   const MotionLog f = readMotionCsv(kData + "motion_bom_crlf_noyaw.csv", 0.125);
   REQUIRE(f.samples.size() == 2);
-  CHECK(f.samples[0].frame == 10);
-  CHECK(f.samples[0].x == 1);
-  CHECK(f.samples[0].y == 2);
-  CHECK(f.samples[0].z == 0.5);
-  CHECK(f.samples[0].heading == 0.1);
+  checkSample(f.samples[0], 10, 1, 2, 0.5, 0.1, 0.125);
   CHECK(f.samples[1].z == 0.75);
-  CHECK(f.samples[0].yaw == 0.125);
   CHECK(f.samples[1].yaw == 0.125);
 
   // Every permutation of the six columns reads the same.
@@ -303,12 +266,7 @@ TEST_CASE("motion log: column order, extra columns, BOM, CRLF, spaces", "[io][mo
     }
     const MotionLog q = readMotionCsv(dir.write("perm.csv", header + "\r\n" + row + "\r\n"));
     REQUIRE(q.samples.size() == 1);
-    CHECK(q.samples[0].frame == 5);
-    CHECK(q.samples[0].x == 1.5);
-    CHECK(q.samples[0].y == -2.5);
-    CHECK(q.samples[0].z == 3e-3);
-    CHECK(q.samples[0].heading == 0.5);
-    CHECK(q.samples[0].yaw == -0.25);
+    checkSample(q.samples[0], 5, 1.5, -2.5, 3e-3, 0.5, -0.25);
     ++n;
   } while (std::next_permutation(cols.begin(), cols.end()));
   CHECK(n == 720);
@@ -337,14 +295,12 @@ TEST_CASE("motion log: rejections name the file and the line, on one line", "[io
   const std::string H = "frame,x,y,z,heading,yaw\n";
   SECTION("missing file")
   {
-    const std::string p = dir.file("nope.csv");
-    requireError(errorOf([&] { readMotionCsv(p); }), p + ": ", "cannot open");
+    requireReadError(dir.file("nope.csv"), ": ", "cannot open", readMotion);
   }
   SECTION("a folder is unreadable")
   {
     fs::create_directories(dir.path / "folder.csv");
-    const std::string p = dir.file("folder.csv");
-    requireError(errorOf([&] { readMotionCsv(p); }), p + ": ", "cannot");
+    requireReadError(dir.file("folder.csv"), ": ", "cannot", readMotion);
   }
   SECTION("empty file") { requireMotionError(dir, "", ": ", "empty file"); }
   SECTION("blank file") { requireMotionError(dir, "\xEF\xBB\xBF\r\n  \n", ": ", "empty file"); }
@@ -526,8 +482,7 @@ TEST_CASE("tracks: rejections", "[io][tracks]")
   const std::string H = "frame,id,u,v\n";
   SECTION("missing file")
   {
-    const std::string p = dir.file("missing_tracks.csv");
-    requireError(errorOf([&] { readTracksCsv(p); }), p + ": ", "cannot open");
+    requireReadError(dir.file("missing_tracks.csv"), ": ", "cannot open", readTracks);
   }
   SECTION("empty") { requireTracksError(dir, "", ": ", "empty file"); }
   SECTION("header only") { requireTracksError(dir, H, ": ", "no data rows"); }
@@ -617,8 +572,7 @@ TEST_CASE("rig file: rejections", "[io][rig]")
   TempDir dir;
   SECTION("missing file")
   {
-    const std::string p = dir.file("missing.yaml");
-    requireError(errorOf([&] { readRigFile(p); }), p + ": ", "cannot open");
+    requireReadError(dir.file("missing.yaml"), ": ", "cannot open", readRig);
   }
   SECTION("empty file") { requireRigError(dir, "", ": ", "empty"); }
   SECTION("comments only") { requireRigError(dir, "# nothing\n", ": ", "empty"); }
@@ -710,10 +664,8 @@ TEST_CASE("points: header, empty numbers when not ok, round trip", "[io][points]
   CHECK(readPointsCsv(p).empty());
 
   // Bad status words and text are rejected.
-  const std::string q = dir.write("bad_points.csv", "id,frame,x,y,z,xc,yc,zc,sigma_zc,status\n1,2,,,,,,,,bogus\n");
-  requireError(errorOf([&] { readPointsCsv(q); }), q + ":2: ", "unknown status 'bogus'");
-  const std::string s = dir.write("bad_points2.csv", "id,frame,x,y,z,xc,yc,zc,sigma_zc,status\n1,2,a,,,,,,,ok\n");
-  requireError(errorOf([&] { readPointsCsv(s); }), s + ":2: ", "column 'x': 'a' is not a number");
+  requirePointsError(dir, "id,frame,x,y,z,xc,yc,zc,sigma_zc,status\n1,2,,,,,,,,bogus\n", ":2: ", "unknown status 'bogus'");
+  requirePointsError(dir, "id,frame,x,y,z,xc,yc,zc,sigma_zc,status\n1,2,a,,,,,,,ok\n", ":2: ", "column 'x': 'a' is not a number");
 }
 
 // ----------------------------------------------------------------------------------------- atomic
@@ -765,14 +717,10 @@ TEST_CASE("atomic write: replaces an existing file, no partial file on failure",
 TEST_CASE("rig file: unknown keys and a yaw axis the estimators do not model are refused", "[io][rig]")
 {
   TempDir dir;
-  const std::string typo = dir.write("typo.yaml", "camera_ofset: [-0.15, 0, 0]\n");
-  requireError(errorOf([&] { readRigFile(typo); }), typo + ":1: ", "unknown key 'camera_ofset' (known: camera_offset");
-  const std::string other = dir.write("other.yaml", "camera_offset: [-0.15, 0, 0]\nother: {a: 1}\n");
-  requireError(errorOf([&] { readRigFile(other); }), other + ":2: ", "unknown key 'other'");
-  const std::string sideways = dir.write("axis.yaml", "camera_offset: [-0.15, 0, 0]\nyaw_axis: [1, 0, 0]\n");
-  requireError(errorOf([&] { readRigFile(sideways); }), sideways + ":2: ", "'yaw_axis' is 90.0 deg from the vision frame's +Y");
-  const std::string tilted = dir.write("tilt.yaml", "camera_offset: [-0.15, 0, 0]\nyaw_axis: [0.06, 1, 0]\n");
-  requireError(errorOf([&] { readRigFile(tilted); }), tilted + ":2: ", "3.4 deg from the vision frame's +Y");
+  requireRigError(dir, "camera_ofset: [-0.15, 0, 0]\n", ":1: ", "unknown key 'camera_ofset' (known: camera_offset");
+  requireRigError(dir, "camera_offset: [-0.15, 0, 0]\nother: {a: 1}\n", ":2: ", "unknown key 'other'");
+  requireRigError(dir, "camera_offset: [-0.15, 0, 0]\nyaw_axis: [1, 0, 0]\n", ":2: ", "'yaw_axis' is 90.0 deg from the vision frame's +Y");
+  requireRigError(dir, "camera_offset: [-0.15, 0, 0]\nyaw_axis: [0.06, 1, 0]\n", ":2: ", "3.4 deg from the vision frame's +Y");
   // What calibrate-rig writes beside the values is known, and a tilt within 2 deg is accepted.
   const std::string calibrated = dir.write(
       "cal.yaml", "camera_offset: [-0.15, 0, 0.01]\nyaw_offset: 0.01\nyaw_axis: [0.02, 1, -0.01]\n"
@@ -806,16 +754,11 @@ TEST_CASE("rig file: camera_pose, a fixed 6-DoF mount (an arm's eMc)", "[io][rig
     CHECK((*back.camera_pose)[i] == (*rig.camera_pose)[i]);
   CHECK(*back.camera_pose_sigma == *rig.camera_pose_sigma);
   // Both forms, neither, a wrong count, a sigma without a pose, a rotation beyond pi.
-  const std::string both = dir.write("both.yaml", "camera_offset: [0, 0, 0]\ncamera_pose: [0, 0, 0, 0, 0, 0]\n");
-  requireError(errorOf([&] { readRigFile(both); }), both + ":2: ", "both 'camera_offset' and 'camera_pose'");
-  const std::string neither = dir.write("neither.yaml", "yaw: 0.1\n");
-  requireError(errorOf([&] { readRigFile(neither); }), neither + ": ", "missing key 'camera_offset' (or 'camera_pose')");
-  const std::string five = dir.write("five.yaml", "camera_pose: [0, 0, 0, 0, 0]\n");
-  requireError(errorOf([&] { readRigFile(five); }), five + ":1: ", "'camera_pose' must be a sequence of 6 numbers (it has 5)");
-  const std::string lone = dir.write("lone.yaml", "camera_offset: [0, 0, 0]\ncamera_pose_sigma: [0, 0, 0, 0, 0, 0]\n");
-  requireError(errorOf([&] { readRigFile(lone); }), lone + ":2: ", "'camera_pose_sigma' without 'camera_pose'");
-  const std::string big = dir.write("big.yaml", "camera_pose: [0, 0, 0, 4, 0, 0]\n");
-  requireError(errorOf([&] { readRigFile(big); }), big + ":1: ", "norm of at most pi");
+  requireRigError(dir, "camera_offset: [0, 0, 0]\ncamera_pose: [0, 0, 0, 0, 0, 0]\n", ":2: ", "both 'camera_offset' and 'camera_pose'");
+  requireRigError(dir, "yaw: 0.1\n", ": ", "missing key 'camera_offset' (or 'camera_pose')");
+  requireRigError(dir, "camera_pose: [0, 0, 0, 0, 0]\n", ":1: ", "'camera_pose' must be a sequence of 6 numbers (it has 5)");
+  requireRigError(dir, "camera_offset: [0, 0, 0]\ncamera_pose_sigma: [0, 0, 0, 0, 0, 0]\n", ":2: ", "'camera_pose_sigma' without 'camera_pose'");
+  requireRigError(dir, "camera_pose: [0, 0, 0, 4, 0, 0]\n", ":1: ", "norm of at most pi");
 }
 
 TEST_CASE("motion log: the 6-DoF form (tx, ty, tz, tux, tuy, tuz) reads, round-trips and refuses mixtures", "[io][motion]")

@@ -30,6 +30,22 @@ constexpr bool kSanitized = false;
 
 CameraModel testCamera() { return CameraModel::brown(600, 600, 320, 240, {-0.05, 0, 0, 0}, 640, 480); }
 
+/* The depth provider's side-view sequences: the camera at 90 degrees, `frames` steps of `step`
+   metres past 12 points at 0.8 to 2 m, with little noise. */
+SceneOptions sideView(int frames, double step, std::uint64_t seed)
+{
+  SceneOptions so;
+  so.frames = frames;
+  so.step = step;
+  so.yaw = M_PI / 2;
+  so.points = 12;
+  so.min_depth = 0.8;
+  so.max_depth = 2.0;
+  so.noise = NoiseModel{0.2, 0.0003, 0.0002, 0.0002};
+  so.seed = seed;
+  return so;
+}
+
 // Each frame's observations of a scene, as the provider takes them.
 std::map<long, std::vector<std::pair<long, vpImagePoint>>> framesOf(const Scene &scene)
 {
@@ -48,6 +64,21 @@ void feedPoses(DepthProvider &p, const Scene &scene)
   for (const MotionSample &row : scene.measured) {
     const auto it = frames.find(row.frame);
     p.update(wMv(row), it == frames.end() ? std::vector<std::pair<long, vpImagePoint>>{} : it->second);
+  }
+}
+
+/* Calls check(Z_true, f) for every feature the scene still sees in its last frame: its true depth
+   there and the provider's estimate, named in an INFO. */
+template <class Check> void forEachFeatureAtLast(const Scene &scene, const YawRig &rig, const DepthProvider &p, const Check &check)
+{
+  const std::size_t last = scene.truth.size() - 1;
+  for (const Track &t : scene.tracks) {
+    if (t.observations.back().frame != scene.truth[last].frame)
+      continue; // left the image
+    const double Z_true = scene.cameraPoint(rig, t.id, last).z();
+    const FeatureDepth f = p.info(t.id);
+    INFO("feature " << t.id << " true " << Z_true << " depth " << f.depth << " sigma " << f.sigma);
+    check(Z_true, f);
   }
 }
 
@@ -145,16 +176,7 @@ TEST_CASE("depth provider: converges to the true depth on a side-view sequence",
 {
   const CameraModel camera = testCamera();
   const YawRig rig(Eigen::Vector3d(-0.15, 0, 0));
-  SceneOptions so;
-  so.frames = 30;
-  so.step = 0.01;
-  so.yaw = M_PI / 2;
-  so.points = 12;
-  so.min_depth = 0.8;
-  so.max_depth = 2.0;
-  so.noise = NoiseModel{0.2, 0.0003, 0.0002, 0.0002};
-  so.seed = 7;
-  const Scene scene = simulateScene(camera, rig, so);
+  const Scene scene = simulateScene(camera, rig, sideView(30, 0.01, 7));
   DepthProviderOptions o;
   o.noise = NoiseModel{0.2, 0.0005, 0.0003, 0.0003};
   o.min_translation = 0.005;
@@ -164,20 +186,14 @@ TEST_CASE("depth provider: converges to the true depth on a side-view sequence",
     const auto it = frames.find(scene.measured[r].frame);
     p.update(scene.measured[r], it == frames.end() ? std::vector<std::pair<long, vpImagePoint>>{} : it->second);
   }
-  const std::size_t last = scene.truth.size() - 1;
   int converged = 0;
-  for (const Track &t : scene.tracks) {
-    if (t.observations.back().frame != scene.truth[last].frame)
-      continue; // left the image
-    const double Z_true = scene.cameraPoint(rig, t.id, last).z();
-    const FeatureDepth f = p.info(t.id);
-    INFO("feature " << t.id << " true " << Z_true << " depth " << f.depth << " sigma " << f.sigma);
+  forEachFeatureAtLast(scene, rig, p, [&](double Z_true, const FeatureDepth &f) {
     REQUIRE(f.converged);
     CHECK(f.status == Status::Ok);
     CHECK(std::abs(f.depth - Z_true) < 3 * f.sigma + 1e-6);
     CHECK(std::abs(f.depth - Z_true) / Z_true < 0.03);
     ++converged;
-  }
+  });
   CHECK(converged >= 6);
 }
 
@@ -185,16 +201,8 @@ TEST_CASE("depth provider: convergence is revoked when an estimate jumps, and co
 {
   const CameraModel camera = testCamera();
   const YawRig rig(Eigen::Vector3d(-0.15, 0, 0));
-  SceneOptions so;
-  so.frames = 70;
-  so.step = 0.005;
-  so.yaw = M_PI / 2;
-  so.points = 12;
-  so.min_depth = 0.8;
-  so.max_depth = 2.0;
+  SceneOptions so = sideView(70, 0.005, 11);
   so.margin_px = 150;
-  so.noise = NoiseModel{0.2, 0.0003, 0.0002, 0.0002};
-  so.seed = 11;
   const Scene scene = simulateScene(camera, rig, so);
   auto frames = framesOf(scene);
   // Two points seen in every frame, at the most different depths: from frame 30 on, the tracker
@@ -277,20 +285,14 @@ TEST_CASE("depth provider: a 6-DoF camera (vpHomogeneousMatrix poses, an arm orb
   o.noise = NoiseModel{0.2, 0.0005, 0.0, 0.0, 0.0005};
   DepthProvider p(camera, rig, o);
   feedPoses(p, scene);
-  const std::size_t last = scene.truth.size() - 1;
   int converged = 0;
-  for (const Track &t : scene.tracks) {
-    if (t.observations.back().frame != scene.truth[last].frame)
-      continue;
-    const double Z_true = scene.cameraPoint(rig, t.id, last).z();
-    const FeatureDepth f = p.info(t.id);
-    INFO("feature " << t.id << " true " << Z_true << " depth " << f.depth << " sigma " << f.sigma);
+  forEachFeatureAtLast(scene, rig, p, [&](double Z_true, const FeatureDepth &f) {
     if (!f.converged)
-      continue;
+      return;
     CHECK(std::abs(f.depth - Z_true) < 3 * f.sigma + 1e-6);
     CHECK(std::abs(f.depth - Z_true) / Z_true < 0.03);
     ++converged;
-  }
+  });
   CHECK(converged >= 6);
   // A pose that is not a rigid motion is refused.
   vpHomogeneousMatrix bad;
@@ -641,17 +643,11 @@ TEST_CASE("depth provider: default noise model, the same accuracy whatever the c
     const Scene scene = simulateScene(camera, rig, so);
     DepthProvider p(camera, rig); // default options
     feedPoses(p, scene);
-    const std::size_t last = scene.truth.size() - 1;
-    for (const Track &t : scene.tracks) {
-      if (t.observations.back().frame != scene.truth[last].frame)
-        continue;
-      const double Z_true = scene.cameraPoint(rig, t.id, last).z();
-      const FeatureDepth f = p.info(t.id);
-      INFO("feature " << t.id << " true " << Z_true << " depth " << f.depth << " sigma " << f.sigma);
+    forEachFeatureAtLast(scene, rig, p, [&](double Z_true, const FeatureDepth &f) {
       REQUIRE(f.converged);
       CHECK(std::abs(f.depth - Z_true) < 4 * f.sigma);
       sigmas[frames].push_back(f.sigma / f.depth);
-    }
+    });
   }
   REQUIRE(sigmas[30].size() >= 8);
   REQUIRE(sigmas[120].size() >= 8);

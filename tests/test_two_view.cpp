@@ -105,6 +105,21 @@ void checkExactness(const CameraModel &camera, double tol, std::uint64_t seed)
   CHECK(ok >= 390);
 }
 
+/* The pixel of the camera-frame point P. */
+Eigen::Vector2d pixelOf(const CameraModel &camera, const Eigen::Vector3d &P) { return camera.project(P.head<2>() / P.z()); }
+
+/* Frames 0 and 1 of the paper's pinhole camera on its rig; a test sets their motion. */
+struct TwoFrames {
+  const CameraModel camera = paperPinhole();
+  const YawRig rig{Eigen::Vector3d(-0.1503, 0, 0)};
+  MotionSample prev, cur;
+  TwoFrames()
+  {
+    prev.frame = 0;
+    cur.frame = 1;
+  }
+};
+
 } // namespace
 
 TEST_CASE("exact is exact on noise-free data, pinhole, any increment, heading and yaw change", "[exact]")
@@ -149,22 +164,17 @@ TEST_CASE("paperDepth is eq. (5) through vpFeaturePoint's interaction matrix", "
   CHECK(paperDepth(0.1, 0.3, 5.0, 1700.0, Eigen::Vector3d(0.028, 0.05, 0.028)) == Approx(-8.568).epsilon(1e-14));
 }
 
-TEST_CASE("paper returns the previous frame's depth: its bias is dZc/Z", "[paper]")
+TEST_CASE_METHOD(TwoFrames, "paper returns the previous frame's depth: its bias is dZc/Z", "[paper]")
 {
   // The paper's experiment: 620 mm away, camera increment (+40, 0, -40) mm in the camera frame
   // (the board moved by (-40, 0, 40) mm), pure translation.
-  const CameraModel camera = paperPinhole();
-  const YawRig rig(Eigen::Vector3d(-0.1503, 0, 0));
-  MotionSample prev, cur;
-  prev.frame = 0;
-  cur.frame = 1;
   prev.yaw = cur.yaw = 0.0;
   cur.x = 0.04;
   cur.z = -0.04;
   const Eigen::Vector3d P_prev(-0.02, 0.015, 0.62);
   const Eigen::Vector3d P_cur = P_prev - Eigen::Vector3d(0.04, 0.0, -0.04);
-  const Eigen::Vector2d uv_prev = camera.project(P_prev.head<2>() / P_prev.z());
-  const Eigen::Vector2d uv_cur = camera.project(P_cur.head<2>() / P_cur.z());
+  const Eigen::Vector2d uv_prev = pixelOf(camera, P_prev);
+  const Eigen::Vector2d uv_cur = pixelOf(camera, P_cur);
   const PointEstimate paper = estimatePaper(camera, rig, prev, cur, uv_prev, uv_cur);
   const PointEstimate exact = estimateExact(camera, rig, prev, cur, uv_prev, uv_cur);
   REQUIRE(paper.ok());
@@ -176,13 +186,8 @@ TEST_CASE("paper returns the previous frame's depth: its bias is dZc/Z", "[paper
   CHECK(std::abs(bias) > 0.06);
 }
 
-TEST_CASE("paper removes a small known rotation to first order", "[paper]")
+TEST_CASE_METHOD(TwoFrames, "paper removes a small known rotation to first order", "[paper]")
 {
-  const CameraModel camera = paperPinhole();
-  const YawRig rig(Eigen::Vector3d(-0.1503, 0, 0));
-  MotionSample prev, cur;
-  prev.frame = 0;
-  cur.frame = 1;
   prev.yaw = M_PI / 2;
   cur.yaw = M_PI / 2 + 0.002; // the camera pans during the increment
   cur.z = 0.02;
@@ -190,8 +195,8 @@ TEST_CASE("paper removes a small known rotation to first order", "[paper]")
   Eigen::Vector3d t;
   fromVisp(curMprev(rig, prev, cur), R, t);
   const Eigen::Vector3d P_cur(0.1, 0.05, 1.0), P_prev = R.transpose() * (P_cur - t);
-  const Eigen::Vector2d uv_prev = camera.project(P_prev.head<2>() / P_prev.z());
-  const Eigen::Vector2d uv_cur = camera.project(P_cur.head<2>() / P_cur.z());
+  const Eigen::Vector2d uv_prev = pixelOf(camera, P_prev);
+  const Eigen::Vector2d uv_cur = pixelOf(camera, P_cur);
   const PointEstimate paper = estimatePaper(camera, rig, prev, cur, uv_prev, uv_cur);
   REQUIRE(paper.ok());
   // Rotation of 0.002 rad moves the image by ~3.5 px against ~34 px of parallax: ignoring it
@@ -199,13 +204,8 @@ TEST_CASE("paper removes a small known rotation to first order", "[paper]")
   CHECK(paper.c_P.z() == Approx(1.0).epsilon(0.02));
 }
 
-TEST_CASE("gates: no motion, focus of expansion, behind, too few frames", "[gates]")
+TEST_CASE_METHOD(TwoFrames, "gates: no motion, focus of expansion, behind, too few frames", "[gates]")
 {
-  const CameraModel camera = paperPinhole();
-  const YawRig rig(Eigen::Vector3d(-0.1503, 0, 0));
-  MotionSample prev, cur;
-  prev.frame = 0;
-  cur.frame = 1;
   const Eigen::Vector2d centre(319.2, 241.4);
 
   SECTION("no motion")
@@ -279,7 +279,7 @@ TEST_CASE("estimateTrack uses the last two observations and reports at the last 
     Eigen::Vector3d t;
     fromVisp(wMc(rig, motion[k]).inverse(), R, t);
     const Eigen::Vector3d c_P = R * v_P + t;
-    const Eigen::Vector2d uv = camera.project(c_P.head<2>() / c_P.z());
+    const Eigen::Vector2d uv = pixelOf(camera, c_P);
     track.observations.push_back({motion[k].frame, uv.x(), uv.y()});
   }
   const PointEstimate e = estimateTrack(camera, rig, motion, track);

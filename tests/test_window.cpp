@@ -16,7 +16,10 @@
 // The estimator's model with its analytic Jacobians (private to the module, header-only).
 #include "window_model.h"
 
+#include "scene_support.h"
+
 using namespace yawdepth;
+using namespace yawdepth::test;
 
 namespace {
 
@@ -28,27 +31,6 @@ constexpr double kFiniteDifference = 1e-5;
 // looser than docs/method.md's pooled 1.2 and coverage 0.90 to 0.98).
 constexpr double kMaxRatio = 1.3;
 constexpr double kMinCoverage = 0.86, kMaxCoverage = 0.995;
-
-CameraModel paperCamera()
-{
-  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-}
-YawRig paperRig() { return YawRig(Eigen::Vector3d(-0.1503, 0.0, 0.0)); }
-NoiseModel paperNoise() { return NoiseModel{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg}; }
-
-SceneOptions scene(double yaw, double turn, int frames, std::uint64_t seed, bool noisy = true)
-{
-  SceneOptions o;
-  o.frames = frames;
-  o.step = 0.02;
-  o.yaw = yaw;
-  o.turn_rate = turn;
-  o.points = 30;
-  o.seed = seed;
-  if (noisy)
-    o.noise = paperNoise();
-  return o;
-}
 
 std::size_t rowOf(const Scene &s, long frame)
 {
@@ -64,18 +46,7 @@ Eigen::Vector3d truthAtLast(const Scene &s, const YawRig &rig, const Track &t)
   return s.cameraPoint(rig, t.id, rowOf(s, t.observations.back().frame));
 }
 
-struct Stats {
-  double sum = 0;
-  int n = 0, covered = 0;
-  void add(double e, double crlb, double sigma)
-  {
-    sum += (e / crlb) * (e / crlb);
-    covered += std::abs(e) <= 2 * sigma ? 1 : 0;
-    ++n;
-  }
-  double ratio() const { return std::sqrt(sum / std::max(n, 1)); }
-  double coverage() const { return double(covered) / std::max(n, 1); }
-};
+using Stats = CrlbStats;
 
 /* Every frame's observations, for feeding a WindowEstimator by hand. */
 std::vector<std::vector<FeatureObservation>> byFrame(const Scene &s, const std::vector<Track> &tracks)
@@ -208,7 +179,7 @@ TEST_CASE("window returns the truth on noise-free scenes, with and without margi
   const YawRig rig = paperRig();
   for (int frames : {10, 25}) {
     for (double yaw : {0.0, 90 * kDeg}) {
-      const Scene s = simulateScene(camera, rig, scene(yaw, 1 * kDeg, frames, 3, false));
+      const Scene s = simulateScene(camera, rig, paperScene(yaw, 1 * kDeg, frames, 3, false));
       WindowOptions o;
       o.noise = paperNoise(); // the model of noisy data; these happen to be exact
       o.window = 8;
@@ -233,17 +204,14 @@ TEST_CASE("window returns the truth on noise-free scenes, with and without margi
   }
 }
 
-TEST_CASE("window is efficient and honest with marginalisation (Monte Carlo against the joint bound)",
+TEST_CASE_METHOD(PaperSetup, "window is efficient and honest with marginalisation (Monte Carlo against the joint bound)",
           "[window][montecarlo]")
 {
-  const CameraModel camera = paperCamera();
-  const YawRig rig = paperRig();
-  const NoiseModel noise = paperNoise();
   Stats pooled;
   for (double yaw : {0.0, 45 * kDeg, 90 * kDeg}) {
     Stats st;
     for (int t = 0; t < 25; ++t) {
-      const Scene s = simulateScene(camera, rig, scene(yaw, 0.5 * kDeg, 20, 100 + static_cast<std::uint64_t>(t)));
+      const Scene s = simulateScene(camera, rig, paperScene(yaw, 0.5 * kDeg, 20, 100 + static_cast<std::uint64_t>(t)));
       const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
       WindowOptions o;
       o.noise = noise;
@@ -267,15 +235,12 @@ TEST_CASE("window is efficient and honest with marginalisation (Monte Carlo agai
   CHECK(pooled.coverage() < kMaxCoverage);
 }
 
-TEST_CASE("window flags gross outliers and stays near the clean bound", "[window][outliers][slow]")
+TEST_CASE_METHOD(PaperSetup, "window flags gross outliers and stays near the clean bound", "[window][outliers][slow]")
 {
-  const CameraModel camera = paperCamera();
-  const YawRig rig = paperRig();
-  const NoiseModel noise = paperNoise();
   long corrupted = 0, tp = 0, fp = 0;
   Stats st;
   for (int t = 0; t < 12; ++t) {
-    const Scene s = simulateScene(camera, rig, scene(45 * kDeg, 0.5 * kDeg, 20, 300 + static_cast<std::uint64_t>(t)));
+    const Scene s = simulateScene(camera, rig, paperScene(45 * kDeg, 0.5 * kDeg, 20, 300 + static_cast<std::uint64_t>(t)));
     std::vector<Track> tracks = s.tracks;
     std::vector<std::vector<bool>> truth(tracks.size());
     std::mt19937_64 rng(900 + static_cast<std::uint64_t>(t));
@@ -319,7 +284,7 @@ TEST_CASE("window: features appear and vanish, frames without motion or without 
 {
   const CameraModel camera = paperCamera();
   const YawRig rig = paperRig();
-  Scene s = simulateScene(camera, rig, scene(60 * kDeg, 0.0, 30, 21));
+  Scene s = simulateScene(camera, rig, paperScene(60 * kDeg, 0.0, 30, 21));
   // Features 0..9 only from frame 12 on (appearing), 10..19 only up to frame 15 (vanishing).
   std::vector<Track> tracks = s.tracks;
   for (Track &t : tracks) {
@@ -384,7 +349,7 @@ TEST_CASE("window: a camera that does not move gives no_motion, not a depth", "[
 {
   const CameraModel camera = paperCamera();
   const YawRig rig = paperRig();
-  Scene s = simulateScene(camera, rig, scene(0.0, 0.0, 6, 5, false));
+  Scene s = simulateScene(camera, rig, paperScene(0.0, 0.0, 6, 5, false));
   for (MotionSample &m : s.measured)
     m = MotionSample{m.frame, 0, 0, 0, 0, 0};
   // Every observation at its first frame's pixel: a still camera.
@@ -409,7 +374,7 @@ TEST_CASE("window with per-pose motion noise on arm scenes is near the joint bou
   noise.motion_noise = MotionNoise::Absolute;
   Stats st;
   for (int t = 0; t < 15; ++t) {
-    SceneOptions so = scene(0, 0, 16, 500 + static_cast<std::uint64_t>(t));
+    SceneOptions so = paperScene(0, 0, 16, 500 + static_cast<std::uint64_t>(t));
     so.noise = noise;
     so.min_depth = 0.4;
     so.max_depth = 0.8;
@@ -430,18 +395,15 @@ TEST_CASE("window with per-pose motion noise on arm scenes is near the joint bou
   CHECK(st.coverage() > kMinCoverage);
 }
 
-TEST_CASE("window does not drift over a long sequence (features appearing and vanishing)", "[window][montecarlo]")
+TEST_CASE_METHOD(PaperSetup, "window does not drift over a long sequence (features appearing and vanishing)", "[window][montecarlo]")
 {
-  const CameraModel camera = paperCamera();
-  const YawRig rig = paperRig();
-  const NoiseModel noise = paperNoise();
   // Normalised squared errors of the first and the last third of a 300-frame drive past a wall.
   double nees[3] = {0, 0, 0};
   int n[3] = {0, 0, 0};
   for (int t = 0; t < 3; ++t) {
     std::mt19937_64 rng(40 + static_cast<std::uint64_t>(t));
     std::uniform_real_distribution<double> u(0.0, 1.0);
-    SceneOptions so = scene(60 * kDeg, 0.0, 300, 40 + static_cast<std::uint64_t>(t));
+    SceneOptions so = paperScene(60 * kDeg, 0.0, 300, 40 + static_cast<std::uint64_t>(t));
     for (int i = 0; i < 300; ++i)
       so.world_points.emplace_back(1.5 + 1.5 * u(rng), -0.3 + 0.6 * u(rng), -1.0 + 10.0 * u(rng));
     const Scene s = simulateScene(camera, rig, so);
@@ -498,7 +460,7 @@ TEST_CASE("window rejects bad input", "[window]")
   CHECK(est.motion(8).frame == 8);
 
   // windowTracks: a frame missing from the log, a repeated id.
-  const Scene s = simulateScene(camera, rig, scene(0.0, 0.0, 4, 1, false));
+  const Scene s = simulateScene(camera, rig, paperScene(0.0, 0.0, 4, 1, false));
   std::vector<Track> tracks = s.tracks;
   tracks[0].observations.push_back(Observation{999, 100, 100});
   CHECK_THROWS_AS(windowTracks(camera, rig, s.measured, tracks), Error);
