@@ -976,7 +976,15 @@ struct WindowEstimator::Impl {
   // ---- Estimates.
   /* A feature's estimate; when ok, its Jacobian over the layout (rows) goes to columns jt_col..+2 of
      *Jt_out and the caller computes the covariance. */
-  PointEstimate estimateOf(const Feature &ft, Eigen::MatrixXd *Jt_out = nullptr, int jt_col = 0) const
+  /*
+    The feature's estimate. With Jt_out (and a factorisation), its status is provisional: the point's
+    Jacobian over the state goes into columns jt_col..jt_col+2 for ensureCache() to give it its
+    covariance and depth gate; for a point at non-positive inverse depth, the unit column of that
+    inverse depth goes into jt_col and *rho_column is set, for the gate that tells `behind` from
+    an unresolved depth.
+  */
+  PointEstimate estimateOf(const Feature &ft, Eigen::MatrixXd *Jt_out = nullptr, int jt_col = 0,
+                           bool *rho_column = nullptr) const
   {
     PointEstimate e;
     e.frame = ft.last_frame;
@@ -1052,6 +1060,11 @@ struct WindowEstimator::Impl {
     const Eigen::Vector3d q = f.cam.R.transpose() * u;
     if (!(rho > 0)) {
       e.status = Status::Behind;
+      const auto it = layout.feature_offset.find(ft.id);
+      if (Jt_out && llt_ok && rho_column && it != layout.feature_offset.end()) {
+        (*Jt_out)(it->second + 2, jt_col) = 1.0;
+        *rho_column = true;
+      }
       return e;
     }
     e.c_P = q / rho;
@@ -1097,10 +1110,13 @@ struct WindowEstimator::Impl {
         ids.push_back(kv.first);
     Eigen::MatrixXd Jt = Eigen::MatrixXd::Zero(layout.n, 3 * static_cast<Eigen::Index>(ids.size()));
     std::vector<int> col(ids.size(), -1);
+    std::vector<char> rho_only(ids.size(), 0);
     for (std::size_t i = 0; i < ids.size(); ++i) {
-      PointEstimate e = estimateOf(features.at(ids[i]), &Jt, 3 * static_cast<int>(i));
-      if (e.ok())
+      bool rho_column = false;
+      PointEstimate e = estimateOf(features.at(ids[i]), &Jt, 3 * static_cast<int>(i), &rho_column);
+      if (e.ok() || rho_column)
         col[i] = 3 * static_cast<int>(i);
+      rho_only[i] = rho_column ? 1 : 0;
       cache[ids[i]] = e;
     }
     if (llt_ok && Jt.cols() > 0) {
@@ -1109,9 +1125,18 @@ struct WindowEstimator::Impl {
         if (col[i] < 0)
           continue;
         PointEstimate &e = cache[ids[i]];
+        if (rho_only[i]) {
+          // Beyond infinity: behind the camera only if the inverse depth's 2-sigma range stays
+          // below zero; else the depth is not resolved.
+          const double sigma_rho = Jt.col(col[i]).norm();
+          if (features.at(ids[i]).p[2] + 2.0 * sigma_rho > 0)
+            e.status = Status::Degenerate;
+          continue;
+        }
         const auto X = Jt.middleCols<3>(col[i]);
         e.c_cov = X.transpose() * X;
-        if (!e.c_cov.allFinite())
+        // As `fused`: a depth without a bounded 2-sigma interval is not a measurement.
+        if (!e.c_cov.allFinite() || !std::isfinite(inverseDepthInterval(std::sqrt(e.c_cov(2, 2)) / e.c_P.z())))
           e.status = Status::Degenerate;
       }
     }

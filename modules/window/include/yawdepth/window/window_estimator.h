@@ -49,7 +49,10 @@
   which were the outliers),
   `undistort_failed`, `no_motion` (camera centre moved less than gates.min_baseline between the
   first and the last inlier), `degenerate` (largest rotation-compensated parallax below
-  gates.min_parallax_px), `behind`, else `ok`. A feature whose last observation left the window is
+  gates.min_parallax_px; or a depth without a bounded 2-sigma interval, as `fused`'s
+  inverseDepthInterval(); or a non-positive inverse depth whose 2-sigma range reaches positive
+  values), `behind` (the point behind a camera that saw it, or its inverse depth below zero by
+  more than 2 sigma), else `ok`. A feature whose last observation left the window is
   removed from the state and its last estimate kept (estimate() returns it until forget()); if it
   is observed again it starts anew.
 
