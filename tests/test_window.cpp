@@ -365,6 +365,31 @@ TEST_CASE("window: a camera that does not move gives no_motion, not a depth", "[
   }
 }
 
+TEST_CASE("window: a depth the frames do not resolve is degenerate, not ok or behind", "[window]")
+{
+  // 15 frames 0.05 mm apart (0.7 mm of travel for points 0.5 to 3 m away): a fraction of a pixel of
+  // parallax against 0.3 px of noise, so most inverse depths span zero at 2 sigma.
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  SceneOptions so = paperScene(1.0, 0.0, 15, 11);
+  so.step = 0.00005;
+  so.points = 60;
+  so.noise.sigma_odom = 1e-4;
+  const Scene s = simulateScene(camera, rig, so);
+  WindowOptions o;
+  o.noise = so.noise;
+  const std::vector<PointEstimate> est = windowTracks(camera, rig, s.measured, s.tracks, o);
+  int degenerate = 0;
+  for (const PointEstimate &e : est) {
+    degenerate += e.status == Status::Degenerate ? 1 : 0;
+    if (e.ok()) { // every ok depth has a bounded 2-sigma interval
+      const double rel = std::sqrt(e.c_cov(2, 2)) / e.c_P.z();
+      CHECK(std::isfinite(inverseDepthInterval(rel)));
+    }
+  }
+  CHECK(degenerate > static_cast<int>(est.size()) / 2);
+}
+
 TEST_CASE("window with per-pose motion noise on arm scenes is near the joint bound", "[window][6dof][montecarlo]")
 {
   const CameraModel camera = CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
