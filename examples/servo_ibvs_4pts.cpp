@@ -120,11 +120,8 @@ struct Run {
 // The servo loop: observe the corners, give the provider the camera's pose and the pixels, set
 // each feature's Z, compute the control law, move the camera.
 Run servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4], vpSimulatorCamera &robot,
-          const vpHomogeneousMatrix &wMo)
+          const vpHomogeneousMatrix &wMo, yawdepth::DepthProvider &provider)
 {
-  // The depth estimator: the camera is the vision frame (identity camera_pose), default options.
-  yawdepth::DepthProvider provider(scene.cam, yawdepth::YawRig(vpHomogeneousMatrix()));
-
   std::mt19937 rng(1000003u * args.seed + 17u);
   std::normal_distribution<double> noise(0.0, args.sigma_px);
   Run run;
@@ -203,10 +200,13 @@ int main(int argc, char **argv)
   robot.getPosition(wMc);
   const vpHomogeneousMatrix wMo = wMc * cMo;
 
+  // The depth estimator: the camera is the vision frame (identity camera_pose), default options.
+  yawdepth::DepthProvider provider(scene.cam, yawdepth::YawRig(vpHomogeneousMatrix()));
+
   if (!args.quiet)
     std::printf("servo: depth=%s pose=%u seed=%u sigma_px=%.2f\n", args.depth_mode.c_str(), args.pose, args.seed,
                 args.sigma_px);
-  const Run run = servo(args, scene, task, p, robot, wMo);
+  const Run run = servo(args, scene, task, p, robot, wMo, provider);
   std::printf("path_length=%.4f depth_error=%.4f\n", run.path_length, run.depth_error);
   return servo_sim::printOutcome(run.converged, run.iterations, run.final_error, run.reason);
 }

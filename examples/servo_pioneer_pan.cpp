@@ -128,9 +128,13 @@ vpColVector saturateAsRobot(const vpSimulatorPioneerPan &robot, const vpColVecto
 // Odometry: the platform's pose integrated from the measured wheel speeds.
 struct Odometry {
   double x = 0.0, y = 0.0, theta = 0.0;
-  // One period at the measured forward speed and turn rate.
-  void integrate(double v_meas, double w_meas, double dt)
+  // One period at the forward speed v[0] and turn rate v[1], each measured off by a relative
+  // `noise` x gauss() (drawn in that order).
+  template <class Gauss>
+  void integrate(const vpColVector &v, double noise, Gauss &&gauss, double dt)
   {
+    const double v_meas = v[0] * (1.0 + noise * gauss());
+    const double w_meas = v[1] * (1.0 + noise * gauss());
     x += dt * v_meas * std::cos(theta);
     y += dt * v_meas * std::sin(theta);
     theta += dt * w_meas;
@@ -144,17 +148,13 @@ struct Run {
   int iterations = 0;
   double final_error = 0.0, path_length = 0.0, depth_error = 0.0, depth_bias = 0.0;
   int converged_at[4] = {-1, -1, -1, -1}; // first iteration at which the provider used each corner's estimate
-  long revocations = 0;
 };
 
 // The servo loop: observe the corners, give the provider the odometry and the pan reading, set
 // each feature's Z, compute the control law, move the robot, integrate its odometry.
 Run servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4], vpSimulatorPioneerPan &robot,
-          const vpHomogeneousMatrix &wMo, double q0)
+          const vpHomogeneousMatrix &wMo, double q0, yawdepth::DepthProvider &provider)
 {
-  // The depth estimator, default options, the Pioneer's rig.
-  yawdepth::DepthProvider provider(scene.cam, yawdepth::pioneerPanRig());
-
   std::mt19937 rng(1000003u * args.seed + 17u);
   std::normal_distribution<double> gauss(0.0, 1.0);
   Odometry odo; // 2 % off per period by default
@@ -215,17 +215,13 @@ Run servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4],
     task.set_eJe(eJe);
     const vpColVector v = saturateAsRobot(robot, task.computeControlLaw());
     robot.setVelocity(vpRobot::ARTICULAR_FRAME, v);
-    const double v_meas = v[0] * (1.0 + args.odom_noise * gauss(rng));
-    const double w_meas = v[1] * (1.0 + args.odom_noise * gauss(rng));
-    odo.integrate(v_meas, w_meas, scene.dt);
+    odo.integrate(v, args.odom_noise, [&] { return gauss(rng); }, scene.dt);
     q_true += scene.dt * v[2];
 
     if (!args.quiet && run.iterations % (args.verbose ? 10 : 50) == 0)
       servo_sim::printProgress(run.iterations, view.error, run.path_length, p, point,
                                args.verbose && args.depth_mode == "estimated" ? &provider : nullptr);
   }
-  for (unsigned i = 0; i < 4; i++)
-    run.revocations += provider.info(i).revocations;
   return run;
 }
 
@@ -261,12 +257,18 @@ int main(int argc, char **argv)
   vpFeaturePoint p[4], pd[4];
   servo_sim::addSquareFeatures(task, scene.point, scene.cam, scene.cdMo, cMo_start, p, pd, scene.desired);
 
+  // The depth estimator, default options, the Pioneer's rig.
+  yawdepth::DepthProvider provider(scene.cam, yawdepth::pioneerPanRig());
+
   if (!args.quiet)
     std::printf("servo: depth=%s scenario=%s seed=%u sigma_px=%.2f\n", args.depth_mode.c_str(), args.scenario.c_str(),
                 args.seed, args.sigma_px);
-  const Run run = servo(args, scene, task, p, robot, wMo, q0);
+  const Run run = servo(args, scene, task, p, robot, wMo, q0, provider);
+  long revocations = 0;
+  for (unsigned i = 0; i < 4; i++)
+    revocations += provider.info(i).revocations;
   std::printf("path_length=%.4f depth_error=%.4f depth_bias=%+.4f converged_at=%d,%d,%d,%d revocations=%ld\n",
               run.path_length, run.depth_error, run.depth_bias, run.converged_at[0], run.converged_at[1],
-              run.converged_at[2], run.converged_at[3], run.revocations);
+              run.converged_at[2], run.converged_at[3], revocations);
   return servo_sim::printOutcome(run.converged, run.iterations, run.final_error, run.reason);
 }
