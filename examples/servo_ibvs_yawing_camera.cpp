@@ -57,9 +57,12 @@ namespace servo_sim {
 
 namespace {
 
-// The desired features sd: the corners seen from the goal; their pixels into desired_pixels.
-void setDesiredFeatures(const TagScene &scene, std::vector<vpFeaturePoint> &sd,
-                        std::vector<Eigen::Vector2d> &desired_pixels)
+// The task: the desired features sd (the corners seen from the goal, their pixels into
+// desired_pixels), each with its current feature in s; the three joints (v, omega, pan rate) move
+// the camera through eJe = the robot's Jacobian cJq (cVe = identity); the interaction matrix of the
+// current features, whose depths are what the provider sets.
+void setUpTask(vpServo &task, const TagScene &scene, double lambda, std::vector<vpFeaturePoint> &s,
+               std::vector<vpFeaturePoint> &sd, std::vector<Eigen::Vector2d> &desired_pixels)
 {
   const vpHomogeneousMatrix cdMw = scene.wMcd.inverse();
   for (std::size_t i = 0; i < sd.size(); ++i) {
@@ -67,6 +70,30 @@ void setDesiredFeatures(const TagScene &scene, std::vector<vpFeaturePoint> &sd,
     sd[i].buildFrom(P.x() / P.z(), P.y() / P.z(), P.z());
     desired_pixels.push_back(scene.camera.project(Eigen::Vector2d(P.x() / P.z(), P.y() / P.z())));
   }
+  task.setServo(vpServo::EYEINHAND_L_cVe_eJe);
+  task.setInteractionMatrixType(vpServo::CURRENT);
+  task.setLambda(lambda);
+  task.set_cVe(vpVelocityTwistMatrix());
+  for (std::size_t i = 0; i < s.size(); ++i)
+    task.addFeature(s[i], sd[i]);
+}
+
+// The record of period k as observed: time, the robot's true pose, the corners' true pixels and
+// depths, and their mean distance to the desired pixels.
+ServoSimStep startStep(int k, double dt, const UnicyclePanRobot &robot, const CornerView &view,
+                       const std::vector<Eigen::Vector2d> &desired_pixels)
+{
+  ServoSimStep st;
+  st.iteration = k;
+  st.time = k * dt;
+  st.robot = robot.sample(k);
+  st.pixels = view.pixels;
+  st.true_Z = view.true_Z;
+  double err = 0;
+  for (std::size_t i = 0; i < desired_pixels.size(); ++i)
+    err += (st.pixels[i] - desired_pixels[i]).norm();
+  st.error_px = err / desired_pixels.size();
+  return st;
 }
 
 // One feature's depth Z from the chosen source, and what the provider says of it (Estimated mode).
@@ -100,14 +127,21 @@ DepthChoice chooseDepth(const ServoSimOptions &o, const yawdepth::DepthProvider 
   return d;
 }
 
-// Appends one feature's depth to the period's record.
-void recordDepth(ServoSimStep &st, const DepthChoice &d)
+// Each feature: x, y from the observed pixel, Z from the chosen source; the depths into the record.
+void setFeatures(const ServoSimOptions &o, const TagScene &scene, const CornerView &view,
+                 const yawdepth::DepthProvider &provider, std::vector<vpFeaturePoint> &s, ServoSimStep &st)
 {
-  st.used_Z.push_back(d.Z);
-  st.sigma_Z.push_back(d.sigma);
-  st.converged.push_back(d.converged);
-  st.status.push_back(d.status);
-  st.estimate_Z.push_back(d.estimate);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const DepthChoice d = chooseDepth(o, provider, scene.ids[i], view.true_Z[i]);
+    double x = 0, y = 0;
+    o.camera.pixelToMeter(view.observed[i].second, x, y);
+    s[i].buildFrom(x, y, d.Z);
+    st.used_Z.push_back(d.Z);
+    st.sigma_Z.push_back(d.sigma);
+    st.converged.push_back(d.converged);
+    st.status.push_back(d.status);
+    st.estimate_Z.push_back(d.estimate);
+  }
 }
 
 // The yaw helper's pan rate (recommendYawRate() on the features whose depth has not converged);
@@ -151,6 +185,14 @@ void moveRobot(UnicyclePanRobot &robot, UnicyclePanRobot &odometry, const vpColV
   odometry.step(measured_rates, o.dt);
 }
 
+// Keeps period st in the result, then gives it to on_step.
+void keepStep(ServoSimResult &result, const ServoSimStep &st, const std::function<void(const ServoSimStep &)> &on_step)
+{
+  result.steps.push_back(st);
+  if (on_step)
+    on_step(result.steps.back());
+}
+
 } // namespace
 
 ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<void(const ServoSimStep &)> &on_step)
@@ -158,7 +200,6 @@ ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<
   // The simulated world: the tag, the goal and the robot at its start. The robot's odometry
   // dead-reckons from the same start.
   const TagScene scene(o);
-  const yawdepth::CameraModel &camera = o.camera;
   const std::size_t n = scene.ids.size();
   UnicyclePanRobot robot = scene.start;
   UnicyclePanRobot odometry = robot;
@@ -166,42 +207,16 @@ ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<
 
   ServoSimResult result;
   std::vector<vpFeaturePoint> s(n), sd(n);
-  setDesiredFeatures(scene, sd, result.desired_pixels);
-  auto record = [&](const ServoSimStep &st) { // keeps the period, then tells the caller
-    result.steps.push_back(st);
-    if (on_step)
-      on_step(result.steps.back());
-  };
-
-  // The task: the three joints (v, omega, pan rate) move the camera through eJe = the robot's
-  // Jacobian cJq (cVe = identity); the interaction matrix of the current features, whose depths
-  // are what the provider sets.
   vpServo task;
-  task.setServo(vpServo::EYEINHAND_L_cVe_eJe);
-  task.setInteractionMatrixType(vpServo::CURRENT);
-  task.setLambda(o.lambda);
-  task.set_cVe(vpVelocityTwistMatrix());
-  for (std::size_t i = 0; i < n; ++i)
-    task.addFeature(s[i], sd[i]);
-
-  yawdepth::DepthProvider provider(camera, o.rig, o.provider);
+  setUpTask(task, scene, o.lambda, s, sd, result.desired_pixels);
+  yawdepth::DepthProvider provider(o.camera, o.rig, o.provider);
 
   vpColVector qdot(3, 0.0);
   result.reason = "max_iterations";
   for (int k = 0; k <= o.max_iterations; ++k) {
-    ServoSimStep st;
-    st.iteration = k;
-    st.time = k * o.dt;
-    st.robot = robot.sample(k);
-
     // Observe the corners: (id, pixel) as a tracker gives them, and the truth for the record.
     const CornerView view = scene.observe(robot, noise);
-    st.pixels = view.pixels;
-    st.true_Z = view.true_Z;
-    double err = 0;
-    for (std::size_t i = 0; i < n; ++i)
-      err += (st.pixels[i] - result.desired_pixels[i]).norm();
-    st.error_px = err / n;
+    ServoSimStep st = startStep(k, o.dt, robot, view, result.desired_pixels);
     result.final_error_px = st.error_px;
     result.iterations = k;
     if (view.lost || !std::isfinite(st.error_px)) {
@@ -211,7 +226,7 @@ ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<
     if (st.error_px < o.tolerance_px) {
       result.converged = true;
       result.reason = "converged";
-      record(st);
+      keepStep(result, st, on_step);
       break;
     }
     if (k == o.max_iterations)
@@ -224,13 +239,7 @@ ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<
     // Each feature: x, y from the observed pixel, Z from the chosen source.
     if (o.depth == ServoDepthMode::Estimated)
       provider.update(odo, view.observed);
-    for (std::size_t i = 0; i < n; ++i) {
-      const DepthChoice d = chooseDepth(o, provider, scene.ids[i], view.true_Z[i]);
-      double x = 0, y = 0;
-      camera.pixelToMeter(view.observed[i].second, x, y);
-      s[i].buildFrom(x, y, d.Z);
-      recordDepth(st, d);
-    }
+    setFeatures(o, scene, view, provider, s, st);
 
     // Control: the robot's Jacobian at the measured pan.
     UnicyclePanRobot measured = robot;
@@ -251,7 +260,7 @@ ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<
       break;
     }
     st.qdot = qdot;
-    record(st);
+    keepStep(result, st, on_step);
     moveRobot(robot, odometry, qdot, o, noise);
   }
   return result;
