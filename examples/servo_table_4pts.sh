@@ -6,6 +6,7 @@
 # (paired: the same pose and noise seed), the worst final error and the number of diverged runs.
 # Usage: examples/servo_table_4pts.sh [path/to/servo_ibvs_4pts] [POSES] [SEEDS] [SIGMA]
 set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/servo_table_common.sh"
 bin=${1:-build/examples/servo_ibvs_4pts}
 poses=${2:-8}
 seeds=${3:-5}
@@ -19,13 +20,8 @@ for pose in $(seq 0 $((poses - 1))); do
   for m in "${modes[@]}"; do
     label=${m%%:*}; args=${m#*:}
     for s in $(seq 1 "$seeds"); do
-      out=$("$bin" --pose "$pose" --seed "$s" --sigma-px "$sigma" --quiet $args | tail -2) || true
-      last=$(tail -1 <<<"$out")
-      case $last in converged*) d=0 ;; *) d=1 ;; esac
-      i=$(sed -n 's/.*iterations=\([0-9]*\).*/\1/p' <<<"$last")
-      e=$(sed -n 's/.*final_error=\([0-9.eE+-]*\).*/\1/p' <<<"$last")
-      p=$(head -1 <<<"$out" | sed -n 's/.*path_length=\([0-9.eE+-]*\).*/\1/p')
-      echo "$label $s $i $p $e $d"
+      out=$(last_lines 2 "$bin" --pose "$pose" --seed "$s" --sigma-px "$sigma" --quiet $args)
+      echo "$label $s $(field iterations "$out") $(field path_length "$out") $(field final_error "$out") $(not_converged "$out")"
     done
   done | awk -v pose="$pose" '
     { key = $0; n = NF; lab = ""; for (k = 1; k <= n - 5; k++) lab = lab (k > 1 ? " " : "") $k
