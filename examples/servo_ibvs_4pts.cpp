@@ -107,6 +107,7 @@ struct Scene {
   const vpHomogeneousMatrix cdMo = vpHomogeneousMatrix(0, 0, 0.75, 0, 0, 0);
   vpPoint point[4];
   vpImagePoint desired[4]; // the corners' pixels at the goal
+  Scene() { servo_sim::setSquare(point); }
 };
 
 // How a run ended and what the line before the last reports.
@@ -168,9 +169,7 @@ Run servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4],
     }
     vpColVector v = task.computeControlLaw();
     robot.setVelocity(vpRobot::CAMERA_FRAME, v);
-    if (!args.quiet && run.iterations % (args.verbose ? 10 : 50) == 0)
-      servo_sim::printProgress(run.iterations, view.error, run.path_length, p, point,
-                               args.verbose && args.depth_mode == "estimated" ? &provider : nullptr);
+    servo_sim::printProgress(args, run.iterations, view.error, run.path_length, p, point, provider);
   }
   return run;
 }
@@ -183,7 +182,6 @@ int main(int argc, char **argv)
 
   // The square, and the camera's start (the tutorial's, or a random one).
   Scene scene;
-  servo_sim::setSquare(scene.point);
   const vpHomogeneousMatrix cMo = startPose(args.pose, scene.cam, scene.width, scene.height, scene.point);
 
   vpServo task;

@@ -103,6 +103,7 @@ struct Scene {
   const vpHomogeneousMatrix cdMo = vpHomogeneousMatrix(0, 0, 0.6, 0, 0, 0);
   vpPoint point[4];
   vpImagePoint desired[4]; // the corners' pixels at the goal
+  Scene() { servo_sim::setSquare(point); }
 };
 
 // Turns the pan to q0 (the robot stays at the world origin): one period of pan velocity.
@@ -218,9 +219,7 @@ Run servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4],
     odo.integrate(v, args.odom_noise, [&] { return gauss(rng); }, scene.dt);
     q_true += scene.dt * v[2];
 
-    if (!args.quiet && run.iterations % (args.verbose ? 10 : 50) == 0)
-      servo_sim::printProgress(run.iterations, view.error, run.path_length, p, point,
-                               args.verbose && args.depth_mode == "estimated" ? &provider : nullptr);
+    servo_sim::printProgress(args, run.iterations, view.error, run.path_length, p, point, provider);
   }
   return run;
 }
@@ -231,7 +230,6 @@ int main(int argc, char **argv)
 {
   const Args args = parse(argc, argv);
   Scene scene;
-  servo_sim::setSquare(scene.point);
 
   // The robot starts at the world origin, the pan at q0; the square is placed relative to the camera.
   vpSimulatorPioneerPan robot;

@@ -17,15 +17,8 @@ echo "| start pose | depth | iterations (mean) | / true | path (m, mean) | / tru
 echo "|---|---|---|---|---|---|---|---|---|"
 for pose in $(seq 0 $((poses - 1))); do
   declare -A it=() path=()
-  for m in "${modes[@]}"; do
-    label=${m%%:*}; args=${m#*:}
-    for s in $(seq 1 "$seeds"); do
-      out=$(last_lines 2 "$bin" --pose "$pose" --seed "$s" --sigma-px "$sigma" --quiet $args)
-      echo "$label $s $(field iterations "$out") $(field path_length "$out") $(field final_error "$out") $(not_converged "$out")"
-    done
-  done | awk -v pose="$pose" '
-    { key = $0; n = NF; lab = ""; for (k = 1; k <= n - 5; k++) lab = lab (k > 1 ? " " : "") $k
-      s = $(n-4); it[lab, s] = $(n-3); pa[lab, s] = $(n-2); er[lab, s] = $(n-1); dv[lab] += $n
+  mode_runs "iterations path_length final_error" --pose "$pose" --sigma-px "$sigma" | awk -F'|' -v pose="$pose" '
+    { lab = $1; s = $2; it[lab, s] = $3; pa[lab, s] = $4; er[lab, s] = $5; dv[lab] += $6
       if (!(lab in seen)) { seen[lab] = 1; order[++nl] = lab } if (s > ns) ns = s }
     END {
       for (l = 1; l <= nl; l++) { lab = order[l]; si = sp = ri = rp = 0; wr = 0; we = 0

@@ -18,13 +18,8 @@ echo "| scenario | pixel noise | depth | iterations (mean) | / true (mean) | / t
 echo "|---|---|---|---|---|---|---|---|---|"
 for scenario in front side; do
   for sigma in $sigmas; do
-    for m in "${modes[@]}"; do
-      label=${m%%:*}; args=${m#*:}
-      for s in $(seq 1 "$seeds"); do
-        out=$(last_lines 2 "$bin" --scenario "$scenario" --seed "$s" --sigma-px "$sigma" --quiet $args)
-        echo "$label|$s|$(field iterations "$out")|$(field depth_error "$out")|$(field depth_bias "$out")|$(not_converged "$out")"
-      done
-    done | awk -F'|' -v sc="$scenario" -v sg="$sigma" '
+    mode_runs "iterations depth_error depth_bias" --scenario "$scenario" --sigma-px "$sigma" |
+      awk -F'|' -v sc="$scenario" -v sg="$sigma" '
       { lab = $1; s = $2; it[lab, s] = $3; er[lab, s] = $4; bi[lab, s] = $5; dv[lab] += $6
         if (!(lab in seen)) { seen[lab] = 1; order[++nl] = lab } if (s > ns) ns = s }
       END {

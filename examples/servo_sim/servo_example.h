@@ -165,12 +165,16 @@ SquareView observeSquare(vpPoint (&point)[4], const vpHomogeneousMatrix &cMo, co
 // ---- The printed lines ----
 
 /*!
-  The progress line: the iteration, the true error, the path, the depths used and the true ones;
-  with a provider (verbose, estimated depth) a line per corner with its estimate.
+  The progress line every 50 iterations (every 10 with --verbose, none with --quiet): the
+  iteration, the true error, the path, the depths used and the true ones; verbose and estimated
+  depth, a line per corner with its estimate.
 */
-inline void printProgress(int iter, double error, double path_length, const vpFeaturePoint (&p)[4],
-                          const vpPoint (&point)[4], const yawdepth::DepthProvider *provider)
+inline void printProgress(const PointServoArgs &args, int iter, double error, double path_length,
+                          const vpFeaturePoint (&p)[4], const vpPoint (&point)[4],
+                          const yawdepth::DepthProvider &provider)
 {
+  if (args.quiet || iter % (args.verbose ? 10 : 50) != 0)
+    return;
   std::printf("it %4d  error %8.3f px  path %.4f  Z used", iter, error, path_length);
   for (unsigned i = 0; i < 4; i++)
     std::printf(" %.3f", p[i].get_Z());
@@ -178,9 +182,9 @@ inline void printProgress(int iter, double error, double path_length, const vpFe
   for (unsigned i = 0; i < 4; i++)
     std::printf(" %.3f", point[i].get_Z());
   std::printf(")\n");
-  if (provider)
+  if (args.verbose && args.depth_mode == "estimated")
     for (unsigned i = 0; i < 4; i++) {
-      const yawdepth::FeatureDepth f = provider->info(i);
+      const yawdepth::FeatureDepth f = provider.info(i);
       std::printf("    %u: %s estimate %.4f +- %.4f%s\n", i, yawdepth::toString(f.status), f.estimate,
                   f.estimate_sigma, f.converged ? " (used)" : "");
     }
