@@ -110,66 +110,47 @@ struct Scene {
   Scene() { servo_sim::setSquare(point); }
 };
 
-// How a run ended and what the line before the last reports.
-struct Run {
-  bool converged = false;
-  std::string reason = "max_iterations";
-  int iterations = 0;
-  double final_error = 0.0, path_length = 0.0, depth_error = 0.0;
-};
-
 // The servo loop: observe the corners, give the provider the camera's pose and the pixels, set
 // each feature's Z, compute the control law, move the camera.
-Run servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4], vpSimulatorCamera &robot,
-          const vpHomogeneousMatrix &wMo, yawdepth::DepthProvider &provider)
+servo_sim::PointServoRun servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4],
+                               vpSimulatorCamera &robot, const vpHomogeneousMatrix &wMo,
+                               yawdepth::DepthProvider &provider)
 {
   std::mt19937 rng(1000003u * args.seed + 17u);
   std::normal_distribution<double> noise(0.0, args.sigma_px);
-  Run run;
+  servo_sim::PointServoRun run;
   vpHomogeneousMatrix wMc;
   robot.getPosition(wMc);
-  vpTranslationVector previous_centre = wMc.getTranslationVector();
+  run.start(wMc);
   vpPoint(&point)[4] = scene.point;
   for (; run.iterations < args.max_iterations; ++run.iterations) {
     robot.getPosition(wMc);
     const vpHomogeneousMatrix cMo = wMc.inverse() * wMo;
-    run.path_length += (wMc.getTranslationVector() - previous_centre).frobeniusNorm();
-    previous_centre = wMc.getTranslationVector();
+    run.moveTo(wMc);
 
     // Observe: the true projection, then pixel noise.
     const servo_sim::SquareView view = servo_sim::observeSquare(point, cMo, scene.cam, scene.width, scene.height,
                                                                 scene.desired, [&] { return noise(rng); });
-    run.final_error = view.error;
-    if (view.outside) {
-      run.reason = "feature_left_image";
+    if (run.ends(view))
       break;
-    }
-    if (view.error < 0.5) {
-      run.converged = true;
-      break;
-    }
 
     // The features: x, y from the noisy pixels, Z from the chosen source.
     if (args.depth_mode == "estimated")
       provider.update(wMc, view.observed);
-    run.depth_error = 0.0;
+    run.clearDepthErrors();
     for (unsigned i = 0; i < 4; i++) {
       const vpImagePoint &ip = view.observed[i].second;
-      double Z = point[i].get_Z();
-      if (args.depth_mode == "estimated") {
-        provider.buildFrom(i, ip, p[i]);
-        Z = p[i].get_Z();
-      } else {
+      if (args.depth_mode == "estimated")
+        provider.buildFrom(i, ip, p[i]); // x, y undistorted, Z the provider's depth
+      else {
         vpFeatureBuilder::create(p[i], scene.cam, ip);
-        if (args.depth_mode == "constant")
-          Z = scene.cdMo[2][3] * (1.0 + args.constant_error);
-        p[i].set_Z(Z);
+        p[i].set_Z(args.depth_mode == "constant" ? scene.cdMo[2][3] * (1.0 + args.constant_error) : point[i].get_Z());
       }
-      run.depth_error += std::fabs(Z - point[i].get_Z()) / point[i].get_Z() / 4.0;
+      run.addDepth(p[i].get_Z(), point[i].get_Z());
     }
     vpColVector v = task.computeControlLaw();
     robot.setVelocity(vpRobot::CAMERA_FRAME, v);
-    servo_sim::printProgress(args, run.iterations, view.error, run.path_length, p, point, provider);
+    servo_sim::printProgress(args, run, view.error, p, point, provider);
   }
   return run;
 }
@@ -204,7 +185,7 @@ int main(int argc, char **argv)
   if (!args.quiet)
     std::printf("servo: depth=%s pose=%u seed=%u sigma_px=%.2f\n", args.depth_mode.c_str(), args.pose, args.seed,
                 args.sigma_px);
-  const Run run = servo(args, scene, task, p, robot, wMo, provider);
+  const servo_sim::PointServoRun run = servo(args, scene, task, p, robot, wMo, provider);
   std::printf("path_length=%.4f depth_error=%.4f\n", run.path_length, run.depth_error);
   return servo_sim::printOutcome(run.converged, run.iterations, run.final_error, run.reason);
 }

@@ -142,12 +142,8 @@ struct Odometry {
   }
 };
 
-// How a run ended and what the line before the last reports.
-struct Run {
-  bool converged = false;
-  std::string reason = "max_iterations";
-  int iterations = 0;
-  double final_error = 0.0, path_length = 0.0, depth_error = 0.0, depth_bias = 0.0;
+// How a run went: what the line before the last reports.
+struct Run : servo_sim::PointServoRun {
   int converged_at[4] = {-1, -1, -1, -1}; // first iteration at which the provider used each corner's estimate
 };
 
@@ -163,27 +159,19 @@ Run servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4],
   Run run;
   vpHomogeneousMatrix wMc;
   robot.getPosition(wMc);
-  vpTranslationVector previous_centre = wMc.getTranslationVector();
+  run.start(wMc);
   vpPoint(&point)[4] = scene.point;
   vpMatrix eJe;
   for (; run.iterations < args.max_iterations; ++run.iterations) {
     robot.getPosition(wMc);
     const vpHomogeneousMatrix cMo = wMc.inverse() * wMo;
-    run.path_length += (wMc.getTranslationVector() - previous_centre).frobeniusNorm();
-    previous_centre = wMc.getTranslationVector();
+    run.moveTo(wMc);
 
     // Observe: the true projection, then pixel noise.
     const servo_sim::SquareView view = servo_sim::observeSquare(
         point, cMo, scene.cam, scene.width, scene.height, scene.desired, [&] { return args.sigma_px * gauss(rng); });
-    run.final_error = view.error;
-    if (view.outside) {
-      run.reason = "feature_left_image";
+    if (run.ends(view))
       break;
-    }
-    if (view.error < 0.5) {
-      run.converged = true;
-      break;
-    }
 
     // The features: x, y from the noisy pixels, Z from the chosen source.
     if (args.depth_mode == "estimated") {
@@ -194,32 +182,26 @@ Run servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4],
       else
         provider.update(odometry, view.observed);
     }
-    run.depth_error = run.depth_bias = 0.0;
+    run.clearDepthErrors();
     for (unsigned i = 0; i < 4; i++) {
       const vpImagePoint &ip = view.observed[i].second;
-      double Z = point[i].get_Z();
       if (args.depth_mode == "estimated") {
-        provider.buildFrom(i, ip, p[i]);
-        Z = p[i].get_Z();
+        provider.buildFrom(i, ip, p[i]); // x, y undistorted, Z the provider's depth
         if (run.converged_at[i] < 0 && provider.converged(i))
           run.converged_at[i] = run.iterations;
       } else {
         vpFeatureBuilder::create(p[i], scene.cam, ip);
-        if (args.depth_mode == "constant")
-          Z = scene.cdMo[2][3] * (1.0 + args.constant_error);
-        p[i].set_Z(Z);
+        p[i].set_Z(args.depth_mode == "constant" ? scene.cdMo[2][3] * (1.0 + args.constant_error) : point[i].get_Z());
       }
-      run.depth_error += std::fabs(Z - point[i].get_Z()) / point[i].get_Z() / 4.0;
-      run.depth_bias += (Z - point[i].get_Z()) / point[i].get_Z() / 4.0;
+      run.addDepth(p[i].get_Z(), point[i].get_Z());
     }
     robot.get_eJe(eJe);
     task.set_eJe(eJe);
     const vpColVector v = saturateAsRobot(robot, task.computeControlLaw());
     robot.setVelocity(vpRobot::ARTICULAR_FRAME, v);
+    servo_sim::printProgress(args, run, view.error, p, point, provider);
     odo.integrate(v, args.odom_noise, [&] { return gauss(rng); }, scene.dt);
     q_true += scene.dt * v[2];
-
-    servo_sim::printProgress(args, run.iterations, view.error, run.path_length, p, point, provider);
   }
   return run;
 }

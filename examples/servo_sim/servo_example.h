@@ -9,6 +9,7 @@
   also built alone against an installed yawdepth (tests/consumer, tests/consumer_servo), with this
   header found beside them; a copy of an example needs this file too.
 */
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
@@ -22,6 +23,7 @@
 #include <visp3/core/vpImagePoint.h>
 #include <visp3/core/vpMeterPixelConversion.h>
 #include <visp3/core/vpPoint.h>
+#include <visp3/core/vpTranslationVector.h>
 #include <visp3/visual_features/vpFeatureBuilder.h>
 #include <visp3/visual_features/vpFeaturePoint.h>
 #include <visp3/vs/vpServo.h>
@@ -162,6 +164,46 @@ SquareView observeSquare(vpPoint (&point)[4], const vpHomogeneousMatrix &cMo, co
   return view;
 }
 
+// ---- The run's record ----
+
+/*! How a run of servo_ibvs_4pts or servo_pioneer_pan goes: what its last two lines report. */
+struct PointServoRun {
+  bool converged = false;                     //!< the true error fell under 0.5 px
+  std::string reason = "max_iterations";      //!< why it diverged
+  int iterations = 0;                         //!< periods run
+  double final_error = 0.0;                   //!< true mean corner error at the end (px)
+  double path_length = 0.0;                   //!< the camera's path (m)
+  double depth_error = 0.0, depth_bias = 0.0; //!< last period: mean |Z used - Z true| / Z true, mean (Z used - Z true) / Z true
+  vpTranslationVector centre;                 //!< the camera's centre at the last period
+
+  /*! The camera's start wMc: where its path begins. */
+  void start(const vpHomogeneousMatrix &wMc) { centre = wMc.getTranslationVector(); }
+  /*! The camera now at wMc: its move since the last period added to the path. */
+  void moveTo(const vpHomogeneousMatrix &wMc)
+  {
+    path_length += (wMc.getTranslationVector() - centre).frobeniusNorm();
+    centre = wMc.getTranslationVector();
+  }
+  /*! The period's view: its true error kept; true when the run ends there (a corner left the image: diverged; the error under 0.5 px: converged). */
+  bool ends(const SquareView &view)
+  {
+    final_error = view.error;
+    if (view.outside)
+      reason = "feature_left_image";
+    else if (view.error < 0.5)
+      converged = true;
+    return view.outside || converged;
+  }
+  /*! Starts the period's depth errors. */
+  void clearDepthErrors() { depth_error = depth_bias = 0.0; }
+  /*! One corner's depth: Z given to the control law against its true depth. */
+  void addDepth(double Z, double Z_true)
+  {
+    depth_error += std::fabs(Z - Z_true) / Z_true / 4.0;
+    depth_bias += (Z - Z_true) / Z_true / 4.0;
+  }
+};
+
 // ---- The printed lines ----
 
 /*!
@@ -169,13 +211,13 @@ SquareView observeSquare(vpPoint (&point)[4], const vpHomogeneousMatrix &cMo, co
   iteration, the true error, the path, the depths used and the true ones; verbose and estimated
   depth, a line per corner with its estimate.
 */
-inline void printProgress(const PointServoArgs &args, int iter, double error, double path_length,
+inline void printProgress(const PointServoArgs &args, const PointServoRun &run, double error,
                           const vpFeaturePoint (&p)[4], const vpPoint (&point)[4],
                           const yawdepth::DepthProvider &provider)
 {
-  if (args.quiet || iter % (args.verbose ? 10 : 50) != 0)
+  if (args.quiet || run.iterations % (args.verbose ? 10 : 50) != 0)
     return;
-  std::printf("it %4d  error %8.3f px  path %.4f  Z used", iter, error, path_length);
+  std::printf("it %4d  error %8.3f px  path %.4f  Z used", run.iterations, error, run.path_length);
   for (unsigned i = 0; i < 4; i++)
     std::printf(" %.3f", p[i].get_Z());
   std::printf("  (true");
