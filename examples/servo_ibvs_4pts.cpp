@@ -45,6 +45,7 @@
 
 namespace {
 
+// The usage lines (on stdout, as --help prints them).
 void usage()
 {
   std::printf("usage: servo_ibvs_4pts [--depth true|constant|estimated] [--constant-error E]\n"

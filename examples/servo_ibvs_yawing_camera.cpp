@@ -272,6 +272,7 @@ ServoSimResult runServoSimulation(const ServoSimOptions &o, const std::function<
 
 namespace {
 
+// The usage lines (on stdout, as --help prints them).
 void usage()
 {
   std::printf("usage: servo_ibvs_yawing_camera [--depth true|constant|estimated] [--constant-error E]\n"

@@ -53,6 +53,7 @@
 
 namespace {
 
+// The usage lines (on stdout, as --help prints them).
 void usage()
 {
   std::printf("usage: servo_pioneer_pan [--depth true|constant|estimated] [--scenario front|side]\n"
