@@ -68,25 +68,27 @@ struct SceneSpec {
   int arm = -1;    // an arm scene (ArmPath) instead of the planar robot
   bool isArm() const { return arm >= 0; }
   const char *armName() const { return arm == 0 ? "approach" : arm == 1 ? "orbit" : "random"; }
-  std::string name() const
+  // The scene's name: long (the tables' headers) or short (the summary's rows).
+  std::string label(bool brief) const
   {
     char buf[96];
     if (isArm())
-      std::snprintf(buf, sizeof buf, "arm, %s (6-DoF, hand-eye mount)", armName());
+      std::snprintf(buf, sizeof buf, brief ? "arm %s" : "arm, %s (6-DoF, hand-eye mount)", armName());
     else
-      std::snprintf(buf, sizeof buf, "yaw %2.0f deg, %s", yaw_deg, turn_deg == 0 ? "straight" : "turning 1 deg/frame");
+      std::snprintf(buf, sizeof buf, brief ? "yaw %2.0f %s" : "yaw %2.0f deg, %s", yaw_deg,
+                    turn_deg != 0 ? (brief ? "turning" : "turning 1 deg/frame") : "straight");
     return buf;
   }
-  std::string shortName() const
-  {
-    char buf[64];
-    if (isArm())
-      std::snprintf(buf, sizeof buf, "arm %s", armName());
-    else
-      std::snprintf(buf, sizeof buf, "yaw %2.0f %s", yaw_deg, turn_deg == 0 ? "straight" : "turning");
-    return buf;
-  }
+  std::string name() const { return label(false); }
+  std::string shortName() const { return label(true); }
 };
+
+/*! Adds each of the given members of `from` into the same member of `to` (a merge of sums). */
+template <class T, class... Member>
+void addEach(T &to, const T &from, Member... members)
+{
+  ((to.*members += from.*members), ...);
+}
 
 /*! Error statistics of one method over the points used. */
 struct Acc {
@@ -114,14 +116,8 @@ struct Acc {
   }
   void merge(const Acc &o)
   {
-    n += o.n;
-    se += o.se;
-    sum_e += o.sum_e;
-    sn_joint += o.sn_joint;
-    sn_pp += o.sn_pp;
-    covered += o.covered;
-    not_ok += o.not_ok;
-    gross += o.gross;
+    addEach(*this, o, &Acc::n, &Acc::se, &Acc::sum_e, &Acc::sn_joint, &Acc::sn_pp, &Acc::covered, &Acc::not_ok,
+            &Acc::gross);
     abs_e.insert(abs_e.end(), o.abs_e.begin(), o.abs_e.end());
   }
   double medianAbs() const
@@ -147,12 +143,8 @@ struct CleanStats {
   std::array<Acc, kMethods> acc;
   void merge(const CleanStats &o)
   {
-    points += o.points;
-    few_obs += o.few_obs;
-    no_bound += o.no_bound;
-    used += o.used;
-    crlb_joint_sq += o.crlb_joint_sq;
-    crlb_pp_sq += o.crlb_pp_sq;
+    addEach(*this, o, &CleanStats::points, &CleanStats::few_obs, &CleanStats::no_bound, &CleanStats::used,
+            &CleanStats::crlb_joint_sq, &CleanStats::crlb_pp_sq);
     for (int m = 0; m < kMethods; ++m)
       acc[m].merge(o.acc[m]);
   }
@@ -165,9 +157,7 @@ struct OutlierStats {
   std::array<long, 3> tp{{0, 0, 0}}, fp{{0, 0, 0}}; // flagged and corrupted / flagged and clean
   void merge(const OutlierStats &o)
   {
-    points += o.points;
-    used += o.used;
-    corrupted += o.corrupted;
+    addEach(*this, o, &OutlierStats::points, &OutlierStats::used, &OutlierStats::corrupted);
     for (int m = 0; m < 3; ++m) {
       acc[m].merge(o.acc[m]);
       tp[m] += o.tp[m];
@@ -662,6 +652,20 @@ void printSummaryRow(const std::string &name, const CleanStats &s, bool refine_o
   std::printf("\n");
 }
 
+/*! A table's rows: `print` of each scene's statistics (its short name), a rule, the pooled planar
+    and arm statistics, a rule. */
+template <class Stats, class PrintRows>
+void printSceneRows(const Setup &setup, const std::vector<Stats> &per_scene, const Stats &pooled,
+                    const Stats &pooled_arm, int width, PrintRows print)
+{
+  for (std::size_t si = 0; si < setup.specs.size(); ++si)
+    print(setup.specs[si].shortName(), per_scene[si], setup.refine_ok);
+  printRule(width);
+  print("pooled planar", pooled, setup.refine_ok);
+  print("pooled arm", pooled_arm, setup.refine_ok);
+  printRule(width);
+}
+
 /*! Compact summary: RMSE/CRLB(joint) per scene and method. */
 void printSummaryTable(const Setup &setup, const std::vector<CleanStats> &clean, const CleanStats &pooled,
                        const CleanStats &pooled_arm)
@@ -674,12 +678,7 @@ void printSummaryTable(const Setup &setup, const std::vector<CleanStats> &clean,
     std::printf(" %20s", kMethodNames[m]);
   std::printf("\n");
   printRule(W);
-  for (std::size_t si = 0; si < setup.specs.size(); ++si)
-    printSummaryRow(setup.specs[si].shortName(), clean[si], setup.refine_ok);
-  printRule(W);
-  printSummaryRow("pooled planar", pooled, setup.refine_ok);
-  printSummaryRow("pooled arm", pooled_arm, setup.refine_ok);
-  printRule(W);
+  printSceneRows(setup, clean, pooled, pooled_arm, W, printSummaryRow);
 }
 
 void printOutlierRows(const std::string &name, const OutlierStats &s, bool refine_ok)
@@ -718,12 +717,7 @@ void printOutlierTable(const Setup &setup, const std::vector<OutlierStats> &dirt
   std::printf("%-16s %-7s %7s %10s %9s %10s %10s %6s %9s %7s %9s\n", "", "", "(pts)", "(mm)", "|e| (mm)", "joint",
               "per-point", "(pts)", "coverage", "recall", "precision");
   printRule(W);
-  for (std::size_t si = 0; si < setup.specs.size(); ++si)
-    printOutlierRows(setup.specs[si].shortName(), dirty[si], setup.refine_ok);
-  printRule(W);
-  printOutlierRows("pooled planar", op, setup.refine_ok);
-  printOutlierRows("pooled arm", op_arm, setup.refine_ok);
-  printRule(W);
+  printSceneRows(setup, dirty, op, op_arm, W, printOutlierRows);
   std::printf("  pooled planar: %ld points, %ld used (fused, window and refine ok, >= 2 observations), %ld corrupted observations.\n",
               op.points, op.used, op.corrupted);
 }

@@ -27,6 +27,8 @@
 #include <yawdepth/window/window_estimator.h>
 #include <yawdepth/servo/yaw_helper.h>
 
+#include "bench_common.h"
+
 using namespace yawdepth;
 
 namespace {
@@ -49,6 +51,78 @@ struct Policy {
   double yaw; // fixed yaw (rad); the steered policy starts pointing at the layout
   bool explore = true; // the steered policy explores unseen bearings (YawHelper) once nothing is left to learn
 };
+
+/* Dead reckoning over one frame: the increment with its noise, in the previous measured heading. */
+void deadReckon(MotionSample &measured, const NoiseModel &noise, std::mt19937_64 &rng,
+                std::normal_distribution<double> &gauss)
+{
+  const Eigen::Vector3d d(noise.sigma_odom * gauss(rng), noise.sigma_odom * gauss(rng),
+                          kSpeed * kDt + noise.sigma_odom * gauss(rng));
+  const double dh = noise.sigma_heading * gauss(rng);
+  const Eigen::Vector3d w = rotY(measured.heading) * d;
+  measured.x += w.x();
+  measured.y += w.y();
+  measured.z += w.z();
+  measured.heading += dh;
+}
+
+/* The targets in view from the true pose, their pixels with noise. */
+std::vector<FeatureObservation> observeTargets(const CameraModel &camera, const YawRig &rig, const MotionSample &truth,
+                                               const std::vector<Eigen::Vector3d> &points, const NoiseModel &noise,
+                                               std::mt19937_64 &rng, std::normal_distribution<double> &gauss)
+{
+  const vpHomogeneousMatrix cMw = wMc(rig, truth).inverse();
+  std::vector<FeatureObservation> obs;
+  for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+    const vpColVector P = cMw * vpColVector({points[i].x(), points[i].y(), points[i].z(), 1.0});
+    if (!(P[2] > 0.05))
+      continue;
+    const Eigen::Vector2d uv = camera.project(Eigen::Vector2d(P[0] / P[2], P[1] / P[2]));
+    if (uv.x() < 0 || uv.y() < 0 || uv.x() > camera.width() - 1 || uv.y() > camera.height() - 1)
+      continue;
+    const double u = uv.x() + noise.sigma_px * gauss(rng), v = uv.y() + noise.sigma_px * gauss(rng);
+    obs.push_back(FeatureObservation{i, u, v});
+  }
+  return obs;
+}
+
+/* What the helper gets: every target the estimator tracks that still needs depth (predicted into the
+   current view from the measured motion, whether or not it is in view now) and the ones in view. */
+std::vector<YawHelperFeature> helperFeatures(const CameraModel &camera, const YawRig &rig, const WindowEstimator &est,
+                                             const std::vector<FeatureObservation> &obs,
+                                             const std::vector<double> &reached, const std::vector<MotionSample> &log,
+                                             int k, double prior_depth)
+{
+  std::vector<YawHelperFeature> helper;
+  const vpHomogeneousMatrix cMw_measured = wMc(rig, log.back()).inverse();
+  std::vector<bool> in_view(reached.size(), false);
+  for (const FeatureObservation &o : obs) {
+    in_view[static_cast<std::size_t>(o.id)] = true;
+    const PointEstimate e = est.estimate(o.id);
+    Eigen::Vector2d m;
+    if (!camera.undistort(Eigen::Vector2d(o.u, o.v), m))
+      continue;
+    YawHelperFeature f;
+    f.x = m.x();
+    f.y = m.y();
+    const bool ok = e.ok() && e.frame == k && e.c_P.z() > 0;
+    f.Z = ok ? e.c_P.z() : prior_depth;
+    f.sigma_rel = ok ? e.sigmaZ() / e.c_P.z() : std::numeric_limits<double>::quiet_NaN();
+    f.weight = reached[static_cast<std::size_t>(o.id)] < kNever ? 0.0 : 1.0;
+    helper.push_back(f);
+  }
+  for (std::size_t i = 0; i < reached.size(); ++i) {
+    const PointEstimate e = est.estimate(static_cast<long>(i));
+    if (in_view[i] || reached[i] < kNever || !e.ok() || !(e.c_P.z() > 0))
+      continue;
+    const vpColVector P = cMw_measured * wMc(rig, log[static_cast<std::size_t>(e.frame)]) *
+                          vpColVector({e.c_P.x(), e.c_P.y(), e.c_P.z(), 1.0});
+    if (!(P[2] > 0.05))
+      continue; // behind the camera now: passed
+    helper.push_back(YawHelperFeature{P[0] / P[2], P[1] / P[2], P[2], 1.0, e.sigmaZ() / e.c_P.z()});
+  }
+  return helper;
+}
 
 /* Seconds until every target reached sigma_Z / Z < 2 % (kNever if one never does). */
 double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layout, const Policy &policy, int frames,
@@ -80,31 +154,10 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
     truth.frame = measured.frame = k;
     truth.z = kSpeed * kDt * k;
     truth.yaw = yaw;
-    if (k > 0) { // dead reckoning: the increment with its noise, in the previous measured heading
-      const Eigen::Vector3d d(noise.sigma_odom * gauss(rng), noise.sigma_odom * gauss(rng),
-                              kSpeed * kDt + noise.sigma_odom * gauss(rng));
-      const double dh = noise.sigma_heading * gauss(rng);
-      const Eigen::Vector3d w = rotY(measured.heading) * d;
-      measured.x += w.x();
-      measured.y += w.y();
-      measured.z += w.z();
-      measured.heading += dh;
-    }
+    if (k > 0)
+      deadReckon(measured, noise, rng, gauss);
     measured.yaw = yaw + noise.sigma_yaw * gauss(rng);
-    // Observations of the targets in view.
-    const vpHomogeneousMatrix cMw = wMc(rig, truth).inverse();
-    std::vector<FeatureObservation> obs;
-    std::vector<YawHelperFeature> helper;
-    for (int i = 0; i < n; ++i) {
-      const vpColVector P = cMw * vpColVector({points[i].x(), points[i].y(), points[i].z(), 1.0});
-      if (!(P[2] > 0.05))
-        continue;
-      const Eigen::Vector2d uv = camera.project(Eigen::Vector2d(P[0] / P[2], P[1] / P[2]));
-      if (uv.x() < 0 || uv.y() < 0 || uv.x() > camera.width() - 1 || uv.y() > camera.height() - 1)
-        continue;
-      const double u = uv.x() + noise.sigma_px * gauss(rng), v = uv.y() + noise.sigma_px * gauss(rng);
-      obs.push_back(FeatureObservation{i, u, v});
-    }
+    const std::vector<FeatureObservation> obs = observeTargets(camera, rig, truth, points, noise, rng, gauss);
     est.addFrame(measured, obs);
     int done = 0;
     for (int i = 0; i < n; ++i) {
@@ -114,37 +167,9 @@ double runOnce(const CameraModel &camera, const YawRig &rig, const Layout &layou
         reached[i] = k * kDt;
       done += reached[i] < kNever ? 1 : 0;
     }
-    // The helper gets every target the estimator tracks that still needs depth (predicted into the
-    // current view from the measured motion, whether or not it is in view now) and the ones in view.
     log.push_back(measured);
-    const vpHomogeneousMatrix cMw_measured = wMc(rig, measured).inverse();
-    std::vector<bool> in_view(n, false);
-    for (const FeatureObservation &o : obs) {
-      in_view[static_cast<std::size_t>(o.id)] = true;
-      const PointEstimate e = est.estimate(o.id);
-      Eigen::Vector2d m;
-      if (!camera.undistort(Eigen::Vector2d(o.u, o.v), m))
-        continue;
-      YawHelperFeature f;
-      f.x = m.x();
-      f.y = m.y();
-      const bool ok = e.ok() && e.frame == k && e.c_P.z() > 0;
-      f.Z = ok ? e.c_P.z() : 1.0 / wo.prior_inverse_depth;
-      f.sigma_rel = ok ? e.sigmaZ() / e.c_P.z() : std::numeric_limits<double>::quiet_NaN();
-      f.weight = reached[static_cast<std::size_t>(o.id)] < kNever ? 0.0 : 1.0;
-      helper.push_back(f);
-    }
-    for (int i = 0; i < n; ++i) {
-      const PointEstimate e = est.estimate(i);
-      if (in_view[static_cast<std::size_t>(i)] || reached[static_cast<std::size_t>(i)] < kNever || !e.ok() ||
-          !(e.c_P.z() > 0))
-        continue;
-      const vpColVector P = cMw_measured * wMc(rig, log[static_cast<std::size_t>(e.frame)]) *
-                            vpColVector({e.c_P.x(), e.c_P.y(), e.c_P.z(), 1.0});
-      if (!(P[2] > 0.05))
-        continue; // behind the camera now: passed
-      helper.push_back(YawHelperFeature{P[0] / P[2], P[1] / P[2], P[2], 1.0, e.sigmaZ() / e.c_P.z()});
-    }
+    const std::vector<YawHelperFeature> helper =
+        helperFeatures(camera, rig, est, obs, reached, log, k, 1.0 / wo.prior_inverse_depth);
     if (done == n)
       break;
     if (policy.steered) {
@@ -171,28 +196,16 @@ int main(int argc, char **argv)
 {
   int seeds = 10, frames = 400, only = -1;
   std::uint64_t seed = 1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--seeds" && i + 1 < argc)
-      seeds = std::atoi(argv[++i]);
-    else if (a == "--seed" && i + 1 < argc)
-      seed = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--frames" && i + 1 < argc)
-      frames = std::atoi(argv[++i]);
-    else if (a == "--layout" && i + 1 < argc)
-      only = std::atoi(argv[++i]);
-    else {
-      std::fprintf(stderr, "usage: %s [--seeds N] [--seed S] [--frames F] [--layout I (0-based row)]\n", argv[0]);
-      return 2;
-    }
-  }
+  bench::CommandLine cli("[--seeds N] [--seed S] [--frames F] [--layout I (0-based row)]");
+  cli.option("--seeds", seeds).option("--seed", seed).option("--frames", frames).option("--layout", only);
+  if (!cli.parse(argc, argv))
+    return 2;
   if (seeds < 1 || frames < 10) {
     std::fprintf(stderr, "bench_active_yaw: --seeds must be >= 1 and --frames >= 10\n");
     return 2;
   }
-  const CameraModel camera =
-      CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-  const YawRig rig(Eigen::Vector3d(-0.1503, 0, 0));
+  const CameraModel camera = bench::paperCamera();
+  const YawRig rig = bench::paperRig();
   const std::vector<Layout> layouts = {
       {"ahead on the path, 6 m", {0.0, 0.0, 6.0}, {0.3, 0.1, 0.3}},
       {"ahead-right, 1 m off the path, 5 m", {1.0, 0.0, 5.0}, {0.3, 0.1, 0.3}},

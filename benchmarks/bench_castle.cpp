@@ -33,6 +33,8 @@
 #include <yawdepth/features/klt_tracker.h>
 #include <yawdepth/window/window_estimator.h>
 
+#include "bench_common.h"
+
 using namespace yawdepth;
 
 namespace {
@@ -118,121 +120,152 @@ double quantile(std::vector<double> v, double q)
   return v[k];
 }
 
+/* The command line's values. */
+struct Args {
+  std::string data = "/usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu";
+  int frames = 40, max_features = 300;
+  double sigma_px = 0.3;
+};
+
+/* Frames 1..frames of the sequence: the camera's motion (world = the object's frame), the images' paths, the depth maps. */
+struct Sequence {
+  std::vector<MotionSample> motion;
+  std::vector<std::string> images;
+  std::vector<DepthMap> depth;
+};
+
+/* Reads frames 1..frames of the sequence in folder `data`. */
+Sequence readSequence(const std::string &data, int frames)
+{
+  Sequence q;
+  char name[64];
+  for (int k = 1; k <= frames; ++k) {
+    std::snprintf(name, sizeof name, "/CameraPose/Camera_%03d.txt", k);
+    const vpHomogeneousMatrix cMo = readPose(data + name);
+    q.motion.push_back(MotionSample::fromPose(k, cMo.inverse(), 0.0));
+    std::snprintf(name, sizeof name, "/Images/Image_%04d.pgm", k);
+    q.images.push_back(data + name);
+    std::snprintf(name, sizeof name, "/Depth/Depth_%04d.bin", k);
+    q.depth.push_back(readDepth(data + name));
+  }
+  return q;
+}
+
+/* The estimator's noise model: sigma_px on the pixels, the given poses' absolute 0.1 mm and 0.1 mrad. */
+NoiseModel castleNoise(double sigma_px)
+{
+  NoiseModel noise;
+  noise.sigma_px = sigma_px;
+  noise.motion_noise = MotionNoise::Absolute;
+  noise.sigma_odom = 1e-4;
+  noise.sigma_rot = 1e-4;
+  noise.sigma_yaw = 0;
+  return noise;
+}
+
+/* One ok point against the depth map: relative depth error, own relative sigma, error within 2 sigma. */
+struct Row {
+  double rel, sigma_rel;
+  bool within;
+};
+
+/* Every ok point against the depth map of its last frame; `ok` counts them, `no_truth` those without truth there. */
+std::vector<Row> compareWithDepth(const std::vector<PointEstimate> &est, const std::vector<Track> &tracks,
+                                  const std::vector<DepthMap> &depth, int frames, int &ok, int &no_truth)
+{
+  std::vector<Row> rows;
+  ok = no_truth = 0;
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const PointEstimate &e = est[i];
+    if (!e.ok())
+      continue;
+    ++ok;
+    const Track &t = tracks[i];
+    const auto obs = std::find_if(t.observations.begin(), t.observations.end(),
+                                  [&](const Observation &o) { return o.frame == e.frame; });
+    if (obs == t.observations.end() || e.frame < 1 || e.frame > frames) {
+      ++no_truth;
+      continue;
+    }
+    // The point in the depth camera: 5 cm to the colour camera's left (x - 0.05), same axes.
+    const Eigen::Vector3d d_P = e.c_P + kDepthFromColour;
+    const double z = truthAt(depth[static_cast<std::size_t>(e.frame - 1)], 700.0 * d_P.x() / d_P.z() + 320.0,
+                             700.0 * d_P.y() / d_P.z() + 240.0);
+    if (!std::isfinite(z)) {
+      ++no_truth;
+      continue;
+    }
+    const double err = d_P.z() - z;
+    rows.push_back({std::abs(err) / z, e.sigmaZ() / e.c_P.z(), std::abs(err) <= 2 * e.sigmaZ()});
+  }
+  return rows;
+}
+
+/* The table: every ok point with truth, then those whose own relative sigma is under 1 %. */
+void printTable(const std::vector<Row> &rows, int frames)
+{
+  std::printf("| points | count | per frame | median rel. error | 95th pct | within 2 sigma | largest |\n");
+  std::printf("|---|---|---|---|---|---|---|\n");
+  for (int subset = 0; subset < 2; ++subset) {
+    std::vector<double> rel;
+    int within = 0;
+    for (const Row &r : rows)
+      if (subset == 0 || r.sigma_rel < 0.01) {
+        rel.push_back(r.rel);
+        within += r.within ? 1 : 0;
+      }
+    const std::string label = subset == 0 ? "every ok point with truth" : "own sigma under 1 %";
+    std::printf("| %s | %zu | %.1f | %.3f %% | %.3f %% | %.3f | %.2f %% |\n", label.c_str(), rel.size(),
+                static_cast<double>(rel.size()) / frames, 100 * quantile(rel, 0.5), 100 * quantile(rel, 0.95),
+                rel.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(rel.size()),
+                rel.empty() ? 0.0 : 100 * *std::max_element(rel.begin(), rel.end()));
+  }
+}
+
 } // namespace
 
 int main(int argc, char **argv)
 {
-  std::string data = "/usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu";
-  int frames = 40, max_features = 300;
-  double sigma_px = 0.3;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--data" && i + 1 < argc)
-      data = argv[++i];
-    else if (a == "--frames" && i + 1 < argc)
-      frames = std::atoi(argv[++i]);
-    else if (a == "--max-features" && i + 1 < argc)
-      max_features = std::atoi(argv[++i]);
-    else if (a == "--sigma-px" && i + 1 < argc)
-      sigma_px = std::atof(argv[++i]);
-    else {
-      std::fprintf(stderr, "usage: %s [--data DIR] [--frames N (2-40)] [--max-features N] [--sigma-px S]\n", argv[0]);
-      return 2;
-    }
-  }
-  if (frames < 2 || frames > 40 || max_features < 1 || !(sigma_px > 0)) {
+  Args a;
+  bench::CommandLine cli("[--data DIR] [--frames N (2-40)] [--max-features N] [--sigma-px S]");
+  cli.option("--data", a.data).option("--frames", a.frames);
+  cli.option("--max-features", a.max_features).option("--sigma-px", a.sigma_px);
+  if (!cli.parse(argc, argv))
+    return 2;
+  if (a.frames < 2 || a.frames > 40 || a.max_features < 1 || !(a.sigma_px > 0)) {
     std::fprintf(stderr, "bench_castle: --frames must be in [2, 40], --max-features >= 1, --sigma-px > 0\n");
     return 2;
   }
   try {
     const CameraModel camera = CameraModel::brown(700, 700, 320, 240, {0, 0, 0, 0}, 640, 480);
     const YawRig rig; // the camera is the vision frame
-    std::vector<MotionSample> motion;
-    std::vector<std::string> images;
-    std::vector<DepthMap> depth;
-    char name[64];
-    for (int k = 1; k <= frames; ++k) {
-      std::snprintf(name, sizeof name, "/CameraPose/Camera_%03d.txt", k);
-      const vpHomogeneousMatrix cMo = readPose(data + name);
-      motion.push_back(MotionSample::fromPose(k, cMo.inverse(), 0.0));
-      std::snprintf(name, sizeof name, "/Images/Image_%04d.pgm", k);
-      images.push_back(data + name);
-      std::snprintf(name, sizeof name, "/Depth/Depth_%04d.bin", k);
-      depth.push_back(readDepth(data + name));
-    }
-    NoiseModel noise;
-    noise.sigma_px = sigma_px;
-    noise.motion_noise = MotionNoise::Absolute;
-    noise.sigma_odom = 1e-4;
-    noise.sigma_rot = 1e-4;
-    noise.sigma_yaw = 0;
+    const Sequence q = readSequence(a.data, a.frames);
+    const NoiseModel noise = castleNoise(a.sigma_px);
     KltOptions ko;
-    ko.max_features = max_features;
+    ko.max_features = a.max_features;
     const auto t0 = std::chrono::steady_clock::now();
-    const SequenceTracks seq = trackSequence(camera, rig, motion, images, noise, ko);
+    const SequenceTracks seq = trackSequence(camera, rig, q.motion, q.images, noise, ko);
     const auto t1 = std::chrono::steady_clock::now();
     WindowOptions wo;
     wo.noise = noise;
-    const std::vector<PointEstimate> est = windowTracks(camera, rig, motion, seq.tracks, wo);
+    const std::vector<PointEstimate> est = windowTracks(camera, rig, q.motion, seq.tracks, wo);
     const auto t2 = std::chrono::steady_clock::now();
-
-    struct Row {
-      double rel, sigma_rel;
-      bool within;
-    };
-    std::vector<Row> rows;
     int ok = 0, no_truth = 0;
-    for (std::size_t i = 0; i < seq.tracks.size(); ++i) {
-      const PointEstimate &e = est[i];
-      if (!e.ok())
-        continue;
-      ++ok;
-      const Track &t = seq.tracks[i];
-      const auto obs = std::find_if(t.observations.begin(), t.observations.end(),
-                                    [&](const Observation &o) { return o.frame == e.frame; });
-      if (obs == t.observations.end() || e.frame < 1 || e.frame > frames) {
-        ++no_truth;
-        continue;
-      }
-      // The point in the depth camera: 5 cm to the colour camera's left (x - 0.05), same axes.
-      const Eigen::Vector3d d_P = e.c_P + kDepthFromColour;
-      const double z = truthAt(depth[static_cast<std::size_t>(e.frame - 1)], 700.0 * d_P.x() / d_P.z() + 320.0,
-                               700.0 * d_P.y() / d_P.z() + 240.0);
-      if (!std::isfinite(z)) {
-        ++no_truth;
-        continue;
-      }
-      const double err = d_P.z() - z;
-      rows.push_back({std::abs(err) / z, e.sigmaZ() / e.c_P.z(), std::abs(err) <= 2 * e.sigmaZ()});
-    }
+    const std::vector<Row> rows = compareWithDepth(est, seq.tracks, q.depth, a.frames, ok, no_truth);
+
     const double track_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     const double est_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
     std::printf("yawdepth on Castle-simu (visp-images-data mbt-depth, someone else's renderer): KLT tracks + window "
                 "estimator vs the depth maps\n");
-    std::printf("Reproduce: build/benchmarks/bench_castle --frames %d --max-features %d --sigma-px %g\n", frames,
-                max_features, sigma_px);
+    std::printf("Reproduce: build/benchmarks/bench_castle --frames %d --max-features %d --sigma-px %g\n", a.frames,
+                a.max_features, a.sigma_px);
     std::printf("%d frames; %zu tracks over 2+ frames (%d detected; cut: %d epipolar, %d forward-backward); %d ok "
                 "points, %d without depth truth (background, occluding edge)\n",
-                frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb, ok,
+                a.frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb, ok,
                 no_truth);
-    std::printf("tracking %.1f ms/frame, estimation %.1f ms/frame (this machine, one core)\n", track_ms / frames,
-                est_ms / frames);
-    std::printf("| points | count | per frame | median rel. error | 95th pct | within 2 sigma | largest |\n");
-    std::printf("|---|---|---|---|---|---|---|\n");
-    for (int subset = 0; subset < 2; ++subset) {
-      std::vector<double> rel;
-      int within = 0;
-      for (const Row &r : rows)
-        if (subset == 0 || r.sigma_rel < 0.01) {
-          rel.push_back(r.rel);
-          within += r.within ? 1 : 0;
-        }
-      const std::string label = subset == 0 ? "every ok point with truth" : "own sigma under 1 %";
-      std::printf("| %s | %zu | %.1f | %.3f %% | %.3f %% | %.3f | %.2f %% |\n", label.c_str(), rel.size(),
-                  static_cast<double>(rel.size()) / frames, 100 * quantile(rel, 0.5), 100 * quantile(rel, 0.95),
-                  rel.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(rel.size()),
-                  rel.empty() ? 0.0 : 100 * *std::max_element(rel.begin(), rel.end()));
-    }
+    std::printf("tracking %.1f ms/frame, estimation %.1f ms/frame (this machine, one core)\n", track_ms / a.frames,
+                est_ms / a.frames);
+    printTable(rows, a.frames);
   } catch (const Error &e) {
     std::fprintf(stderr, "bench_castle: %s\n", e.what());
     return 1;

@@ -100,15 +100,21 @@ struct Calib {
   bool ok = false;
 };
 
-/*! OpenCV calibration of one method's corners (k1 k2 p1 p2 k3) and its leave-one-view-out error. */
-Calib opencvCalib(const std::vector<Corners> &views, const ImageSet &s, cv::Size size, int flags) {
-  std::vector<std::vector<cv::Point3f>> obj;
-  std::vector<Corners> img;
+/*! The views with the board (corners found): their board points and their corners. */
+void boardViews(const std::vector<Corners> &views, const ImageSet &s, std::vector<std::vector<cv::Point3f>> &obj,
+                std::vector<Corners> &img) {
   for (const auto &v : views)
     if (!v.empty()) {
       obj.push_back(boardPoints(s));
       img.push_back(v);
     }
+}
+
+/*! OpenCV calibration of one method's corners (k1 k2 p1 p2 k3) and its leave-one-view-out error. */
+Calib opencvCalib(const std::vector<Corners> &views, const ImageSet &s, cv::Size size, int flags) {
+  std::vector<std::vector<cv::Point3f>> obj;
+  std::vector<Corners> img;
+  boardViews(views, s, obj, img);
   Calib c;
   if (img.size() < 4)
     return c;
@@ -156,44 +162,50 @@ bool loadSet(ImageSet &s, const std::vector<std::string> &paths) {
   return true;
 }
 
-void runChessboardSet(const ImageSet &s, const std::vector<CornerMethod> &methods) {
-  if (s.images.empty())
-    return;
+/*! One method's corners in one image (empty when not found), in the order the method gives them. */
+Corners detectCorners(const cv::Mat &g, const ImageSet &s, const CornerMethod &me) {
+  if (me.yawdepth)
+    return yawdepthCorners(g, s, me);
+  if (me.window > 0)
+    return opencvSubPix(g, s.cols, s.rows, me.window);
+  return opencvSB(g, s.cols, s.rows);
+}
+
+/*! DEBUG_CORNERS: each method's corner count, method 2's corners far from method 0's, and an image
+    of both (/tmp/dbg_I.png). */
+void debugCorners(const ImageSet &s, std::size_t i, const std::vector<CornerMethod> &methods,
+                  const std::vector<std::vector<Corners>> &corners) {
+  cv::Mat col;
+  cv::cvtColor(s.images[i], col, cv::COLOR_GRAY2BGR);
+  for (std::size_t m = 0; m < methods.size(); ++m) {
+    std::printf("%s %s: %zu corners\n", s.names[i].c_str(), methods[m].name.c_str(), corners[m][i].size());
+    if (m == 2)
+      for (std::size_t k = 0; k < corners[m][i].size(); ++k) {
+        double best = 1e9;
+        for (const auto &q : corners[0][i])
+          best = std::min(best, (double)cv::norm(q - corners[m][i][k]));
+        if (best > 0.3)
+          std::printf("   corner %zu at (%.1f %.1f) %.2f px from cornerSubPix\n", k, corners[m][i][k].x,
+                      corners[m][i][k].y, best);
+      }
+  }
+  for (const auto &q : corners[0][i])
+    cv::circle(col, q, 3, cv::Scalar(0, 255, 0));
+  for (const auto &q : corners[2][i])
+    cv::drawMarker(col, q, cv::Scalar(0, 0, 255), cv::MARKER_CROSS, 8);
+  cv::imwrite("/tmp/dbg_" + std::to_string(i) + ".png", col);
+}
+
+/*! Every method's corners in every image ([method][image]), in one order: the truth's (board
+    row-major), else the reference method's (index 0); a method whose corners cannot be matched has none. */
+std::vector<std::vector<Corners>> detectAll(const ImageSet &s, const std::vector<CornerMethod> &methods) {
   const std::size_t nm = methods.size();
   std::vector<std::vector<Corners>> corners(nm, std::vector<Corners>(s.images.size()));
   for (std::size_t i = 0; i < s.images.size(); ++i) {
-    const cv::Mat &g = s.images[i];
-    for (std::size_t m = 0; m < nm; ++m) {
-      const CornerMethod &me = methods[m];
-      if (me.yawdepth)
-        corners[m][i] = yawdepthCorners(g, s, me);
-      else if (me.window > 0)
-        corners[m][i] = opencvSubPix(g, s.cols, s.rows, me.window);
-      else
-        corners[m][i] = opencvSB(g, s.cols, s.rows);
-    }
-    if (getenv("DEBUG_CORNERS")) {
-      cv::Mat col;
-      cv::cvtColor(g, col, cv::COLOR_GRAY2BGR);
-      for (std::size_t m = 0; m < nm; ++m) {
-        std::printf("%s %s: %zu corners\n", s.names[i].c_str(), methods[m].name.c_str(), corners[m][i].size());
-        if (m == 2)
-          for (std::size_t k = 0; k < corners[m][i].size(); ++k) {
-            double best = 1e9;
-            for (const auto &q : corners[0][i])
-              best = std::min(best, (double)cv::norm(q - corners[m][i][k]));
-            if (best > 0.3)
-              std::printf("   corner %zu at (%.1f %.1f) %.2f px from cornerSubPix\n", k, corners[m][i][k].x,
-                          corners[m][i][k].y, best);
-          }
-      }
-      for (const auto &q : corners[0][i])
-        cv::circle(col, q, 3, cv::Scalar(0, 255, 0));
-      for (const auto &q : corners[2][i])
-        cv::drawMarker(col, q, cv::Scalar(0, 0, 255), cv::MARKER_CROSS, 8);
-      cv::imwrite("/tmp/dbg_" + std::to_string(i) + ".png", col);
-    }
-    // one order for all: the truth's (board row-major), else the reference method's (index 0)
+    for (std::size_t m = 0; m < nm; ++m)
+      corners[m][i] = detectCorners(s.images[i], s, methods[m]);
+    if (getenv("DEBUG_CORNERS"))
+      debugCorners(s, i, methods, corners);
     if (!s.truth.empty()) {
       for (std::size_t m = 0; m < nm; ++m)
         if (!matchOrder(s.truth[i], corners[m][i]))
@@ -204,93 +216,116 @@ void runChessboardSet(const ImageSet &s, const std::vector<CornerMethod> &method
           corners[m][i].clear();
     }
   }
-  const cv::Size size = s.images[0].size();
-  // Reference camera: method 0 (the peer pipeline), 5 coefficients.
-  std::vector<std::vector<cv::Point3f>> obj;
-  std::vector<Corners> img;
-  for (const auto &v : corners[0])
-    if (!v.empty()) {
-      obj.push_back(boardPoints(s));
-      img.push_back(v);
-    }
-  if (img.size() < 4) {
-    std::printf("%s: fewer than 4 images with the board, skipped\n", s.name.c_str());
-    return;
-  }
-  cv::Mat K, D;
-  std::vector<cv::Mat> rv, tv;
-  std::printf("\n## %s: %zu images %dx%d, chessboard %dx%d\n", s.name.c_str(), s.images.size(), size.width,
-              size.height, s.cols, s.rows);
+  return corners;
+}
+
+/*! The set's reference camera K, D, printed: the true one (renders), else OpenCV's calibration (5
+    coefficients) of `reference`'s corners, whose name is `method`. */
+void referenceCamera(const ImageSet &s, const std::vector<Corners> &reference, const std::string &method,
+                     cv::Mat &K, cv::Mat &D) {
   if (!s.K.empty()) {
     K = s.K;
     D = s.D;
     std::printf("reference camera: the true one, fx %.2f\n", K.at<double>(0, 0));
-  } else {
-    cv::calibrateCamera(obj, img, size, K, D, rv, tv, 0);
-    std::printf("reference camera (OpenCV, %s corners): fx %.2f fy %.2f u0 %.2f v0 %.2f k1 %.4f k2 %.4f\n",
-                methods[0].name.c_str(), K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2),
-                K.at<double>(1, 2), D.at<double>(0), D.at<double>(1));
+    return;
   }
+  std::vector<std::vector<cv::Point3f>> obj;
+  std::vector<Corners> img;
+  boardViews(reference, s, obj, img);
+  std::vector<cv::Mat> rv, tv;
+  cv::calibrateCamera(obj, img, s.images[0].size(), K, D, rv, tv, 0);
+  std::printf("reference camera (OpenCV, %s corners): fx %.2f fy %.2f u0 %.2f v0 %.2f k1 %.4f k2 %.4f\n",
+              method.c_str(), K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2),
+              D.at<double>(0), D.at<double>(1));
+}
+
+/*! One method's row: images found, homography RMS (median, max), straightness, smooth-field RMS,
+    OpenCV calibration RMS and leave-one-out error, fx, and the RMS against the truth (renders). */
+void printMethodRow(const ImageSet &s, const std::string &name, const std::vector<Corners> &corners,
+                    const cv::Mat &K, const cv::Mat &D) {
+  std::vector<double> h, st, sm;
+  int found = 0;
+  double tsse = 0;
+  long tn = 0;
+  for (std::size_t i = 0; i < s.images.size(); ++i) {
+    if (corners[i].empty())
+      continue;
+    ++found;
+    if (!s.truth.empty())
+      for (std::size_t k = 0; k < s.truth[i].size(); ++k) {
+        const cv::Point2f e = corners[i][k] - s.truth[i][k];
+        tsse += e.dot(e);
+        tn += 2;
+      }
+    const Fit f = planarFit(corners[i], s.cols, s.rows, K, D);
+    h.push_back(f.h_rms);
+    st.push_back(f.straight);
+    sm.push_back(f.smooth_rms);
+  }
+  const Calib c = opencvCalib(corners, s, s.images[0].size(), 0);
+  std::printf("%-26s %2d/%-2zu %10.4f %10.4f %10.4f %9.4f %9.4f %9.4f %9.2f %9.4f\n", name.c_str(), found,
+              s.images.size(), median(h), h.empty() ? NAN : *std::max_element(h.begin(), h.end()), median(st), median(sm), c.rms,
+              c.loo, c.fx, tn ? std::sqrt(tsse / tn) : NAN);
+}
+
+/*! yawdepth's own calibration (distortion model chosen on views left out) of its own corners: its row. */
+void printYawdepthCalibration(const ImageSet &s, const std::vector<Corners> &corners) {
+  BoardLayout board;
+  board.pattern = PatternSpec::parse("chessboard:" + std::to_string(s.cols) + "x" + std::to_string(s.rows) + ":" +
+                                     std::to_string(s.square));
+  std::vector<CalibrationView> views;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const Corners &c = corners[i];
+    if (c.empty())
+      continue;
+    CalibrationView v;
+    v.name = s.names[i];
+    for (std::size_t k = 0; k < c.size(); ++k)
+      v.features.push_back(FeatureObservation{static_cast<long>(k), c[k].x, c[k].y});
+    views.push_back(v);
+  }
+  CameraCalibrationOptions o;
+  o.fit_visp = false;
+  try {
+    const CameraCalibration cal = calibrateCamera(board, views, s.images[0].size().width, s.images[0].size().height, o);
+    double heldout = 0;
+    for (const auto &m : cal.models)
+      if (m.chosen)
+        heldout = m.heldout_rms_px;
+    std::printf("%-26s %5s %10s %10s %10s %9s %9.4f %9.4f %9.2f   model %s\n", "yawdepth calibrate-camera", "", "", "",
+                "", "", cal.rms_px, heldout, cal.camera.kx(), cal.model_reason.c_str());
+  } catch (const std::exception &e) {
+    std::printf("yawdepth calibrate-camera: %s\n", e.what());
+  }
+}
+
+/*! One chessboard set: every method's corners, the reference camera, a row per method, then
+    yawdepth's calibration of its gradient corners. */
+void runChessboardSet(const ImageSet &s, const std::vector<CornerMethod> &methods) {
+  if (s.images.empty())
+    return;
+  const std::vector<std::vector<Corners>> corners = detectAll(s, methods);
+  const std::size_t with_board = static_cast<std::size_t>(
+      std::count_if(corners[0].begin(), corners[0].end(), [](const Corners &c) { return !c.empty(); }));
+  if (with_board < 4) {
+    std::printf("%s: fewer than 4 images with the board, skipped\n", s.name.c_str());
+    return;
+  }
+  const cv::Size size = s.images[0].size();
+  std::printf("\n## %s: %zu images %dx%d, chessboard %dx%d\n", s.name.c_str(), s.images.size(), size.width,
+              size.height, s.cols, s.rows);
+  cv::Mat K, D;
+  referenceCamera(s, corners[0], methods[0].name, K, D);
   std::printf("%-26s %5s %10s %10s %10s %9s %9s %9s %9s %9s\n", "method", "found", "H-rms med", "H-rms max", "straight",
               "H+smooth", "calib rms", "LOO", "fx", "truth rms");
   const std::vector<Corners> *yawdepth_calib_input = nullptr;
-  for (std::size_t m = 0; m < nm; ++m) {
-    std::vector<double> h, st, sm;
-    int found = 0;
-    double tsse = 0;
-    long tn = 0;
-    for (std::size_t i = 0; i < s.images.size(); ++i) {
-      if (corners[m][i].empty())
-        continue;
-      ++found;
-      if (!s.truth.empty())
-        for (std::size_t k = 0; k < s.truth[i].size(); ++k) {
-          const cv::Point2f e = corners[m][i][k] - s.truth[i][k];
-          tsse += e.dot(e);
-          tn += 2;
-        }
-      const Fit f = planarFit(corners[m][i], s.cols, s.rows, K, D);
-      h.push_back(f.h_rms);
-      st.push_back(f.straight);
-      sm.push_back(f.smooth_rms);
-    }
-    const Calib c = opencvCalib(corners[m], s, size, 0);
+  for (std::size_t m = 0; m < methods.size(); ++m) {
+    printMethodRow(s, methods[m].name, corners[m], K, D);
     if (methods[m].yawdepth && methods[m].refinement == CornerRefinement::Gradient && methods[m].window == 0)
       yawdepth_calib_input = &corners[m];
-    std::printf("%-26s %2d/%-2zu %10.4f %10.4f %10.4f %9.4f %9.4f %9.4f %9.2f %9.4f\n", methods[m].name.c_str(), found,
-                s.images.size(), median(h), h.empty() ? NAN : *std::max_element(h.begin(), h.end()), median(st), median(sm), c.rms,
-                c.loo, c.fx, tn ? std::sqrt(tsse / tn) : NAN);
   }
-  // yawdepth's own calibration (distortion model chosen on views left out) of its own corners.
-  if (yawdepth_calib_input) {
-    BoardLayout board;
-    board.pattern = PatternSpec::parse("chessboard:" + std::to_string(s.cols) + "x" + std::to_string(s.rows) + ":" +
-                                       std::to_string(s.square));
-    std::vector<CalibrationView> views;
-    for (std::size_t i = 0; i < yawdepth_calib_input->size(); ++i) {
-      const Corners &c = (*yawdepth_calib_input)[i];
-      if (c.empty())
-        continue;
-      CalibrationView v;
-      v.name = s.names[i];
-      for (std::size_t k = 0; k < c.size(); ++k)
-        v.features.push_back(FeatureObservation{static_cast<long>(k), c[k].x, c[k].y});
-      views.push_back(v);
-    }
-    CameraCalibrationOptions o;
-    o.fit_visp = false;
-    try {
-      const CameraCalibration cal = calibrateCamera(board, views, size.width, size.height, o);
-      double heldout = 0;
-      for (const auto &m : cal.models)
-        if (m.chosen)
-          heldout = m.heldout_rms_px;
-      std::printf("%-26s %5s %10s %10s %10s %9s %9.4f %9.4f %9.2f   model %s\n", "yawdepth calibrate-camera", "", "", "",
-                  "", "", cal.rms_px, heldout, cal.camera.kx(), cal.model_reason.c_str());
-    } catch (const std::exception &e) {
-      std::printf("yawdepth calibrate-camera: %s\n", e.what());
-    }
-  }
+  if (yawdepth_calib_input)
+    printYawdepthCalibration(s, *yawdepth_calib_input);
 }
 
 /*! Photo-like renders of a 9x6 board (25 mm) through a wide lens with strong barrel distortion:
@@ -456,88 +491,176 @@ void posePlanarity(const std::vector<vpHomogeneousMatrix> &cMt, double &plane_rm
   }
 }
 
+/*! One dot grid: cv::findCirclesGrid (symmetric grid) and yawdepth's refineDotGridCentres on its
+    output; homography RMS of each (ho, hy) and, with a truth, RMS error per coordinate (eo, ey; NaN
+    without). False when OpenCV finds no grid or the truth cannot be matched. */
+bool dotGridFit(const cv::Mat &g, int cols, int rows, const std::vector<cv::Point2f> *truth, double &ho, double &hy,
+                double &eo, double &ey) {
+  Corners c;
+  if (!cv::findCirclesGrid(g, cv::Size(cols, rows), c, cv::CALIB_CB_SYMMETRIC_GRID))
+    return false;
+  std::vector<cv::Point2d> d(c.begin(), c.end());
+  refineDotGridCentres(g, d, cols, rows);
+  Corners y;
+  for (const auto &p : d)
+    y.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+  const cv::Mat K = cv::Mat::eye(3, 3, CV_64F), D;
+  ho = planarFit(c, cols, rows, K, D).h_rms;
+  hy = planarFit(y, cols, rows, K, D).h_rms;
+  eo = ey = NAN;
+  if (truth) {
+    Corners tc = *truth;
+    Corners c2 = c, y2 = y;
+    if (!matchOrder(tc, c2) || !matchOrder(tc, y2))
+      return false;
+    double so = 0, sy = 0;
+    for (std::size_t i = 0; i < tc.size(); ++i) {
+      const cv::Point2f a = c2[i] - tc[i], b = y2[i] - tc[i];
+      so += a.dot(a);
+      sy += b.dot(b);
+    }
+    eo = std::sqrt(so / (2.0 * tc.size()));
+    ey = std::sqrt(sy / (2.0 * tc.size()));
+  }
+  return true;
+}
+
+/*! The row of ViSP's grid36-0*.pgm (real photos, 6x6 dots), or a line saying they are not installed. */
+void printRealDotGrids(const std::string &visp_images) {
+  std::vector<double> ho, hy;
+  int n = 0, found = 0;
+  for (int k = 1; k <= 4; ++k) {
+    const cv::Mat g = cv::imread(visp_images + "/calibration/grid36-0" + std::to_string(k) + ".pgm", cv::IMREAD_GRAYSCALE);
+    if (g.empty())
+      continue;
+    ++n;
+    double a, b, c, d;
+    if (dotGridFit(g, 6, 6, nullptr, a, b, c, d)) {
+      ++found;
+      ho.push_back(a);
+      hy.push_back(b);
+    }
+  }
+  if (n)
+    std::printf("%-44s %2d/%-2d %12.4f %12.4f %12s %12s\n", "ViSP grid36-0*.pgm (real, 6x6)", found, n, median(ho),
+                median(hy), "-", "-");
+  else
+    std::printf("ViSP grid36-0*.pgm: not found (apt-get install visp-images-data)\n");
+}
+
+/*! The row of 10 rendered 6x6 dot grids (seeded random homographies, blur 0.8), against their truth. */
+void printRenderedDotGrids() {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(-1, 1);
+  std::vector<double> ho, hy, eo, ey;
+  int found = 0;
+  const int n = 10;
+  for (int k = 0; k < n; ++k) {
+    // a 6x6 grid, spacing ~60 px, dots 0.6 spacing, perspective from a random homography
+    const double s = 55 + 10 * U(rng);
+    cv::Matx33d H(s, 0.15 * s * U(rng), 170 + 20 * U(rng), 0.15 * s * U(rng), s, 90 + 20 * U(rng),
+                  2e-3 * U(rng) * 60 / s, 2e-3 * U(rng) * 60 / s, 1);
+    std::vector<cv::Point2f> truth;
+    const cv::Mat g = dotGridImage(H, 6, 6, 0.6, cv::Size(640, 480), 0.8, 2.0, 100 + k, truth);
+    double a, b, c, d;
+    if (dotGridFit(g, 6, 6, &truth, a, b, c, d)) {
+      ++found;
+      ho.push_back(a);
+      hy.push_back(b);
+      eo.push_back(c);
+      ey.push_back(d);
+    }
+  }
+  std::printf("%-44s %2d/%-2d %12.4f %12.4f %12.4f %12.4f\n", "rendered 6x6 dot grids (perspective, blur 0.8)", found, n,
+              median(ho), median(hy), median(eo), median(ey));
+}
+
 /*! Dot grids: ViSP's grid36-0*.pgm (real photos, 6x6 dots) and perspective renders with truth;
     cv::findCirclesGrid (symmetric grid) beside yawdepth's refineDotGridCentres on its output.
     No undistortion (the grid photos' camera is not given): the homography RMS includes the lens. */
 void runDotGrids(const std::string &visp_images) {
   std::printf("\n## dot grids: homography RMS of the centres (px; no undistortion), renders also against the truth\n");
   std::printf("%-44s %5s %12s %12s %12s %12s\n", "set", "found", "OpenCV H", "yawdepth H", "OpenCV err", "yawdepth err");
-  auto one = [](const cv::Mat &g, int cols, int rows, const std::vector<cv::Point2f> *truth, double &ho, double &hy,
-                double &eo, double &ey) {
-    Corners c;
-    if (!cv::findCirclesGrid(g, cv::Size(cols, rows), c, cv::CALIB_CB_SYMMETRIC_GRID))
-      return false;
-    std::vector<cv::Point2d> d(c.begin(), c.end());
-    refineDotGridCentres(g, d, cols, rows);
-    Corners y;
-    for (const auto &p : d)
-      y.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
-    const cv::Mat K = cv::Mat::eye(3, 3, CV_64F), D;
-    ho = planarFit(c, cols, rows, K, D).h_rms;
-    hy = planarFit(y, cols, rows, K, D).h_rms;
-    eo = ey = NAN;
-    if (truth) {
-      Corners tc = *truth;
-      Corners c2 = c, y2 = y;
-      if (!matchOrder(tc, c2) || !matchOrder(tc, y2))
-        return false;
-      double so = 0, sy = 0;
-      for (std::size_t i = 0; i < tc.size(); ++i) {
-        const cv::Point2f a = c2[i] - tc[i], b = y2[i] - tc[i];
-        so += a.dot(a);
-        sy += b.dot(b);
-      }
-      eo = std::sqrt(so / (2.0 * tc.size()));
-      ey = std::sqrt(sy / (2.0 * tc.size()));
-    }
-    return true;
-  };
-  {
-    std::vector<double> ho, hy;
-    int n = 0, found = 0;
-    for (int k = 1; k <= 4; ++k) {
-      const cv::Mat g = cv::imread(visp_images + "/calibration/grid36-0" + std::to_string(k) + ".pgm", cv::IMREAD_GRAYSCALE);
-      if (g.empty())
-        continue;
-      ++n;
-      double a, b, c, d;
-      if (one(g, 6, 6, nullptr, a, b, c, d)) {
-        ++found;
-        ho.push_back(a);
-        hy.push_back(b);
-      }
-    }
-    if (n)
-      std::printf("%-44s %2d/%-2d %12.4f %12.4f %12s %12s\n", "ViSP grid36-0*.pgm (real, 6x6)", found, n, median(ho),
-                  median(hy), "-", "-");
-    else
-      std::printf("ViSP grid36-0*.pgm: not found (apt-get install visp-images-data)\n");
+  printRealDotGrids(visp_images);
+  printRenderedDotGrids();
+}
+
+/*! The four corners of each tag, by tag id. */
+using TagCorners = std::map<long, std::array<cv::Point2d, 4>>;
+
+/*! ViSP's vpDetectorAprilTag as a ViSP user runs it (default options: quad decimation 1, pose from
+    its homography): each tag's corners and pose. */
+void vispTags(const cv::Mat &gray, double tag, const vpCameraParameters &cam, TagCorners &corners,
+              std::vector<vpHomogeneousMatrix> &poses) {
+  vpImage<unsigned char> I;
+  vpImageConvert::convert(gray, I);
+  vpDetectorAprilTag d(vpDetectorAprilTag::TAG_36h11);
+  d.detect(I);
+  for (std::size_t i = 0; i < d.getNbObjects(); ++i) {
+    const std::vector<vpImagePoint> &poly = d.getPolygon(i);
+    long id = -1;
+    std::sscanf(d.getMessage(i).c_str(), "36h11 id: %ld", &id);
+    if (poly.size() != 4 || id < 0)
+      continue;
+    for (int k = 0; k < 4; ++k)
+      corners[id][static_cast<std::size_t>(k)] = cv::Point2d(poly[static_cast<std::size_t>(k)].get_u(), poly[static_cast<std::size_t>(k)].get_v());
+    vpHomogeneousMatrix M;
+    if (d.getPose(i, tag, cam, M))
+      poses.push_back(M);
   }
-  {
-    std::mt19937_64 rng(5);
-    std::uniform_real_distribution<double> U(-1, 1);
-    std::vector<double> ho, hy, eo, ey;
-    int found = 0;
-    const int n = 10;
-    for (int k = 0; k < n; ++k) {
-      // a 6x6 grid, spacing ~60 px, dots 0.6 spacing, perspective from a random homography
-      const double s = 55 + 10 * U(rng);
-      cv::Matx33d H(s, 0.15 * s * U(rng), 170 + 20 * U(rng), 0.15 * s * U(rng), s, 90 + 20 * U(rng),
-                    2e-3 * U(rng) * 60 / s, 2e-3 * U(rng) * 60 / s, 1);
-      std::vector<cv::Point2f> truth;
-      const cv::Mat g = dotGridImage(H, 6, 6, 0.6, cv::Size(640, 480), 0.8, 2.0, 100 + k, truth);
-      double a, b, c, d;
-      if (one(g, 6, 6, &truth, a, b, c, d)) {
-        ++found;
-        ho.push_back(a);
-        hy.push_back(b);
-        eo.push_back(c);
-        ey.push_back(d);
-      }
-    }
-    std::printf("%-44s %2d/%-2d %12.4f %12.4f %12.4f %12.4f\n", "rendered 6x6 dot grids (perspective, blur 0.8)", found, n,
-                median(ho), median(hy), median(eo), median(ey));
+}
+
+/*! A tag's pose from its 4 corners by PnP (IPPE square, no distortion); false when PnP fails. */
+bool ippePose(const std::array<cv::Point2d, 4> &c, double tag, const vpCameraParameters &cam, vpHomogeneousMatrix &M) {
+  const std::vector<cv::Point3d> obj = {{-tag / 2, tag / 2, 0}, {tag / 2, tag / 2, 0}, {tag / 2, -tag / 2, 0}, {-tag / 2, -tag / 2, 0}};
+  const std::vector<cv::Point2d> img(c.begin(), c.end());
+  cv::Mat rv, tv;
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.get_px(), 0, cam.get_u0(), 0, cam.get_py(), cam.get_v0(), 0, 0, 1);
+  if (!cv::solvePnP(obj, img, K, cv::noArray(), rv, tv, false, cv::SOLVEPNP_IPPE_SQUARE))
+    return false;
+  cv::Mat R;
+  cv::Rodrigues(rv, R);
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b)
+      M[a][b] = R.at<double>(a, b);
+    M[a][3] = tv.at<double>(a);
   }
+  return true;
+}
+
+/*! yawdepth's detector (features by id, pattern.h): each tag's corners, its pose by ippePose(). */
+void yawdepthTags(const cv::Mat &gray, const CameraModel &camera, double tag, const vpCameraParameters &cam,
+                  TagCorners &corners, std::vector<vpHomogeneousMatrix> &poses) {
+  PatternDetector det(PatternSpec::parse("apriltag:36h11:0.053"));
+  det.setCamera(camera);
+  const FrameDetection d = det.detect(gray, 0);
+  std::map<long, std::map<int, cv::Point2d>> byTag;
+  for (const auto &f : d.features) {
+    const long t = f.id / 5, k = f.id % 5 - 1;
+    if (k >= 0)
+      byTag[t][static_cast<int>(k)] = cv::Point2d(f.u, f.v);
+  }
+  for (const auto &[t, m] : byTag)
+    if (m.size() == 4) {
+      std::array<cv::Point2d, 4> c;
+      for (int k = 0; k < 4; ++k)
+        c[static_cast<std::size_t>(k)] = m.at(k);
+      corners[t] = c;
+      vpHomogeneousMatrix M;
+      if (ippePose(c, tag, cam, M))
+        poses.push_back(M);
+    }
+}
+
+/*! One detector's row: tags found, their coplanar homography RMS, the poses' planarity. */
+void printTagRow(const char *name, const TagCorners &c, const std::vector<vpHomogeneousMatrix> &poses) {
+  std::vector<std::array<cv::Point2d, 4>> v;
+  for (const auto &kv : c)
+    v.push_back(kv.second);
+  double pr = NAN, nd = NAN;
+  if (poses.size() >= 4)
+    posePlanarity(poses, pr, nd);
+  std::printf("%-34s %5zu %14.4f %16.3f %16.3f\n", name, v.size(), coplanarTagsRms(v), pr, nd);
 }
 
 /*! AprilTag.pgm (visp-images-data): 12 coplanar 36h11 tags, 53 mm, camera without distortion as
@@ -555,74 +678,41 @@ void runAprilTagSet(const std::string &path) {
   std::printf("\n## AprilTag.pgm (real, visp-images-data): %dx%d, 36h11 tags of 53 mm, camera 615.17/615.17/312.19/243.44\n",
               gray.cols, gray.rows);
   std::printf("%-34s %5s %14s %16s %16s\n", "detector", "tags", "H-rms (px)", "pose plane (mm)", "normals (deg)");
-  // ViSP, as a ViSP user runs it (default options: quad decimation 1, pose from its homography).
-  vpImage<unsigned char> I;
-  vpImageConvert::convert(gray, I);
-  std::map<long, std::array<cv::Point2d, 4>> visp_c;
-  std::vector<vpHomogeneousMatrix> visp_pose;
-  {
-    vpDetectorAprilTag d(vpDetectorAprilTag::TAG_36h11);
-    d.detect(I);
-    for (std::size_t i = 0; i < d.getNbObjects(); ++i) {
-      const std::vector<vpImagePoint> &poly = d.getPolygon(i);
-      long id = -1;
-      std::sscanf(d.getMessage(i).c_str(), "36h11 id: %ld", &id);
-      if (poly.size() != 4 || id < 0)
-        continue;
-      for (int k = 0; k < 4; ++k)
-        visp_c[id][static_cast<std::size_t>(k)] = cv::Point2d(poly[static_cast<std::size_t>(k)].get_u(), poly[static_cast<std::size_t>(k)].get_v());
-      vpHomogeneousMatrix M;
-      if (d.getPose(i, tag, cam, M))
-        visp_pose.push_back(M);
+  TagCorners visp_c, ours;
+  std::vector<vpHomogeneousMatrix> visp_pose, our_pose;
+  vispTags(gray, tag, cam, visp_c, visp_pose);
+  yawdepthTags(gray, camera, tag, cam, ours, our_pose);
+  printTagRow("ViSP vpDetectorAprilTag", visp_c, visp_pose);
+  printTagRow("yawdepth (ViSP corners, IPPE pose)", ours, our_pose);
+}
+
+/*! An extra set from --set NAME:COLSxROWS:SQUARE:FILE[,FILE...], its images read into x: 0, or the
+    exit code (2: a bad spec, 1: an image that cannot be read) after a message on stderr. */
+int loadExtraSet(const std::string &spec, ImageSet &x) {
+  std::vector<std::string> parts;
+  std::size_t a = 0;
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t b = spec.find(':', a);
+    if (b == std::string::npos) {
+      std::fprintf(stderr, "bench_corners: --set NAME:COLSxROWS:SQUARE:FILE,FILE,... expected\n");
+      return 2;
     }
+    parts.push_back(spec.substr(a, b - a));
+    a = b + 1;
   }
-  // yawdepth's detector (features by id, pattern.h), poses by PnP of the 4 corners (IPPE square).
-  std::map<long, std::array<cv::Point2d, 4>> ours;
-  std::vector<vpHomogeneousMatrix> our_pose;
-  {
-    PatternDetector det(PatternSpec::parse("apriltag:36h11:0.053"));
-    det.setCamera(camera);
-    const FrameDetection d = det.detect(gray, 0);
-    std::map<long, std::map<int, cv::Point2d>> byTag;
-    for (const auto &f : d.features) {
-      const long t = f.id / 5, k = f.id % 5 - 1;
-      if (k >= 0)
-        byTag[t][static_cast<int>(k)] = cv::Point2d(f.u, f.v);
-    }
-    for (const auto &[t, m] : byTag)
-      if (m.size() == 4) {
-        std::array<cv::Point2d, 4> c;
-        for (int k = 0; k < 4; ++k)
-          c[static_cast<std::size_t>(k)] = m.at(k);
-        ours[t] = c;
-        const std::vector<cv::Point3d> obj = {{-tag / 2, tag / 2, 0}, {tag / 2, tag / 2, 0}, {tag / 2, -tag / 2, 0}, {-tag / 2, -tag / 2, 0}};
-        const std::vector<cv::Point2d> img(c.begin(), c.end());
-        cv::Mat rv, tv;
-        const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.get_px(), 0, cam.get_u0(), 0, cam.get_py(), cam.get_v0(), 0, 0, 1);
-        if (cv::solvePnP(obj, img, K, cv::noArray(), rv, tv, false, cv::SOLVEPNP_IPPE_SQUARE)) {
-          cv::Mat R;
-          cv::Rodrigues(rv, R);
-          vpHomogeneousMatrix M;
-          for (int a = 0; a < 3; ++a) {
-            for (int b = 0; b < 3; ++b)
-              M[a][b] = R.at<double>(a, b);
-            M[a][3] = tv.at<double>(a);
-          }
-          our_pose.push_back(M);
-        }
-      }
+  x.name = parts[0] + " (real)";
+  if (std::sscanf(parts[1].c_str(), "%dx%d", &x.cols, &x.rows) != 2 || x.cols < 3 || x.rows < 3 ||
+      !(std::atof(parts[2].c_str()) > 0)) {
+    std::fprintf(stderr, "bench_corners: bad set '%s'\n", spec.c_str());
+    return 2;
   }
-  auto row = [&](const char *name, const std::map<long, std::array<cv::Point2d, 4>> &c, const std::vector<vpHomogeneousMatrix> &poses) {
-    std::vector<std::array<cv::Point2d, 4>> v;
-    for (const auto &kv : c)
-      v.push_back(kv.second);
-    double pr = NAN, nd = NAN;
-    if (poses.size() >= 4)
-      posePlanarity(poses, pr, nd);
-    std::printf("%-34s %5zu %14.4f %16.3f %16.3f\n", name, v.size(), coplanarTagsRms(v), pr, nd);
-  };
-  row("ViSP vpDetectorAprilTag", visp_c, visp_pose);
-  row("yawdepth (ViSP corners, IPPE pose)", ours, our_pose);
+  x.square = std::atof(parts[2].c_str());
+  std::vector<std::string> files;
+  std::string rest = spec.substr(a);
+  for (std::size_t b; (b = rest.find(',')) != std::string::npos; rest = rest.substr(b + 1))
+    files.push_back(rest.substr(0, b));
+  files.push_back(rest);
+  return loadSet(x, files) ? 0 : 1;
 }
 
 } // namespace
@@ -659,33 +749,9 @@ int main(int argc, char **argv) {
     methods.push_back({"cornerSubPix w" + std::to_string(w), false, CornerRefinement::OpenCV, w});
   }
   for (const auto &spec : extra) {
-    // NAME:COLSxROWS:SQUARE:FILE[,FILE...]
     ImageSet x;
-    std::vector<std::string> parts;
-    std::size_t a = 0;
-    for (int k = 0; k < 3; ++k) {
-      const std::size_t b = spec.find(':', a);
-      if (b == std::string::npos) {
-        std::fprintf(stderr, "bench_corners: --set NAME:COLSxROWS:SQUARE:FILE,FILE,... expected\n");
-        return 2;
-      }
-      parts.push_back(spec.substr(a, b - a));
-      a = b + 1;
-    }
-    x.name = parts[0] + " (real)";
-    if (std::sscanf(parts[1].c_str(), "%dx%d", &x.cols, &x.rows) != 2 || x.cols < 3 || x.rows < 3 ||
-        !(std::atof(parts[2].c_str()) > 0)) {
-      std::fprintf(stderr, "bench_corners: bad set '%s'\n", spec.c_str());
-      return 2;
-    }
-    x.square = std::atof(parts[2].c_str());
-    std::vector<std::string> files;
-    std::string rest = spec.substr(a);
-    for (std::size_t b; (b = rest.find(',')) != std::string::npos; rest = rest.substr(b + 1))
-      files.push_back(rest.substr(0, b));
-    files.push_back(rest);
-    if (!loadSet(x, files))
-      return 1;
+    if (const int code = loadExtraSet(spec, x))
+      return code;
     runChessboardSet(x, methods);
   }
   ImageSet f;

@@ -30,27 +30,19 @@
 #include <yawdepth/window/window_estimator.h>
 #include <yawdepth/simulation/scene.h>
 
+#include "bench_common.h"
+
 using namespace yawdepth;
+using yawdepth::bench::median;
+using yawdepth::bench::paperCamera;
+using yawdepth::bench::paperRig;
 
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 using Clock = std::chrono::steady_clock;
 
-CameraModel paperCamera()
-{
-  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-}
-YawRig paperRig() { return YawRig(Eigen::Vector3d(-0.1503, 0, 0)); }
 NoiseModel paperNoise() { return NoiseModel{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg}; }
-
-double median(std::vector<double> v)
-{
-  if (v.empty())
-    return NAN;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
 
 /* Frames of a scene as FeatureObservation lists, by motion-log row. */
 std::vector<std::vector<FeatureObservation>> framesOf(const Scene &s)
@@ -139,6 +131,122 @@ void costTable(bool quick, std::uint64_t seed)
   std::printf("%s\n", std::string(78, '-').c_str());
 }
 
+/* Error statistics of the points whose last frame is in one segment of the long sequence. */
+struct Seg {
+  double se = 0, sn = 0, nees = 0, sum_e = 0;
+  long n = 0, cov = 0, notok = 0, nf = 0;
+  // Adds one ok point: its depth error e, its own sigma sz and its bound b (not finite: none).
+  void add(double e, double sz, double b)
+  {
+    ++n;
+    se += e * e;
+    sum_e += e;
+    nees += (e / sz) * (e / sz);
+    cov += std::abs(e) <= 2 * sz ? 1 : 0;
+    if (std::isfinite(b) && b > 0) {
+      sn += (e / b) * (e / b);
+      ++nf;
+    }
+  }
+  // Adds another segment's sums.
+  void merge(const Seg &g)
+  {
+    se += g.se;
+    sn += g.sn;
+    nees += g.nees;
+    sum_e += g.sum_e;
+    n += g.n;
+    nf += g.nf;
+    cov += g.cov;
+    notok += g.notok;
+  }
+  // Prints the segment's row of the table.
+  void print(const char *name) const
+  {
+    std::printf("%14s %8ld %8ld %10.3f %+10.3f %10.3f %9.3f %9.3f\n", name, n, notok, 1e3 * std::sqrt(se / n),
+                1e3 * sum_e / n, std::sqrt(sn / nf), nees / n, double(cov) / n);
+  }
+};
+
+/* The long sequence of one trial: `frames` frames `step` m apart, camera yaw 60 deg, a wall of points
+   x in [1.5, 3] m to the camera's side (yaw 60 deg looks toward +x and ahead) along the whole path. */
+Scene wallScene(const CameraModel &camera, const YawRig &rig, int frames, double step, std::uint64_t seed,
+                const NoiseModel &noise)
+{
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  SceneOptions so;
+  so.frames = frames;
+  so.step = step;
+  so.yaw = 60 * kDeg;
+  so.noise = noise;
+  so.seed = seed;
+  const double length = frames * step + 4.0;
+  const int count = static_cast<int>(length * 30);
+  for (int i = 0; i < count; ++i)
+    so.world_points.emplace_back(1.5 + 1.5 * uni(rng), -0.3 + 0.6 * uni(rng), -1.0 + length * uni(rng));
+  return simulateScene(camera, rig, so);
+}
+
+/* The tracks (2+ observations) whose last frame is in [lo, hi), and the first frame any of them was seen in. */
+std::vector<std::size_t> segmentMembers(const Scene &s, long lo, long hi, long &first)
+{
+  std::vector<std::size_t> members;
+  first = hi;
+  for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+    const auto &obs = s.tracks[i].observations;
+    if (obs.size() < 2 || obs.back().frame < lo || obs.back().frame >= hi)
+      continue;
+    members.push_back(i);
+    first = std::min(first, obs.front().frame);
+  }
+  return members;
+}
+
+/* The per-point depth CRLB of every track with 2+ observations inside the true log `truth`, each cut
+   to it (the others' information on the motion counts too); member_index[i]: track i's entry (-1: none). */
+std::vector<double> subLogBound(const CameraModel &camera, const YawRig &rig, const Scene &s,
+                                const std::vector<MotionSample> &truth, const NoiseModel &noise,
+                                std::vector<int> &member_index)
+{
+  std::vector<Track> sub;
+  std::vector<Eigen::Vector3d> pts;
+  member_index.assign(s.tracks.size(), -1);
+  for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+    Track tr;
+    tr.id = s.tracks[i].id;
+    for (const Observation &ob : s.tracks[i].observations)
+      if (ob.frame >= truth.front().frame && ob.frame <= truth.back().frame)
+        tr.observations.push_back(ob);
+    if (tr.observations.size() < 2)
+      continue;
+    member_index[i] = static_cast<int>(sub.size());
+    sub.push_back(tr);
+    pts.push_back(s.w_points[i]);
+  }
+  return depthCramerRao(camera, rig, truth, sub, pts, noise, true);
+}
+
+/* The table of the long sequence: a row per segment, then all. */
+void printSegments(const std::vector<Seg> &segs, int segment, int frames)
+{
+  std::printf("%s\n", std::string(84, '-').c_str());
+  std::printf("%14s %8s %8s %10s %10s %10s %9s %9s\n", "frames", "points", "not ok", "RMSE (mm)", "bias (mm)",
+              "RMSE/CRLB", "NEES", "2-sigma");
+  std::printf("%s\n", std::string(84, '-').c_str());
+  Seg all;
+  for (std::size_t sg = 0; sg < segs.size(); ++sg) {
+    char name[32];
+    std::snprintf(name, sizeof name, "%ld-%ld", static_cast<long>(sg) * segment,
+                  std::min<long>((static_cast<long>(sg) + 1) * segment, frames) - 1);
+    segs[sg].print(name);
+    all.merge(segs[sg]);
+  }
+  std::printf("%s\n", std::string(84, '-').c_str());
+  all.print("all");
+  std::printf("%s\n", std::string(84, '-').c_str());
+}
+
 /* 2. A long sequence: a wall of points beside a straight path, the camera at side view. */
 void longSequence(int frames, int trials, std::uint64_t seed, int window, const NoiseModel &noise)
 {
@@ -153,27 +261,10 @@ void longSequence(int frames, int trials, std::uint64_t seed, int window, const 
               frames, frames * step, trials, static_cast<unsigned long long>(seed), segment);
   std::printf("   Bound: the joint CRLB of each feature given the motion log and every track from 250 frames before\n"
               "   the segment to its end (the full log for the first 250 frames; beyond, a little loose).\n");
-  struct Seg {
-    double se = 0, sn = 0, nees = 0, sum_e = 0, sf = 0;
-    long n = 0, cov = 0, notok = 0, nf = 0;
-  };
   std::vector<Seg> segs(static_cast<std::size_t>((frames + segment - 1) / segment));
   double total_ms = 0;
   for (int t = 0; t < trials; ++t) {
-    std::mt19937_64 rng(seed + static_cast<std::uint64_t>(t));
-    std::uniform_real_distribution<double> uni(0.0, 1.0);
-    SceneOptions so;
-    so.frames = frames;
-    so.step = step;
-    so.yaw = 60 * kDeg;
-    so.noise = noise;
-    so.seed = seed + static_cast<std::uint64_t>(t);
-    // The wall: x in [1.5, 3] m to the camera's side (yaw 60 deg looks toward +x and ahead).
-    const double length = frames * step + 4.0;
-    const int count = static_cast<int>(length * 30);
-    for (int i = 0; i < count; ++i)
-      so.world_points.emplace_back(1.5 + 1.5 * uni(rng), -0.3 + 0.6 * uni(rng), -1.0 + length * uni(rng));
-    const Scene s = simulateScene(camera, rig, so);
+    const Scene s = wallScene(camera, rig, frames, step, seed + static_cast<std::uint64_t>(t), noise);
     WindowOptions wo;
     wo.noise = noise;
     wo.window = window;
@@ -186,84 +277,27 @@ void longSequence(int frames, int trials, std::uint64_t seed, int window, const 
     // Bound per segment, from the log around the segment's tracks.
     for (std::size_t sg = 0; sg < segs.size(); ++sg) {
       const long lo = static_cast<long>(sg) * segment, hi = lo + segment; // last frames in [lo, hi)
-      std::vector<std::size_t> members;
       long first = hi;
-      for (std::size_t i = 0; i < s.tracks.size(); ++i) {
-        const auto &obs = s.tracks[i].observations;
-        if (obs.size() < 2 || obs.back().frame < lo || obs.back().frame >= hi)
-          continue;
-        members.push_back(i);
-        first = std::min(first, obs.front().frame);
-      }
+      const std::vector<std::size_t> members = segmentMembers(s, lo, hi, first);
       if (members.empty())
         continue;
       const std::size_t r0 = row.at(std::max(0L, std::min(first, lo) - 250)), r1 = row.at(hi - 1 < frames ? hi - 1 : frames - 1);
-      std::vector<MotionSample> truth(s.truth.begin() + static_cast<long>(r0), s.truth.begin() + static_cast<long>(r1) + 1);
-      // Every track with an observation inside the sub-log, cut to it (the others' information on
-      // the motion counts too).
-      std::vector<Track> sub;
-      std::vector<Eigen::Vector3d> pts;
-      std::vector<int> member_index(s.tracks.size(), -1);
-      for (std::size_t i = 0; i < s.tracks.size(); ++i) {
-        Track tr;
-        tr.id = s.tracks[i].id;
-        for (const Observation &ob : s.tracks[i].observations)
-          if (ob.frame >= truth.front().frame && ob.frame <= truth.back().frame)
-            tr.observations.push_back(ob);
-        if (tr.observations.size() < 2)
-          continue;
-        member_index[i] = static_cast<int>(sub.size());
-        sub.push_back(tr);
-        pts.push_back(s.w_points[i]);
-      }
-      const std::vector<double> crlb = depthCramerRao(camera, rig, truth, sub, pts, noise, true);
-      Seg &g = segs[sg];
+      const std::vector<MotionSample> truth(s.truth.begin() + static_cast<long>(r0),
+                                            s.truth.begin() + static_cast<long>(r1) + 1);
+      std::vector<int> member_index;
+      const std::vector<double> crlb = subLogBound(camera, rig, s, truth, noise, member_index);
       for (std::size_t i : members) {
         const double z = s.cameraPoint(rig, s.tracks[i].id, row.at(s.tracks[i].observations.back().frame)).z();
         if (!est[i].ok()) {
-          ++g.notok;
+          ++segs[sg].notok;
           continue;
         }
-        const double e = est[i].c_P.z() - z, sz = est[i].sigmaZ();
-        ++g.n;
-        g.se += e * e;
-        g.sum_e += e;
-        g.nees += (e / sz) * (e / sz);
-        g.cov += std::abs(e) <= 2 * sz ? 1 : 0;
         const double b = member_index[i] >= 0 ? crlb[static_cast<std::size_t>(member_index[i])] : NAN;
-        if (std::isfinite(b) && b > 0) {
-          g.sn += (e / b) * (e / b);
-          ++g.nf;
-        }
+        segs[sg].add(est[i].c_P.z() - z, est[i].sigmaZ(), b);
       }
     }
   }
-  std::printf("%s\n", std::string(84, '-').c_str());
-  std::printf("%14s %8s %8s %10s %10s %10s %9s %9s\n", "frames", "points", "not ok", "RMSE (mm)", "bias (mm)",
-              "RMSE/CRLB", "NEES", "2-sigma");
-  std::printf("%s\n", std::string(84, '-').c_str());
-  Seg all;
-  for (std::size_t sg = 0; sg < segs.size(); ++sg) {
-    const Seg &g = segs[sg];
-    char name[32];
-    std::snprintf(name, sizeof name, "%ld-%ld", static_cast<long>(sg) * segment,
-                  std::min<long>((static_cast<long>(sg) + 1) * segment, frames) - 1);
-    std::printf("%14s %8ld %8ld %10.3f %+10.3f %10.3f %9.3f %9.3f\n", name, g.n, g.notok, 1e3 * std::sqrt(g.se / g.n),
-                1e3 * g.sum_e / g.n, std::sqrt(g.sn / g.nf), g.nees / g.n, double(g.cov) / g.n);
-    all.se += g.se;
-    all.sn += g.sn;
-    all.nees += g.nees;
-    all.sum_e += g.sum_e;
-    all.n += g.n;
-    all.nf += g.nf;
-    all.cov += g.cov;
-    all.notok += g.notok;
-  }
-  std::printf("%s\n", std::string(84, '-').c_str());
-  std::printf("%14s %8ld %8ld %10.3f %+10.3f %10.3f %9.3f %9.3f\n", "all", all.n, all.notok,
-              1e3 * std::sqrt(all.se / all.n), 1e3 * all.sum_e / all.n, std::sqrt(all.sn / all.nf), all.nees / all.n,
-              double(all.cov) / all.n);
-  std::printf("%s\n", std::string(84, '-').c_str());
+  printSegments(segs, segment, frames);
   std::printf("  window: %.3f ms per frame on average over the %d trials (windowTracks, all features).\n",
               total_ms / (static_cast<double>(trials) * frames), trials);
 }
@@ -276,30 +310,17 @@ int main(int argc, char **argv)
   std::uint64_t seed = 1;
   int frames = 1000, trials = 4, window = WindowOptions().window;
   NoiseModel noise = paperNoise();
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick")
-      quick = true;
-    else if (a == "--seed" && i + 1 < argc)
-      seed = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--frames" && i + 1 < argc)
-      frames = std::atoi(argv[++i]);
-    else if (a == "--noise" && i + 4 < argc) {
-      noise.sigma_px = std::atof(argv[++i]);
-      noise.sigma_odom = std::atof(argv[++i]);
-      noise.sigma_heading = std::atof(argv[++i]) * kDeg;
-      noise.sigma_yaw = std::atof(argv[++i]) * kDeg;
-    } else if (a == "--no-cost")
-      skip_cost = true;
-    else if (a == "--window" && i + 1 < argc)
-      window = std::atoi(argv[++i]);
-    else if (a == "--trials" && i + 1 < argc)
-      trials = std::atoi(argv[++i]);
-    else {
-      std::fprintf(stderr, "usage: %s [--quick] [--seed S] [--frames N] [--trials T] [--window K] [--no-cost]\n", argv[0]);
-      return 2;
-    }
-  }
+  bench::CommandLine cli("[--quick] [--seed S] [--frames N] [--trials T] [--window K] [--no-cost]");
+  cli.flag("--quick", quick).flag("--no-cost", skip_cost).option("--seed", seed).option("--frames", frames);
+  cli.option("--window", window).option("--trials", trials);
+  cli.option("--noise", 4, [&noise](char **v) { // px, m, deg, deg
+    noise.sigma_px = std::atof(v[0]);
+    noise.sigma_odom = std::atof(v[1]);
+    noise.sigma_heading = std::atof(v[2]) * kDeg;
+    noise.sigma_yaw = std::atof(v[3]) * kDeg;
+  });
+  if (!cli.parse(argc, argv))
+    return 2;
   if (frames < 20 || trials < 1 || window < 2) {
     std::fprintf(stderr, "bench_window: --frames must be >= 20, --trials >= 1, --window >= 2\n");
     return 2;

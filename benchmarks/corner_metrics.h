@@ -11,21 +11,13 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bench_common.h" // median()
+
 namespace yawdepth {
 namespace bench {
 
 /*! Corners of one image, row-major over the board's grid; empty when not found. */
 using Corners = std::vector<cv::Point2f>;
-
-/*! \brief Median (NaN when empty). */
-inline double median(std::vector<double> v) {
-  if (v.empty())
-    return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 
 /*! The peer pipelines: what a user of stock OpenCV would write. */
 inline Corners opencvSubPix(const cv::Mat &gray, int cols, int rows, int half) {

@@ -16,20 +16,15 @@
 #include <yawdepth/features/pattern.h>
 #include <yawdepth/geometry/rig.h>
 
+#include "bench_common.h" // paperCamera(), paperRig()
+
 namespace yawdepth {
 namespace bench {
 
-/*! The paper's camera (Brown, 640x480). */
-inline CameraModel paperCamera() {
-  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-}
 /*! A wide camera with strong barrel distortion: small squares in pixels, curved edges. */
 inline CameraModel wideCamera() {
   return CameraModel::brown(600.0, 602.0, 322.5, 238.0, {-0.28, 0.09, 0.0005, -0.0003, -0.012}, 640, 480);
 }
-/*! The paper's rig (Lb = 150.3 mm). */
-inline YawRig paperRig() { return YawRig(Eigen::Vector3d(-0.1503, 0.0, 0.0)); }
-
 /*! True (distorted) pixel of every board feature, by id; false when one is behind the camera. */
 inline bool truthPixels(const CameraModel &cam, const YawRig &rig, const MotionSample &s, const BoardLayout &board,
                         const Eigen::Isometry3d &wMb, std::map<long, Eigen::Vector2d> &out) {

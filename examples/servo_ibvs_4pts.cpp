@@ -27,10 +27,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
-#include <stdexcept>
 #include <string>
-#include <utility>
-#include <vector>
 
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
@@ -44,12 +41,38 @@
 
 #include <yawdepth/servo/depth_provider.h>
 
+#include "servo_sim/servo_example.h" // the command line, the square, the observation, the printed lines
+
 namespace {
 
+// The usage lines (on stdout, as --help prints them).
 void usage()
 {
   std::printf("usage: servo_ibvs_4pts [--depth true|constant|estimated] [--constant-error E]\n"
               "       [--pose N] [--seed N] [--sigma-px S] [--max-iterations N] [--quiet] [--verbose]\n");
+}
+
+// The options: the shared ones (servo_example.h) and the starting pose.
+struct Args : servo_sim::PointServoArgs {
+  unsigned pose = 0;
+  Args() { max_iterations = 2000; }
+};
+
+// Reads the command line (exits with 2 on one the example cannot take, with 0 after --help).
+Args parse(int argc, char **argv)
+{
+  Args a;
+  servo_sim::readOptions(argc, argv, "servo_ibvs_4pts", usage,
+                         [&](const std::string &o, const servo_sim::NextValue &next) {
+                           if (o != "--pose")
+                             return servo_sim::readPointServoOption(o, next, a);
+                           a.pose = static_cast<unsigned>(std::stoul(next()));
+                           return true;
+                         });
+  if (!(a.sigma_px >= 0.0) || !(a.constant_error > -1.0) || a.max_iterations <= 0)
+    servo_sim::exitWithUsage("servo_ibvs_4pts", "--sigma-px >= 0, --constant-error > -1 and --max-iterations > 0",
+                             usage);
+  return a;
 }
 
 // The starting pose of the camera relative to the square (cMo): 0 is the tutorial's, N > 0 a random
@@ -78,66 +101,70 @@ vpHomogeneousMatrix startPose(unsigned pose, const vpCameraParameters &cam, unsi
   }
 }
 
+// The tutorial's world: the camera, the square and the goal 0.75 m in front of it.
+struct Scene {
+  const vpCameraParameters cam = vpCameraParameters(600, 600, 320, 240);
+  const unsigned width = 640, height = 480;
+  const vpHomogeneousMatrix cdMo = vpHomogeneousMatrix(0, 0, 0.75, 0, 0, 0);
+  vpPoint point[4];
+  vpImagePoint desired[4]; // the corners' pixels at the goal
+  Scene() { servo_sim::setSquare(point); }
+};
+
+// The servo loop: observe the corners, give the provider the camera's pose and the pixels, set
+// each feature's Z, compute the control law, move the camera.
+servo_sim::PointServoRun servo(const Args &args, Scene &scene, vpServo &task, vpFeaturePoint (&p)[4],
+                               vpSimulatorCamera &robot, const vpHomogeneousMatrix &wMo,
+                               yawdepth::DepthProvider &provider)
+{
+  std::mt19937 rng(1000003u * args.seed + 17u);
+  std::normal_distribution<double> noise(0.0, args.sigma_px);
+  servo_sim::PointServoRun run;
+  vpHomogeneousMatrix wMc;
+  robot.getPosition(wMc);
+  run.start(wMc);
+  vpPoint(&point)[4] = scene.point;
+  for (; run.iterations < args.max_iterations; ++run.iterations) {
+    robot.getPosition(wMc);
+    const vpHomogeneousMatrix cMo = wMc.inverse() * wMo;
+    run.moveTo(wMc);
+
+    // Observe: the true projection, then pixel noise.
+    const servo_sim::SquareView view = servo_sim::observeSquare(point, cMo, scene.cam, scene.width, scene.height,
+                                                                scene.desired, [&] { return noise(rng); });
+    if (run.ends(view))
+      break;
+
+    // The features: x, y from the noisy pixels, Z from the chosen source.
+    if (args.depth_mode == "estimated")
+      provider.update(wMc, view.observed);
+    run.clearDepthErrors();
+    for (unsigned i = 0; i < 4; i++) {
+      const vpImagePoint &ip = view.observed[i].second;
+      if (args.depth_mode == "estimated")
+        provider.buildFrom(i, ip, p[i]); // x, y undistorted, Z the provider's depth
+      else {
+        vpFeatureBuilder::create(p[i], scene.cam, ip);
+        p[i].set_Z(args.depth_mode == "constant" ? scene.cdMo[2][3] * (1.0 + args.constant_error) : point[i].get_Z());
+      }
+      run.addDepth(p[i].get_Z(), point[i].get_Z());
+    }
+    vpColVector v = task.computeControlLaw();
+    robot.setVelocity(vpRobot::CAMERA_FRAME, v);
+    servo_sim::printProgress(args, run, view.error, p, point, provider);
+  }
+  return run;
+}
+
 } // namespace
 
 int main(int argc, char **argv)
 {
-  std::string depth_mode = "estimated";
-  unsigned pose = 0;
-  double constant_error = 0.0, sigma_px = 0.3;
-  unsigned seed = 1;
-  int max_iterations = 2000;
-  bool quiet = false, verbose = false;
-  try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto next = [&]() -> std::string {
-        if (i + 1 >= argc)
-          throw std::runtime_error("missing value after " + a);
-        return argv[++i];
-      };
-      if (a == "--depth") {
-        depth_mode = next();
-        if (depth_mode != "true" && depth_mode != "constant" && depth_mode != "estimated")
-          throw std::runtime_error("--depth: true, constant or estimated");
-      } else if (a == "--constant-error")
-        constant_error = std::stod(next());
-      else if (a == "--pose")
-        pose = static_cast<unsigned>(std::stoul(next()));
-      else if (a == "--seed")
-        seed = static_cast<unsigned>(std::stoul(next()));
-      else if (a == "--sigma-px")
-        sigma_px = std::stod(next());
-      else if (a == "--max-iterations")
-        max_iterations = std::stoi(next());
-      else if (a == "--quiet")
-        quiet = true;
-      else if (a == "--verbose")
-        verbose = true;
-      else if (a == "--help" || a == "-h") {
-        usage();
-        return 0;
-      } else
-        throw std::runtime_error("unknown option " + a);
-    }
-    if (!(sigma_px >= 0.0) || !(constant_error > -1.0) || max_iterations <= 0)
-      throw std::runtime_error("--sigma-px >= 0, --constant-error > -1 and --max-iterations > 0");
-  } catch (const std::exception &e) {
-    std::fprintf(stderr, "servo_ibvs_4pts: %s\n", e.what());
-    usage();
-    return 2;
-  }
+  const Args args = parse(argc, argv);
 
-  const vpCameraParameters cam(600, 600, 320, 240);
-  const unsigned width = 640, height = 480;
-  const vpHomogeneousMatrix cdMo(0, 0, 0.75, 0, 0, 0);
-
-  vpPoint point[4];
-  point[0].setWorldCoordinates(-0.1, -0.1, 0);
-  point[1].setWorldCoordinates(0.1, -0.1, 0);
-  point[2].setWorldCoordinates(0.1, 0.1, 0);
-  point[3].setWorldCoordinates(-0.1, 0.1, 0);
-  vpHomogeneousMatrix cMo = startPose(pose, cam, width, height, point);
+  // The square, and the camera's start (the tutorial's, or a random one).
+  Scene scene;
+  const vpHomogeneousMatrix cMo = startPose(args.pose, scene.cam, scene.width, scene.height, scene.point);
 
   vpServo task;
   task.setServo(vpServo::EYEINHAND_CAMERA);
@@ -145,105 +172,21 @@ int main(int argc, char **argv)
   task.setLambda(0.5);
 
   vpFeaturePoint p[4], pd[4];
-  vpImagePoint desired[4];
-  for (unsigned i = 0; i < 4; i++) {
-    point[i].track(cdMo);
-    vpFeatureBuilder::create(pd[i], point[i]);
-    vpMeterPixelConversion::convertPoint(cam, point[i].get_x(), point[i].get_y(), desired[i]);
-    point[i].track(cMo);
-    vpFeatureBuilder::create(p[i], point[i]);
-    task.addFeature(p[i], pd[i]);
-  }
+  servo_sim::addSquareFeatures(task, scene.point, scene.cam, scene.cdMo, cMo, p, pd, scene.desired);
 
-  vpHomogeneousMatrix wMc, wMo;
+  vpHomogeneousMatrix wMc;
   vpSimulatorCamera robot;
   robot.setSamplingTime(0.040);
   robot.getPosition(wMc);
-  wMo = wMc * cMo;
+  const vpHomogeneousMatrix wMo = wMc * cMo;
 
   // The depth estimator: the camera is the vision frame (identity camera_pose), default options.
-  yawdepth::DepthProvider provider(cam, yawdepth::YawRig(vpHomogeneousMatrix()));
+  yawdepth::DepthProvider provider(scene.cam, yawdepth::YawRig(vpHomogeneousMatrix()));
 
-  std::mt19937 rng(1000003u * seed + 17u);
-  std::normal_distribution<double> noise(0.0, sigma_px);
-  double path_length = 0.0, final_error = 0.0, depth_error = 0.0;
-  vpTranslationVector previous_centre = wMc.getTranslationVector();
-  std::string outcome;
-  int iter = 0;
-  if (!quiet)
-    std::printf("servo: depth=%s pose=%u seed=%u sigma_px=%.2f\n", depth_mode.c_str(), pose, seed, sigma_px);
-  for (; iter < max_iterations; ++iter) {
-    robot.getPosition(wMc);
-    cMo = wMc.inverse() * wMo;
-    path_length += (wMc.getTranslationVector() - previous_centre).frobeniusNorm();
-    previous_centre = wMc.getTranslationVector();
-
-    // Observe: the true projection, then pixel noise.
-    std::vector<std::pair<long, vpImagePoint>> observed;
-    double error = 0.0;
-    bool outside = false;
-    for (unsigned i = 0; i < 4; i++) {
-      point[i].track(cMo);
-      vpImagePoint truth;
-      vpMeterPixelConversion::convertPoint(cam, point[i].get_x(), point[i].get_y(), truth);
-      error += vpImagePoint::distance(truth, desired[i]) / 4.0;
-      outside = outside || point[i].get_Z() <= 0 || truth.get_u() < 0 || truth.get_v() < 0 ||
-                truth.get_u() > width - 1 || truth.get_v() > height - 1;
-      observed.emplace_back(i, vpImagePoint(truth.get_i() + noise(rng), truth.get_j() + noise(rng)));
-    }
-    final_error = error;
-    if (outside) {
-      outcome = "reason=feature_left_image";
-      break;
-    }
-    if (error < 0.5) {
-      outcome = "converged";
-      break;
-    }
-
-    // The features: x, y from the noisy pixels, Z from the chosen source.
-    if (depth_mode == "estimated")
-      provider.update(wMc, observed);
-    depth_error = 0.0;
-    for (unsigned i = 0; i < 4; i++) {
-      const vpImagePoint &ip = observed[i].second;
-      double Z = point[i].get_Z();
-      if (depth_mode == "estimated") {
-        provider.buildFrom(i, ip, p[i]);
-        Z = p[i].get_Z();
-      } else {
-        vpFeatureBuilder::create(p[i], cam, ip);
-        if (depth_mode == "constant")
-          Z = cdMo[2][3] * (1.0 + constant_error);
-        p[i].set_Z(Z);
-      }
-      depth_error += std::fabs(Z - point[i].get_Z()) / point[i].get_Z() / 4.0;
-    }
-    vpColVector v = task.computeControlLaw();
-    robot.setVelocity(vpRobot::CAMERA_FRAME, v);
-    if (!quiet && iter % (verbose ? 10 : 50) == 0) {
-      std::printf("it %4d  error %8.3f px  path %.4f  Z used", iter, error, path_length);
-      for (unsigned i = 0; i < 4; i++)
-        std::printf(" %.3f", p[i].get_Z());
-      std::printf("  (true");
-      for (unsigned i = 0; i < 4; i++)
-        std::printf(" %.3f", point[i].get_Z());
-      std::printf(")\n");
-      if (verbose && depth_mode == "estimated")
-        for (unsigned i = 0; i < 4; i++) {
-          const yawdepth::FeatureDepth f = provider.info(i);
-          std::printf("    %u: %s estimate %.4f +- %.4f%s\n", i, yawdepth::toString(f.status), f.estimate,
-                      f.estimate_sigma, f.converged ? " (used)" : "");
-        }
-    }
-  }
-  if (outcome.empty())
-    outcome = "reason=max_iterations";
-  std::printf("path_length=%.4f depth_error=%.4f\n", path_length, depth_error);
-  if (outcome == "converged") {
-    std::printf("converged iterations=%d final_error=%.4f\n", iter, final_error);
-    return 0;
-  }
-  std::printf("diverged iterations=%d final_error=%.4f %s\n", iter, final_error, outcome.c_str());
-  return 3;
+  if (!args.quiet)
+    std::printf("servo: depth=%s pose=%u seed=%u sigma_px=%.2f\n", args.depth_mode.c_str(), args.pose, args.seed,
+                args.sigma_px);
+  const servo_sim::PointServoRun run = servo(args, scene, task, p, robot, wMo, provider);
+  std::printf("path_length=%.4f depth_error=%.4f\n", run.path_length, run.depth_error);
+  return servo_sim::printOutcome(run.converged, run.iterations, run.final_error, run.reason);
 }

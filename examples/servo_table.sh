@@ -4,6 +4,7 @@
 # estimated depth, front and side view, each over SEEDS noise seeds (default 5).
 # Usage: examples/servo_table.sh [path/to/servo_ibvs_yawing_camera] [SEEDS]
 set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/servo_table_common.sh"
 bin=${1:-build/examples/servo_ibvs_yawing_camera}
 seeds=${2:-5}
 [ -x "$bin" ] || { echo "servo_table.sh: $bin not found (build the servo_ibvs_yawing_camera target)" >&2; exit 1; }
@@ -12,13 +13,10 @@ run() { # view label args...
   local its=() errs=() diverged=0
   for s in $(seq 1 "$seeds"); do
     local last
-    last=$("$bin" --view "$view" --seed "$s" --png none --quiet "$@" | tail -1) || true
-    case $last in
-      converged*) ;;
-      *) diverged=$((diverged + 1)) ;;
-    esac
-    its+=("$(sed -n 's/.*iterations=\([0-9]*\).*/\1/p' <<<"$last")")
-    errs+=("$(sed -n 's/.*final_error=\([0-9.eE+-]*\).*/\1/p' <<<"$last")")
+    last=$(last_lines 1 "$bin" --view "$view" --seed "$s" --png none --quiet "$@")
+    diverged=$((diverged + $(not_converged "$last")))
+    its+=("$(field iterations "$last")")
+    errs+=("$(field final_error "$last")")
   done
   printf '%s\n' "${its[@]}" | awk -v view="$view" -v label="$label" -v div="$diverged" -v errs="${errs[*]}" '
     { s += $1; if (NR == 1 || $1 < mn) mn = $1; if ($1 > mx) mx = $1 }

@@ -6,6 +6,7 @@
 # (paired: the same pose and noise seed), the worst final error and the number of diverged runs.
 # Usage: examples/servo_table_4pts.sh [path/to/servo_ibvs_4pts] [POSES] [SEEDS] [SIGMA]
 set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/servo_table_common.sh"
 bin=${1:-build/examples/servo_ibvs_4pts}
 poses=${2:-8}
 seeds=${3:-5}
@@ -16,20 +17,8 @@ echo "| start pose | depth | iterations (mean) | / true | path (m, mean) | / tru
 echo "|---|---|---|---|---|---|---|---|---|"
 for pose in $(seq 0 $((poses - 1))); do
   declare -A it=() path=()
-  for m in "${modes[@]}"; do
-    label=${m%%:*}; args=${m#*:}
-    for s in $(seq 1 "$seeds"); do
-      out=$("$bin" --pose "$pose" --seed "$s" --sigma-px "$sigma" --quiet $args | tail -2) || true
-      last=$(tail -1 <<<"$out")
-      case $last in converged*) d=0 ;; *) d=1 ;; esac
-      i=$(sed -n 's/.*iterations=\([0-9]*\).*/\1/p' <<<"$last")
-      e=$(sed -n 's/.*final_error=\([0-9.eE+-]*\).*/\1/p' <<<"$last")
-      p=$(head -1 <<<"$out" | sed -n 's/.*path_length=\([0-9.eE+-]*\).*/\1/p')
-      echo "$label $s $i $p $e $d"
-    done
-  done | awk -v pose="$pose" '
-    { key = $0; n = NF; lab = ""; for (k = 1; k <= n - 5; k++) lab = lab (k > 1 ? " " : "") $k
-      s = $(n-4); it[lab, s] = $(n-3); pa[lab, s] = $(n-2); er[lab, s] = $(n-1); dv[lab] += $n
+  mode_runs "iterations path_length final_error" --pose "$pose" --sigma-px "$sigma" | awk -F'|' -v pose="$pose" '
+    { lab = $1; s = $2; it[lab, s] = $3; pa[lab, s] = $4; er[lab, s] = $5; dv[lab] += $6
       if (!(lab in seen)) { seen[lab] = 1; order[++nl] = lab } if (s > ns) ns = s }
     END {
       for (l = 1; l <= nl; l++) { lab = order[l]; si = sp = ri = rp = 0; wr = 0; we = 0

@@ -7,6 +7,7 @@
 # signed error with its standard error (the bias).
 # Usage: examples/servo_table_pioneer.sh [path/to/servo_pioneer_pan] [SEEDS] ["SIGMAS"]
 set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/servo_table_common.sh"
 bin=${1:-build/examples/servo_pioneer_pan}
 seeds=${2:-10}
 sigmas=${3:-"0.1 0.3 0.6"}
@@ -17,18 +18,8 @@ echo "| scenario | pixel noise | depth | iterations (mean) | / true (mean) | / t
 echo "|---|---|---|---|---|---|---|---|---|"
 for scenario in front side; do
   for sigma in $sigmas; do
-    for m in "${modes[@]}"; do
-      label=${m%%:*}; args=${m#*:}
-      for s in $(seq 1 "$seeds"); do
-        out=$("$bin" --scenario "$scenario" --seed "$s" --sigma-px "$sigma" --quiet $args | tail -2) || true
-        last=$(tail -1 <<<"$out")
-        case $last in converged*) d=0 ;; *) d=1 ;; esac
-        i=$(sed -n 's/.*iterations=\([0-9]*\).*/\1/p' <<<"$last")
-        e=$(head -1 <<<"$out" | sed -n 's/.*depth_error=\([0-9.eE+-]*\).*/\1/p')
-        b=$(head -1 <<<"$out" | sed -n 's/.*depth_bias=\([0-9.eE+-]*\).*/\1/p')
-        echo "$label|$s|$i|$e|$b|$d"
-      done
-    done | awk -F'|' -v sc="$scenario" -v sg="$sigma" '
+    mode_runs "iterations depth_error depth_bias" --scenario "$scenario" --sigma-px "$sigma" |
+      awk -F'|' -v sc="$scenario" -v sg="$sigma" '
       { lab = $1; s = $2; it[lab, s] = $3; er[lab, s] = $4; bi[lab, s] = $5; dv[lab] += $6
         if (!(lab in seen)) { seen[lab] = 1; order[++nl] = lab } if (s > ns) ns = s }
       END {
