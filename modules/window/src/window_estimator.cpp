@@ -233,10 +233,12 @@ struct WindowEstimator::Impl {
   static void accumulate(const Eigen::Matrix<double, R, 1> &r, const Eigen::Matrix<double, R, C> &J, const int *cols,
                          double w, Eigen::MatrixXd *H, Eigen::VectorXd &g)
   {
-    const Eigen::Matrix<double, C, 1> Jtr = w * (J.transpose() * r);
+    // Coefficient-based products: Eigen's blocked GEMM (its default above a few rows) costs more
+    // than it saves on these small fixed sizes.
+    const Eigen::Matrix<double, C, 1> Jtr = w * J.transpose().lazyProduct(r);
     Eigen::Matrix<double, C, C> JtJ;
     if (H)
-      JtJ.noalias() = w * (J.transpose() * J);
+      JtJ.noalias() = w * J.transpose().lazyProduct(J);
     for (int a = 0; a < C; ++a) {
       if (cols[a] < 0)
         continue;
