@@ -3,8 +3,8 @@
 # 8 photos from a Panda arm and the arm's poses rMe from its forward kinematics) measured from the arm's
 # motion alone with `yawdepth measure`, against the printed board (23.6 mm squares) and ViSP's published
 # board pose rMo. Prints one row per way of measuring: block lengths (median, 5..95 %, share within
-# 0.3 mm of 23.6), flatness (largest distance to the fitted plane), the board origin's distance to
-# ViSP's rMo, and the reprojection RMS of the solution.
+# 0.3 mm of 23.6), flatness (largest distance to the fitted plane) and the board origin's distance
+# to ViSP's rMo.
 # Usage: examples/franka_measure.sh [path/to/yawdepth] [WORKDIR]
 set -euo pipefail
 Y=${1:-build/tools/yawdepth}
