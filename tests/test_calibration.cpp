@@ -154,6 +154,98 @@ const CameraSet &cameraSet()
   return set;
 }
 
+/* The fit's covariance (poses marginalised) against OpenCV's own standard deviations of the same fit. */
+void checkCovarianceAgainstOpenCv(const CameraSet &set, const CalibrationDetections &det, const CameraCalibration &cal)
+{
+  std::vector<std::vector<cv::Point3f>> obj;
+  std::vector<std::vector<cv::Point2f>> img;
+  const BoardLayout &b = set.board;
+  const auto features = b.features();
+  const std::map<long, Eigen::Vector3d> pts(features.begin(), features.end());
+  for (const auto &v : det.views) {
+    obj.emplace_back();
+    img.emplace_back();
+    for (const auto &f : v.features) {
+      const Eigen::Vector3d &P = pts.at(f.id);
+      obj.back().emplace_back(static_cast<float>(P.x()), static_cast<float>(P.y()), 0.f);
+      img.back().emplace_back(static_cast<float>(f.u), static_cast<float>(f.v));
+    }
+  }
+  cv::Mat K, D, sdi, sde, pve;
+  std::vector<cv::Mat> rv, tv;
+  cv::calibrateCamera(obj, img, cv::Size(640, 480), K, D, rv, tv, sdi, sde, pve, cv::CALIB_FIX_K3,
+                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
+  // OpenCV divides the squared residuals (2 per point) by points - parameters, not by
+  // 2 points - parameters: its deviations are sqrt(~2) too large by that factor alone.
+  double n = 0;
+  for (const auto &v : img)
+    n += static_cast<double>(v.size());
+  const double params = 8 + 6.0 * static_cast<double>(img.size());
+  const double opencv_scale = std::sqrt((2 * n - params) / (n - params));
+  for (int i = 0; i < 8; ++i) {
+    INFO("parameter " << i << ": " << cal.std_devs[static_cast<std::size_t>(i)] << " against OpenCV's " << sdi.at<double>(i));
+    CHECK(std::abs(cal.std_devs[static_cast<std::size_t>(i)] * opencv_scale / sdi.at<double>(i) - 1) < 0.01);
+  }
+}
+
+/* The fitted model `c` maps the truth `t`'s rays to its pixels: the distortion is right (up to the
+   small intrinsics error it trades with), over the whole image. */
+void checkFittedMapping(const CameraModel &c, const CameraModel &t)
+{
+  double worst = 0;
+  for (int v = 20; v < 480; v += 40)
+    for (int u = 20; u < 640; u += 40) {
+      Eigen::Vector2d m;
+      REQUIRE(t.undistort(Eigen::Vector2d(u, v), m));
+      // Compare the shape of the mapping: pixel offsets from the principal point, scaled by focal.
+      const Eigen::Vector2d a = c.project(m), b(u, v);
+      worst = std::max(worst, (a - b).norm());
+    }
+  INFO("worst pixel difference of the fitted mapping " << worst);
+  CHECK(worst < 1.5);
+}
+
+/* ViSP's two models: both fitted, the one with distortion better, both close to the truth `t`. */
+void checkVispModels(const CameraCalibration &cal, const CameraModel &t)
+{
+  REQUIRE(cal.visp_fitted);
+  INFO("ViSP without " << cal.visp_without.get_px() << " " << cal.visp_without.get_py() << " rms "
+                       << cal.visp_rms_without << "; with " << cal.visp_with.get_px() << " kud "
+                       << cal.visp_with.get_kud() << " kdu " << cal.visp_with.get_kdu() << " rms "
+                       << cal.visp_rms_with << " kdu rms " << cal.visp_rms_kdu);
+  CHECK(cal.visp_with.get_projModel() == vpCameraParameters::perspectiveProjWithDistortion);
+  CHECK(cal.visp_rms_with < cal.visp_rms_without);
+  CHECK(cal.visp_rms_with < 0.5);
+  CHECK(cal.visp_rms_kdu < 1.0);
+  CHECK(std::abs(cal.visp_with.get_px() / t.kx() - 1) < 0.01);
+  CHECK(std::abs(cal.visp_with.get_u0() - t.u0()) < 3.0);
+}
+
+/* Files: OpenCV YAML, ViSP XML with both models, coverage picture; they read back. */
+void checkCalibrationFiles(const CameraCalibration &cal, const CalibrationDetections &det)
+{
+  const CameraModel &c = cal.camera;
+  const std::string dir = tempDir("camera");
+  saveCameraYaml(dir + "/cam.yaml", cal.camera);
+  saveVispCameraXml(dir + "/cam.xml", cal, "MyCam");
+  writeCoverageImage(dir + "/cov.png", cal, det.views);
+  const CameraModel y = loadCameraFile(dir + "/cam.yaml");
+  CHECK(std::abs(y.kx() - c.kx()) < 1e-6);
+  const CameraModel x = loadCameraFile(dir + "/cam.xml", "MyCam");
+  CHECK(x.distortion() == CameraModel::Distortion::ViSP);
+  CHECK(std::abs(x.kx() - cal.visp_with.get_px()) < 1e-3);
+  std::ifstream xin(dir + "/cam.xml");
+  const std::string xml((std::istreambuf_iterator<char>(xin)), std::istreambuf_iterator<char>());
+  CHECK(xml.find("perspectiveProjWithoutDistortion") != std::string::npos);
+  CHECK(xml.find("perspectiveProjWithDistortion") != std::string::npos);
+  CHECK(xml.find("<kud>") != std::string::npos);
+  CHECK(xml.find("<kdu>") != std::string::npos);
+  CHECK(xml.find("<image_width>640</image_width>") != std::string::npos);
+  CHECK(std::filesystem::file_size(dir + "/cov.png") > 1000);
+  CHECK(cal.coverage > 0.5);
+  std::filesystem::remove_all(dir);
+}
+
 } // namespace
 
 TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard views", "[calibration][slow]")
@@ -193,37 +285,7 @@ TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard
     CHECK(m.heldout_rms_px >= 0.9 * m.rms_px); // left-out views are not fitted better than fitted ones
   }
   // The covariance (poses marginalised) against OpenCV's own standard deviations of the same fit.
-  {
-    std::vector<std::vector<cv::Point3f>> obj;
-    std::vector<std::vector<cv::Point2f>> img;
-    const BoardLayout &b = set.board;
-    const auto features = b.features();
-    const std::map<long, Eigen::Vector3d> pts(features.begin(), features.end());
-    for (const auto &v : det.views) {
-      obj.emplace_back();
-      img.emplace_back();
-      for (const auto &f : v.features) {
-        const Eigen::Vector3d &P = pts.at(f.id);
-        obj.back().emplace_back(static_cast<float>(P.x()), static_cast<float>(P.y()), 0.f);
-        img.back().emplace_back(static_cast<float>(f.u), static_cast<float>(f.v));
-      }
-    }
-    cv::Mat K, D, sdi, sde, pve;
-    std::vector<cv::Mat> rv, tv;
-    cv::calibrateCamera(obj, img, cv::Size(640, 480), K, D, rv, tv, sdi, sde, pve, cv::CALIB_FIX_K3,
-                        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
-    // OpenCV divides the squared residuals (2 per point) by points - parameters, not by
-    // 2 points - parameters: its deviations are sqrt(~2) too large by that factor alone.
-    double n = 0;
-    for (const auto &v : img)
-      n += static_cast<double>(v.size());
-    const double params = 8 + 6.0 * static_cast<double>(img.size());
-    const double opencv_scale = std::sqrt((2 * n - params) / (n - params));
-    for (int i = 0; i < 8; ++i) {
-      INFO("parameter " << i << ": " << cal.std_devs[static_cast<std::size_t>(i)] << " against OpenCV's " << sdi.at<double>(i));
-      CHECK(std::abs(cal.std_devs[static_cast<std::size_t>(i)] * opencv_scale / sdi.at<double>(i) - 1) < 0.01);
-    }
-  }
+  checkCovarianceAgainstOpenCv(set, det, cal);
   // Projection uncertainty: everywhere finite and positive, small where the corners were.
   REQUIRE(cal.uncertainty_grid.size() == 48);
   for (double u : cal.uncertainty_grid) {
@@ -235,53 +297,14 @@ TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard
     CHECK_FALSE(v.outlier);
     CHECK(v.tilt > 15 * kDeg);
   }
-  // The fitted model maps the true rays to the true pixels: the distortion is right (up to the
-  // small intrinsics error it trades with), over the whole image.
-  double worst = 0;
-  for (int v = 20; v < 480; v += 40)
-    for (int u = 20; u < 640; u += 40) {
-      Eigen::Vector2d m;
-      REQUIRE(t.undistort(Eigen::Vector2d(u, v), m));
-      // Compare the shape of the mapping: pixel offsets from the principal point, scaled by focal.
-      const Eigen::Vector2d a = c.project(m), b(u, v);
-      worst = std::max(worst, (a - b).norm());
-    }
-  INFO("worst pixel difference of the fitted mapping " << worst);
-  CHECK(worst < 1.5);
+  // The fitted model maps the true rays to the true pixels, over the whole image.
+  checkFittedMapping(c, t);
 
   // ViSP's two models: both fitted, the one with distortion better, both close to the truth.
-  REQUIRE(cal.visp_fitted);
-  INFO("ViSP without " << cal.visp_without.get_px() << " " << cal.visp_without.get_py() << " rms "
-                       << cal.visp_rms_without << "; with " << cal.visp_with.get_px() << " kud "
-                       << cal.visp_with.get_kud() << " kdu " << cal.visp_with.get_kdu() << " rms "
-                       << cal.visp_rms_with << " kdu rms " << cal.visp_rms_kdu);
-  CHECK(cal.visp_with.get_projModel() == vpCameraParameters::perspectiveProjWithDistortion);
-  CHECK(cal.visp_rms_with < cal.visp_rms_without);
-  CHECK(cal.visp_rms_with < 0.5);
-  CHECK(cal.visp_rms_kdu < 1.0);
-  CHECK(std::abs(cal.visp_with.get_px() / t.kx() - 1) < 0.01);
-  CHECK(std::abs(cal.visp_with.get_u0() - t.u0()) < 3.0);
+  checkVispModels(cal, t);
 
   // Files: OpenCV YAML, ViSP XML with both models, coverage picture; they read back.
-  const std::string dir = tempDir("camera");
-  saveCameraYaml(dir + "/cam.yaml", cal.camera);
-  saveVispCameraXml(dir + "/cam.xml", cal, "MyCam");
-  writeCoverageImage(dir + "/cov.png", cal, det.views);
-  const CameraModel y = loadCameraFile(dir + "/cam.yaml");
-  CHECK(std::abs(y.kx() - c.kx()) < 1e-6);
-  const CameraModel x = loadCameraFile(dir + "/cam.xml", "MyCam");
-  CHECK(x.distortion() == CameraModel::Distortion::ViSP);
-  CHECK(std::abs(x.kx() - cal.visp_with.get_px()) < 1e-3);
-  std::ifstream xin(dir + "/cam.xml");
-  const std::string xml((std::istreambuf_iterator<char>(xin)), std::istreambuf_iterator<char>());
-  CHECK(xml.find("perspectiveProjWithoutDistortion") != std::string::npos);
-  CHECK(xml.find("perspectiveProjWithDistortion") != std::string::npos);
-  CHECK(xml.find("<kud>") != std::string::npos);
-  CHECK(xml.find("<kdu>") != std::string::npos);
-  CHECK(xml.find("<image_width>640</image_width>") != std::string::npos);
-  CHECK(std::filesystem::file_size(dir + "/cov.png") > 1000);
-  CHECK(cal.coverage > 0.5);
-  std::filesystem::remove_all(dir);
+  checkCalibrationFiles(cal, det);
 }
 
 TEST_CASE("calibrate-camera options: fixed aspect ratio and principal point", "[calibration][slow]")

@@ -835,13 +835,22 @@ TEST_CASE("rig file: yaw_offset and yaw_axis", "[io][rig]")
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("ply: ok points in the world frame, header, colour only when every point has one", "[io][ply]")
+namespace {
+
+/* The PLY test's input: the rig, six random motion samples (frames 10 to 15), and 20 rows of random
+   points at those frames (every fifth degenerate) with a gray level each; seeded. */
+struct PlyInput {
+  YawRig rig{Eigen::Vector3d(-0.15, 0.02, 0.05)};
+  std::vector<MotionSample> samples;
+  std::vector<PointRow> rows;
+  std::map<std::pair<long, long>, int> gray;
+};
+
+PlyInput plyInput()
 {
-  constexpr double kRoundOff = 1e-12; // m, for points within a few metres
+  PlyInput in;
   std::mt19937_64 rng(31);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
-  const YawRig rig(Eigen::Vector3d(-0.15, 0.02, 0.05));
-  std::vector<MotionSample> samples;
   for (long f = 0; f < 6; ++f) {
     MotionSample s;
     s.frame = 10 + f;
@@ -850,20 +859,50 @@ TEST_CASE("ply: ok points in the world frame, header, colour only when every poi
     s.z = 2 * uni(rng);
     s.heading = uni(rng);
     s.yaw = uni(rng);
-    samples.push_back(s);
+    in.samples.push_back(s);
   }
-  std::vector<PointRow> rows;
-  std::map<std::pair<long, long>, int> gray;
   for (long id = 0; id < 20; ++id) {
     PointRow r;
     r.id = 1000 + id;
-    r.estimate.frame = samples[static_cast<std::size_t>(id % 6)].frame;
+    r.estimate.frame = in.samples[static_cast<std::size_t>(id % 6)].frame;
     r.estimate.c_P = Eigen::Vector3d(uni(rng), uni(rng), 2 + uni(rng));
     r.estimate.c_cov = Eigen::Matrix3d::Identity() * (0.001 * (id + 1)) * (0.001 * (id + 1));
     r.estimate.status = id % 5 == 4 ? Status::Degenerate : Status::Ok;
-    rows.push_back(r);
-    gray[{r.estimate.frame, r.id}] = static_cast<int>(id * 12);
+    in.rows.push_back(r);
+    in.gray[{r.estimate.frame, r.id}] = static_cast<int>(id * 12);
   }
+  return in;
+}
+
+/* A PLY text's header lines (appended to `header`, up to end_header) and its vertices' numbers. */
+std::vector<std::vector<double>> parsePly(const std::string &text, std::vector<std::string> &header)
+{
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line) && line != "end_header")
+    header.push_back(line);
+  std::vector<std::vector<double>> v;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::vector<double> row;
+    double x;
+    while (ls >> x)
+      row.push_back(x);
+    v.push_back(row);
+  }
+  return v;
+}
+
+} // namespace
+
+TEST_CASE("ply: ok points in the world frame, header, colour only when every point has one", "[io][ply]")
+{
+  constexpr double kRoundOff = 1e-12; // m, for points within a few metres
+  const PlyInput in = plyInput();
+  const YawRig &rig = in.rig;
+  const std::vector<MotionSample> &samples = in.samples;
+  const std::vector<PointRow> &rows = in.rows;
+  const std::map<std::pair<long, long>, int> &gray = in.gray;
   const std::vector<PlyPoint> pts = plyPoints(rig, samples, rows, gray);
   REQUIRE(pts.size() == 16); // the 4 degenerate rows left out
   std::size_t k = 0;
@@ -879,24 +918,8 @@ TEST_CASE("ply: ok points in the world frame, header, colour only when every poi
     ++k;
   }
   // The text: header, then one vertex per line that reads back to the same numbers.
-  const auto parse = [](const std::string &text, std::vector<std::string> &header) {
-    std::istringstream in(text);
-    std::string line;
-    while (std::getline(in, line) && line != "end_header")
-      header.push_back(line);
-    std::vector<std::vector<double>> v;
-    while (std::getline(in, line)) {
-      std::istringstream ls(line);
-      std::vector<double> row;
-      double x;
-      while (ls >> x)
-        row.push_back(x);
-      v.push_back(row);
-    }
-    return v;
-  };
   std::vector<std::string> header;
-  const std::vector<std::vector<double>> v = parse(plyText(pts), header);
+  const std::vector<std::vector<double>> v = parsePly(plyText(pts), header);
   REQUIRE(header.size() >= 3);
   CHECK(header[0] == "ply");
   CHECK(header[1] == "format ascii 1.0");
@@ -916,12 +939,12 @@ TEST_CASE("ply: ok points in the world frame, header, colour only when every poi
   std::vector<PlyPoint> partial = pts;
   partial[3].gray = -1;
   header.clear();
-  const std::vector<std::vector<double>> w = parse(plyText(partial), header);
+  const std::vector<std::vector<double>> w = parsePly(plyText(partial), header);
   CHECK(std::find(header.begin(), header.end(), "property uchar red") == header.end());
   REQUIRE(w.size() == 16);
   CHECK(w[0].size() == 5);
   header.clear();
-  CHECK(parse(plyText({}), header).empty());
+  CHECK(parsePly(plyText({}), header).empty());
   CHECK(std::find(header.begin(), header.end(), "element vertex 0") != header.end());
   // Refused: a point at a frame the motion does not have, an id beyond 32 bits, a gray level above 255.
   std::vector<PointRow> lost = rows;

@@ -300,16 +300,32 @@ TEST_CASE("depth provider: a 6-DoF camera (vpHomogeneousMatrix poses, an arm orb
   CHECK_THROWS_AS(p.update(bad, {}), Error);
 }
 
-TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion", "[servo]")
-{
+namespace {
+
+/* The yaw helper tests' setting: the test camera at the origin of a rig without offset, the
+   helper's options with a 0.4 rad/s rate bound, the paper's rig (optical centre 0.15 m off the yaw
+   axis) and two features ahead that still need depth. */
+struct YawHelperSetting {
   const CameraModel camera = testCamera();
   const YawRig rig;
-  YawHelperOptions o;
-  o.max_rate = 0.4;
-  // The paper's rig (optical centre 0.15 m off the yaw axis), robot standing still, features ahead:
-  // panning translates the camera, so the helper asks for a yaw rate that creates parallax.
-  const YawRig paper_rig(Eigen::Vector3d(-0.15, 0, 0));
+  YawHelperOptions o = fastOptions();
+  const YawRig paper_rig{Eigen::Vector3d(-0.15, 0, 0)};
   std::vector<YawHelperFeature> f{{0.05, 0.0, 1.0, 1.0}, {-0.05, 0.05, 1.0, 1.0}};
+
+  static YawHelperOptions fastOptions()
+  {
+    YawHelperOptions opts;
+    opts.max_rate = 0.4;
+    return opts;
+  }
+};
+
+} // namespace
+
+TEST_CASE_METHOD(YawHelperSetting, "yaw helper: toward more parallax, bounded, recentres without motion: the paper's rig, home view, driving forward", "[servo]")
+{
+  // The paper's rig, robot standing still, features ahead: panning translates the camera, so the
+  // helper asks for a yaw rate that creates parallax.
   const YawRecommendation r = recommendYawRate(camera, paper_rig, 0.0, Eigen::Vector3d::Zero(), f, o);
   CHECK(r.parallax_now == 0.0);
   CHECK(std::abs(r.rate) > 0.1);
@@ -337,6 +353,10 @@ TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion",
   CHECK(std::abs(fwd.rate) <= o.max_rate + 1e-12);
   CHECK(fwd.information_target >= fwd.information_now);
   CHECK(fwd.information_now > 0);
+}
+
+TEST_CASE_METHOD(YawHelperSetting, "yaw helper: toward more parallax, bounded, recentres without motion: a feature out of view", "[servo]")
+{
   // A feature still to measure that is out of view (35 degrees right, the image spans +-28): the pan
   // turns toward it ...
   const std::vector<YawHelperFeature> outside{{0.7, 0.0, 2.0, 1.0}};
@@ -355,6 +375,10 @@ TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion",
   known[0].sigma_rel = 1e-4;
   CHECK(recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), known, o).information_target <
         1e-2 * seek.information_target);
+}
+
+TEST_CASE_METHOD(YawHelperSetting, "yaw helper: toward more parallax, bounded, recentres without motion: no offset, the pan range, bad input", "[servo]")
+{
   // Side view, translation along the camera's -X: parallax far larger than at front view.
   const YawRecommendation side = recommendYawRate(camera, rig, M_PI / 2, Eigen::Vector3d(0, 0, 0.2), f, o);
   const YawRecommendation front = recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, o);
@@ -374,7 +398,7 @@ TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion",
   o.min_yaw = -0.01;
   const YawRecommendation limited = recommendYawRate(camera, rig, 0.0, Eigen::Vector3d(0, 0, 0.2), f, o);
   CHECK(std::abs(limited.target_yaw) <= 0.01 + 1e-12);
-  // Bad input.
+  // Bad input (with that range).
   CHECK_THROWS_AS(recommendYawRate(camera, rig, 0.0, Eigen::Vector3d::Zero(), {}, o), Error);
   CHECK_THROWS_AS(recommendYawRate(CameraModel(), rig, 0.0, Eigen::Vector3d::Zero(), f, o), Error);
   std::vector<YawHelperFeature> bad_sigma = f;
@@ -396,14 +420,29 @@ TEST_CASE("yaw helper: toward more parallax, bounded, recentres without motion",
   }
 }
 
-TEST_CASE("yaw helper with memory: measures first, then explores unseen bearings, then goes home", "[servo]")
+namespace {
+
+/* The yaw helper with memory's setting: the test camera (+-28 degrees horizontally) on the paper's
+   rig, a pan range of +-2 rad, the robot driving forward. */
+struct YawMemorySetting {
+  const CameraModel camera = testCamera();
+  const YawRig rig{Eigen::Vector3d(-0.15, 0, 0)};
+  const YawHelperOptions o = wideRange();
+  const Eigen::Vector3d forward{0, 0, 0.2};
+
+  static YawHelperOptions wideRange()
+  {
+    YawHelperOptions opts;
+    opts.min_yaw = -2.0;
+    opts.max_yaw = 2.0;
+    return opts;
+  }
+};
+
+} // namespace
+
+TEST_CASE_METHOD(YawMemorySetting, "yaw helper with memory: measures first, then explores unseen bearings, then goes home: explores, measures, forgets on reset", "[servo]")
 {
-  const CameraModel camera = testCamera(); // +-28 degrees horizontally
-  const YawRig rig(Eigen::Vector3d(-0.15, 0, 0));
-  YawHelperOptions o;
-  o.min_yaw = -2.0;
-  o.max_yaw = 2.0;
-  const Eigen::Vector3d forward(0, 0, 0.2);
   YawHelper helper(camera, rig, o);
   // Nothing seen yet anywhere: every view is stale.
   CHECK(helper.staleness(0.0, 0.0) == Approx(1.0));
@@ -437,6 +476,17 @@ TEST_CASE("yaw helper with memory: measures first, then explores unseen bearings
   CHECK(meas.mode == YawMode::Measure);
   CHECK(meas.rate == Approx(plain.rate));
   CHECK(meas.target_yaw == Approx(plain.target_yaw));
+  // After reset() every view is stale again.
+  helper.reset();
+  CHECK(helper.staleness(20.0, yaw) == Approx(1.0));
+  // Bad input.
+  CHECK_NOTHROW(helper.recommend(-1.0, 0.0, forward, {})); // any start time after reset() ...
+  CHECK_THROWS_AS(helper.recommend(-2.0, 0.0, forward, {}), Error); // ... but time may not go back
+  CHECK_THROWS_AS(helper.recommend(0.0, std::nan(""), forward, {}), Error);
+}
+
+TEST_CASE_METHOD(YawMemorySetting, "yaw helper with memory: measures first, then explores unseen bearings, then goes home: home, recentre or hold once everything was seen", "[servo]")
+{
   // Everything seen a moment ago (min_stale = 1 cannot be reached): home when set, else recentre
   // the converged features, and hold without any.
   YawExploreOptions strict;
@@ -463,13 +513,10 @@ TEST_CASE("yaw helper with memory: measures first, then explores unseen bearings
   off.enabled = false;
   YawHelper no_explore(camera, rig, home, off);
   CHECK(no_explore.recommend(0.0, 0.0, forward, {}).mode == YawMode::Home);
-  // After reset() every view is stale again.
-  helper.reset();
-  CHECK(helper.staleness(20.0, yaw) == Approx(1.0));
-  // Bad input.
-  CHECK_NOTHROW(helper.recommend(-1.0, 0.0, forward, {})); // any start time after reset() ...
-  CHECK_THROWS_AS(helper.recommend(-2.0, 0.0, forward, {}), Error); // ... but time may not go back
-  CHECK_THROWS_AS(helper.recommend(0.0, std::nan(""), forward, {}), Error);
+}
+
+TEST_CASE_METHOD(YawMemorySetting, "yaw helper with memory: measures first, then explores unseen bearings, then goes home: refuses a camera, options or a pan range it cannot use", "[servo]")
+{
   CHECK_THROWS_AS(YawHelper(CameraModel(), rig, o), Error);
   for (int which = 0; which < 4; ++which) {
     YawExploreOptions b;

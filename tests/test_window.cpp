@@ -60,116 +60,168 @@ std::vector<std::vector<FeatureObservation>> byFrame(const Scene &s, const std::
 
 } // namespace
 
-TEST_CASE("window: camera, reprojection and increment Jacobians match central finite differences", "[window]")
+namespace {
+
+// The step of the central differences.
+constexpr double kStep = 1e-6;
+
+/* A random frame of the Jacobian tests: the mount, the frame's reference rotation, its parameters
+   and the camera they give. */
+struct JacobianFrame {
+  window_detail::Mount mount;
+  Eigen::Matrix3d Rref;
+  double x[window_detail::kFrameDim];
+  window_detail::CameraPose cam;
+};
+
+JacobianFrame randomFrame(std::mt19937_64 &rng, std::uniform_real_distribution<double> &u)
 {
   using namespace window_detail;
+  JacobianFrame fr;
+  fr.mount.R0 = expSO3<double>(Eigen::Vector3d(0.3 * u(rng), 0.3 * u(rng), 1.5 + 0.1 * u(rng)));
+  fr.mount.t0 = Eigen::Vector3d(0.1 * u(rng), 0.05 * u(rng), 0.05 * u(rng));
+  fr.Rref = expSO3<double>(Eigen::Vector3d(0.2 * u(rng), u(rng), 0.2 * u(rng)));
+  double x[kFrameDim] = {u(rng), 0.1 * u(rng), u(rng), 0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng), u(rng)};
+  std::copy(x, x + kFrameDim, fr.x);
+  cameraPose(fr.x, fr.Rref, fr.mount, fr.cam);
+  return fr;
+}
+
+/* The camera of `fr` with frame parameter j moved by +kStep (cp) and by -kStep (cm). */
+void shifted(const JacobianFrame &fr, int j, window_detail::CameraPose &cp, window_detail::CameraPose &cm)
+{
+  using namespace window_detail;
+  double xp[kFrameDim], xm[kFrameDim];
+  std::copy(fr.x, fr.x + kFrameDim, xp);
+  std::copy(fr.x, fr.x + kFrameDim, xm);
+  xp[j] += kStep;
+  xm[j] -= kStep;
+  cameraPose(xp, fr.Rref, fr.mount, cp);
+  cameraPose(xm, fr.Rref, fr.mount, cm);
+}
+
+/* The camera's derivatives (rotation, centre, and the vehicle rotation's) against central differences. */
+void checkCameraJacobians(const JacobianFrame &fr)
+{
+  using namespace window_detail;
+  const double h = kStep;
+  for (int j = 0; j < kFrameDim; ++j) {
+    CameraPose cp, cm;
+    shifted(fr, j, cp, cm);
+    CHECK(((cp.R - cm.R) / (2 * h) - fr.cam.dR[j]).norm() < kFiniteDifference);
+    CHECK(((cp.c - cm.c) / (2 * h) - fr.cam.dc[j]).norm() < kFiniteDifference);
+    if (j >= 3 && j < 6)
+      CHECK(((cp.Rv - cm.Rv) / (2 * h) - fr.cam.dRv[j - 3]).norm() < kFiniteDifference);
+  }
+}
+
+/* Reprojection: a point 1 to 3 m in front of the camera, anchored in another camera; the residual's
+   Jacobian (frame parameters, then the anchored inverse-depth point) against central differences. */
+void checkReprojectionJacobian(const JacobianFrame &fr, std::mt19937_64 &rng, std::uniform_real_distribution<double> &u)
+{
+  using namespace window_detail;
+  const double h = kStep;
+  const CameraPose &cam = fr.cam;
+  const Eigen::Vector3d P = cam.c + cam.R * Eigen::Vector3d(0.3 * u(rng), 0.2 * u(rng), 2.0 + u(rng));
+  const Eigen::Matrix3d Ra = cam.R * expSO3<double>(Eigen::Vector3d(0.05 * u(rng), 0.05 * u(rng), 0.05 * u(rng)));
+  const Eigen::Vector3d ca = cam.c + Eigen::Vector3d(0.2 * u(rng), 0.05 * u(rng), 0.2 * u(rng));
+  const Eigen::Vector3d qa = Ra.transpose() * (P - ca);
+  double p[3] = {qa.x() / qa.z(), qa.y() / qa.z(), 1.0 / qa.z()};
+  WhitenedObservation w;
+  w.m[0] = 0.01;
+  w.m[1] = -0.02;
+  w.s00 = 3000;
+  w.s01 = 40;
+  w.s11 = 2900;
+  Eigen::Vector2d r;
+  Eigen::Matrix<double, 2, 10> J;
+  REQUIRE(observationResidual(Ra, ca, p, cam, w, r, &J));
+  for (int j = 0; j < 10; ++j) {
+    Eigen::Vector2d rp, rm;
+    if (j < kFrameDim) {
+      CameraPose cp, cm;
+      shifted(fr, j, cp, cm);
+      observationResidual(Ra, ca, p, cp, w, rp, nullptr);
+      observationResidual(Ra, ca, p, cm, w, rm, nullptr);
+    } else {
+      double pp[3] = {p[0], p[1], p[2]}, pm[3] = {p[0], p[1], p[2]};
+      pp[j - 7] += h;
+      pm[j - 7] -= h;
+      observationResidual(Ra, ca, pp, cam, w, rp, nullptr);
+      observationResidual(Ra, ca, pm, cam, w, rm, nullptr);
+    }
+    const Eigen::Vector2d fd = (rp - rm) / (2 * h);
+    CHECK((fd - J.col(j)).norm() <= kFiniteDifference * (1.0 + fd.norm()));
+  }
+}
+
+/* Increment: a second frame near the first, the measurement near the truth; the residual against
+   refine's, and its Jacobian (both frames' parameters) against central differences. */
+void checkIncrementJacobian(const JacobianFrame &fr, std::mt19937_64 &rng, std::uniform_real_distribution<double> &u)
+{
+  using namespace window_detail;
+  const double h = kStep;
+  const double *x = fr.x;
+  const Eigen::Matrix3d &Rref = fr.Rref;
+  const Mount &mount = fr.mount;
+  double y[kFrameDim];
+  for (int j = 0; j < kFrameDim; ++j)
+    y[j] = x[j] + 0.02 * u(rng);
+  const Eigen::Matrix3d Rref2 = Rref * expSO3<double>(Eigen::Vector3d(0.01 * u(rng), 0.1 * u(rng), 0.01 * u(rng)));
+  CameraPose cam2;
+  cameraPose(y, Rref2, mount, cam2);
+  OdometryMeasurementGeneral o;
+  o.d[0] = 0.01;
+  o.d[1] = -0.003;
+  o.d[2] = 0.02;
+  o.dR = expSO3<double>(Eigen::Vector3d(0.001, 0.02, -0.002));
+  o.inv_sigma_t = 1000;
+  o.inv_sigma_r[0] = 2000;
+  o.inv_sigma_r[1] = 1500;
+  o.inv_sigma_r[2] = 1800;
+  Eigen::Matrix<double, 6, 1> ro;
+  Eigen::Matrix<double, 6, 14> Jo;
+  odometryResidual(x, fr.cam, y, cam2, o, ro, &Jo);
+  // Against the residual refine uses (refine_model.h), with Rref folded into the blocks' frames.
+  o.Rref_prev = Rref;
+  o.Rref_cur = Rref2;
+  double rr[6];
+  refine_detail::odometryResidualGeneral(x, y, o, rr);
+  for (int k = 0; k < 6; ++k)
+    CHECK(ro(k) == Approx(rr[k]).margin(kExact));
+  for (int j = 0; j < 14; ++j) {
+    double xp[kFrameDim], xm[kFrameDim], yp[kFrameDim], ym[kFrameDim];
+    std::copy(x, x + kFrameDim, xp);
+    std::copy(x, x + kFrameDim, xm);
+    std::copy(y, y + kFrameDim, yp);
+    std::copy(y, y + kFrameDim, ym);
+    (j < kFrameDim ? xp[j] : yp[j - kFrameDim]) += h;
+    (j < kFrameDim ? xm[j] : ym[j - kFrameDim]) -= h;
+    CameraPose a, b, c, d;
+    cameraPose(xp, Rref, mount, a);
+    cameraPose(yp, Rref2, mount, b);
+    cameraPose(xm, Rref, mount, c);
+    cameraPose(ym, Rref2, mount, d);
+    Eigen::Matrix<double, 6, 1> rp, rm;
+    odometryResidual(xp, a, yp, b, o, rp, nullptr);
+    odometryResidual(xm, c, ym, d, o, rm, nullptr);
+    const Eigen::Matrix<double, 6, 1> fd = (rp - rm) / (2 * h);
+    CHECK((fd - Jo.col(j)).norm() <= kFiniteDifference * (1.0 + fd.norm()));
+  }
+}
+
+} // namespace
+
+TEST_CASE("window: camera, reprojection and increment Jacobians match central finite differences", "[window]")
+{
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const double h = 1e-6;
+  // Each trial draws its frame, then the reprojection's point and anchor, then the second frame.
   for (int trial = 0; trial < 20; ++trial) {
-    Mount mount;
-    mount.R0 = expSO3<double>(Eigen::Vector3d(0.3 * u(rng), 0.3 * u(rng), 1.5 + 0.1 * u(rng)));
-    mount.t0 = Eigen::Vector3d(0.1 * u(rng), 0.05 * u(rng), 0.05 * u(rng));
-    const Eigen::Matrix3d Rref = expSO3<double>(Eigen::Vector3d(0.2 * u(rng), u(rng), 0.2 * u(rng)));
-    double x[kFrameDim] = {u(rng), 0.1 * u(rng), u(rng), 0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng), u(rng)};
-    CameraPose cam;
-    cameraPose(x, Rref, mount, cam);
-    // The camera with frame parameter j moved by +h and by -h.
-    auto shifted = [&](int j, CameraPose &cp, CameraPose &cm) {
-      double xp[kFrameDim], xm[kFrameDim];
-      std::copy(x, x + kFrameDim, xp);
-      std::copy(x, x + kFrameDim, xm);
-      xp[j] += h;
-      xm[j] -= h;
-      cameraPose(xp, Rref, mount, cp);
-      cameraPose(xm, Rref, mount, cm);
-    };
-    // Camera derivatives.
-    for (int j = 0; j < kFrameDim; ++j) {
-      CameraPose cp, cm;
-      shifted(j, cp, cm);
-      CHECK(((cp.R - cm.R) / (2 * h) - cam.dR[j]).norm() < kFiniteDifference);
-      CHECK(((cp.c - cm.c) / (2 * h) - cam.dc[j]).norm() < kFiniteDifference);
-      if (j >= 3 && j < 6)
-        CHECK(((cp.Rv - cm.Rv) / (2 * h) - cam.dRv[j - 3]).norm() < kFiniteDifference);
-    }
-    // Reprojection: a point 1 to 3 m in front of the camera, anchored in another camera.
-    const Eigen::Vector3d P = cam.c + cam.R * Eigen::Vector3d(0.3 * u(rng), 0.2 * u(rng), 2.0 + u(rng));
-    const Eigen::Matrix3d Ra = cam.R * expSO3<double>(Eigen::Vector3d(0.05 * u(rng), 0.05 * u(rng), 0.05 * u(rng)));
-    const Eigen::Vector3d ca = cam.c + Eigen::Vector3d(0.2 * u(rng), 0.05 * u(rng), 0.2 * u(rng));
-    const Eigen::Vector3d qa = Ra.transpose() * (P - ca);
-    double p[3] = {qa.x() / qa.z(), qa.y() / qa.z(), 1.0 / qa.z()};
-    WhitenedObservation w;
-    w.m[0] = 0.01;
-    w.m[1] = -0.02;
-    w.s00 = 3000;
-    w.s01 = 40;
-    w.s11 = 2900;
-    Eigen::Vector2d r;
-    Eigen::Matrix<double, 2, 10> J;
-    REQUIRE(observationResidual(Ra, ca, p, cam, w, r, &J));
-    for (int j = 0; j < 10; ++j) {
-      Eigen::Vector2d rp, rm;
-      if (j < kFrameDim) {
-        CameraPose cp, cm;
-        shifted(j, cp, cm);
-        observationResidual(Ra, ca, p, cp, w, rp, nullptr);
-        observationResidual(Ra, ca, p, cm, w, rm, nullptr);
-      } else {
-        double pp[3] = {p[0], p[1], p[2]}, pm[3] = {p[0], p[1], p[2]};
-        pp[j - 7] += h;
-        pm[j - 7] -= h;
-        observationResidual(Ra, ca, pp, cam, w, rp, nullptr);
-        observationResidual(Ra, ca, pm, cam, w, rm, nullptr);
-      }
-      const Eigen::Vector2d fd = (rp - rm) / (2 * h);
-      CHECK((fd - J.col(j)).norm() <= kFiniteDifference * (1.0 + fd.norm()));
-    }
-    // Increment: a second frame near the first, the measurement near the truth.
-    double y[kFrameDim];
-    for (int j = 0; j < kFrameDim; ++j)
-      y[j] = x[j] + 0.02 * u(rng);
-    const Eigen::Matrix3d Rref2 = Rref * expSO3<double>(Eigen::Vector3d(0.01 * u(rng), 0.1 * u(rng), 0.01 * u(rng)));
-    CameraPose cam2;
-    cameraPose(y, Rref2, mount, cam2);
-    OdometryMeasurementGeneral o;
-    o.d[0] = 0.01;
-    o.d[1] = -0.003;
-    o.d[2] = 0.02;
-    o.dR = expSO3<double>(Eigen::Vector3d(0.001, 0.02, -0.002));
-    o.inv_sigma_t = 1000;
-    o.inv_sigma_r[0] = 2000;
-    o.inv_sigma_r[1] = 1500;
-    o.inv_sigma_r[2] = 1800;
-    Eigen::Matrix<double, 6, 1> ro;
-    Eigen::Matrix<double, 6, 14> Jo;
-    odometryResidual(x, cam, y, cam2, o, ro, &Jo);
-    // Against the residual refine uses (refine_model.h), with Rref folded into the blocks' frames.
-    o.Rref_prev = Rref;
-    o.Rref_cur = Rref2;
-    double rr[6];
-    refine_detail::odometryResidualGeneral(x, y, o, rr);
-    for (int k = 0; k < 6; ++k)
-      CHECK(ro(k) == Approx(rr[k]).margin(kExact));
-    for (int j = 0; j < 14; ++j) {
-      double xp[kFrameDim], xm[kFrameDim], yp[kFrameDim], ym[kFrameDim];
-      std::copy(x, x + kFrameDim, xp);
-      std::copy(x, x + kFrameDim, xm);
-      std::copy(y, y + kFrameDim, yp);
-      std::copy(y, y + kFrameDim, ym);
-      (j < kFrameDim ? xp[j] : yp[j - kFrameDim]) += h;
-      (j < kFrameDim ? xm[j] : ym[j - kFrameDim]) -= h;
-      CameraPose a, b, c, d;
-      cameraPose(xp, Rref, mount, a);
-      cameraPose(yp, Rref2, mount, b);
-      cameraPose(xm, Rref, mount, c);
-      cameraPose(ym, Rref2, mount, d);
-      Eigen::Matrix<double, 6, 1> rp, rm;
-      odometryResidual(xp, a, yp, b, o, rp, nullptr);
-      odometryResidual(xm, c, ym, d, o, rm, nullptr);
-      const Eigen::Matrix<double, 6, 1> fd = (rp - rm) / (2 * h);
-      CHECK((fd - Jo.col(j)).norm() <= kFiniteDifference * (1.0 + fd.norm()));
-    }
+    const JacobianFrame fr = randomFrame(rng, u);
+    checkCameraJacobians(fr);
+    checkReprojectionJacobian(fr, rng, u);
+    checkIncrementJacobian(fr, rng, u);
   }
 }
 
