@@ -489,7 +489,7 @@ std::vector<double> yawReadings(double from_deg, double to_deg, int n)
 struct RigScene {
   const CameraModel camera = wideCamera();
   const BoardLayout board = chessboard(6, 5, 0.03);
-  const RigTruth truth;
+  const RigTruth truth{};
   /* The views of a static robot, the board 0.75 m ahead turned by `board_angle`, at `count` yaw
      readings from `from_deg` to `to_deg`. */
   std::vector<RigView> staticViews(double board_angle, double from_deg, double to_deg, int count) const
@@ -610,7 +610,7 @@ TEST_CASE("write rendered calibration images for the command line", "[.dump]")
   const CameraModel camera = wideCamera();
   saveCameraYaml(dir + "/rig/wide_camera.yaml", camera);
   const BoardLayout board = chessboard(6, 5, 0.03);
-  const RigTruth truth;
+  const RigTruth truth{};
   const Eigen::Isometry3d wMb = boardAhead(board, 0.75, 0.0);
   std::ofstream csv(dir + "/rig/motion.csv");
   csv << "frame,x,y,z,heading,yaw,image\n";
