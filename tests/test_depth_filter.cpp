@@ -3,12 +3,14 @@
 #include <catch2/catch.hpp>
 
 #include <random>
+#include "scene_support.h"
 #include <yawdepth/estimation/depth_filter.h>
 #include <yawdepth/estimation/fused_estimator.h>
 #include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/simulation/scene.h>
 
 using namespace yawdepth;
+using yawdepth::test::paperCamera;
 
 // The filter's raw state and covariance, private to the library, read here to check the prediction.
 namespace yawdepth {
@@ -23,10 +25,6 @@ namespace {
 constexpr double kFdTol = 1e-6;          // relative, central differences vs analytic derivatives
 constexpr double kNoiseFreeRelTol = 1e-4; // the diffuse prior (log-depth sigma 3) biases by ~1e-6
 
-CameraModel paperCamera()
-{
-  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-}
 const YawRig kRig(Eigen::Vector3d(-0.1503, 0.0, 0.0));
 
 MotionSample sample(long frame, double x, double z, double heading, double yaw)

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include "scene_support.h"
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/pipeline/pipeline.h>
@@ -12,16 +13,13 @@
 #include <yawdepth/window/stream_estimator.h>
 
 using namespace yawdepth;
+using yawdepth::test::paperCamera;
+using yawdepth::test::paperRig;
 
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-CameraModel paperCamera()
-{
-  return CameraModel::brown(1734.1, 1734.5, 319.2, 241.4, {-0.11042, 0.43607, -0.00084, 0.00035}, 640, 480);
-}
-YawRig paperRig() { return YawRig(Eigen::Vector3d(-0.1503, 0.0, 0.0)); }
 
 Scene noisyScene(std::uint64_t seed)
 {
