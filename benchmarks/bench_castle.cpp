@@ -1,7 +1,8 @@
 /*
   bench_castle: natural-feature depth on someone else's rendered sequence, against its depth maps.
 
-    bench_castle [--data DIR] [--frames N] [--max-features N] [--sigma-px S]
+    bench_castle [--data DIR] [--frames N] [--max-features N] [--sigma-px S] [--method window|fused|refine]
+                 [--no-residual-check] [--points FILE]
 
   Data: Debian's visp-images-data, mbt-depth/Castle-simu (ViSP's RGB-D tracker test sequence): 40
   rendered 640x480 gray images of a castle model, a 700 px pinhole camera (Config/chateau.xml),
@@ -11,10 +12,14 @@
 
   The camera's motion is the given poses (world = the object's frame, wMc = cMo^-1, a 6-DoF log
   with absolute noise 0.1 mm and 0.1 mrad). Tracks: yawdepth::trackSequence (KLT with the epipolar
-  gate); points: the window estimator, each at its last frame. Each ok point is moved into that
-  frame's depth camera (5 cm beside the colour camera, see kDepthFromColour) and its depth compared
-  with the depth map at its pixel there (nearest pixel; a point whose 3x3 neighbourhood has no
-  depth or spans more than 2 % of depth, an occluding edge, has no truth and is counted apart).
+  gate); points: yawdepth::estimatePoints with `--method` (window by default) and the residual
+  check (noise from residuals, tracks that are not one point cut; residual_check.h), each point at
+  its last frame. The truth of an ok point is where the ray of its observed pixel in that frame first
+  meets the surface of the frame's depth map (rendered from a second camera 5 cm beside the colour
+  camera, see kDepthFromColour): the ray is marched in depth, each depth projected into the depth
+  camera and compared with the map there (bilinear); the crossing is refined by bisection. The
+  truth does not depend on the estimate. A ray that meets no surface, or meets it within 3 px of
+  an occluding edge (the map spans more than 2 % of depth there), has no truth and is counted apart.
   Reported: points per frame, median and 95th-percentile relative depth error, the share within
   2 sigma (the estimator's own), the largest error; for every ok point and for those whose own
   relative sigma is under 1 %.
@@ -31,7 +36,7 @@
 
 #include <yawdepth/error.h>
 #include <yawdepth/features/klt_tracker.h>
-#include <yawdepth/window/window_estimator.h>
+#include <yawdepth/pipeline/pipeline.h>
 
 #include "bench_common.h"
 
@@ -44,6 +49,11 @@ namespace {
    depth_M_color[0][3] = -0.05; the maps' content sits 60-70 px left of the images' at 0.5-0.6 m,
    700 x 0.05 / Z). */
 const Eigen::Vector3d kDepthFromColour(-0.05, 0.0, 0.0);
+/* Both cameras' intrinsics (Config/chateau.xml, chateau_depth.xml). */
+constexpr double kFocal = 700.0, kU0 = 320.0, kV0 = 240.0;
+/* A feature within this many pixels of an occluding edge of the depth map has no truth: a corner
+   on a silhouette may be on either surface, and the two cameras see the edge from 5 cm apart. */
+constexpr int kEdgePx = 3;
 
 struct DepthMap {
   int width = 0, height = 0;
@@ -93,22 +103,69 @@ vpHomogeneousMatrix readPose(const std::string &path)
   return M;
 }
 
-/* Depth truth at a pixel: NaN without depth, at the image border or across an occluding edge. */
-double truthAt(const DepthMap &d, double u, double v)
+/* The depth map at a sub-pixel position, bilinear; NaN outside, without depth or across an occluding
+   edge (the 2x2 cell spans more than 2 % of depth). */
+double bilinearDepth(const DepthMap &d, double u, double v)
 {
-  const int iu = static_cast<int>(std::lround(u)), iv = static_cast<int>(std::lround(v));
-  if (iu < 1 || iv < 1 || iu >= d.width - 1 || iv >= d.height - 1)
+  const int iu = static_cast<int>(std::floor(u)), iv = static_cast<int>(std::floor(v));
+  if (iu < 0 || iv < 0 || iu >= d.width - 1 || iv >= d.height - 1)
     return std::nan("");
+  const double z00 = d.at(iu, iv), z10 = d.at(iu + 1, iv), z01 = d.at(iu, iv + 1), z11 = d.at(iu + 1, iv + 1);
+  const double lo = std::min({z00, z10, z01, z11}), hi = std::max({z00, z10, z01, z11});
+  if (!(lo > 0) || hi > 1.02 * lo)
+    return std::nan("");
+  const double a = u - iu, b = v - iv;
+  return (1 - a) * (1 - b) * z00 + a * (1 - b) * z10 + (1 - a) * b * z01 + a * b * z11;
+}
+
+/* Whether the depth map spans more than 2 % of depth within kEdgePx pixels of where the ray meets it
+   at depth z (x, y: the ray's normalised coordinates): a point there may be on either surface. */
+bool occludingEdgeNear(const DepthMap &d, double x, double y, double z)
+{
+  const Eigen::Vector3d d_P = Eigen::Vector3d(x * z, y * z, z) + kDepthFromColour;
+  const int iu = static_cast<int>(std::lround(kFocal * d_P.x() / d_P.z() + kU0));
+  const int iv = static_cast<int>(std::lround(kFocal * d_P.y() / d_P.z() + kV0));
   float lo = 1e9f, hi = 0;
-  for (int dv = -1; dv <= 1; ++dv)
-    for (int du = -1; du <= 1; ++du) {
-      const float z = d.at(iu + du, iv + dv);
-      lo = std::min(lo, z);
-      hi = std::max(hi, z);
+  for (int dv = -kEdgePx; dv <= kEdgePx; ++dv)
+    for (int du = -kEdgePx; du <= kEdgePx; ++du) {
+      const int u = iu + du, v = iv + dv;
+      const float zz = u >= 0 && v >= 0 && u < d.width && v < d.height ? d.at(u, v) : 0.0f;
+      lo = std::min(lo, zz);
+      hi = std::max(hi, zz);
     }
-  if (!(lo > 0) || hi > 1.02f * lo)
-    return std::nan("");
-  return d.at(iu, iv);
+  return !(lo > 0) || hi > 1.02f * lo;
+}
+
+/* Depth (the colour camera's Z) where the ray of colour pixel (u, v) first meets the depth map's
+   surface; NaN when it meets none, or where the map has no usable depth (see the file). */
+double rayTruth(const DepthMap &d, double u, double v)
+{
+  const double x = (u - kU0) / kFocal, y = (v - kV0) / kFocal;
+  // The gap between the ray's depth and the map's at the depth camera's pixel of the ray at depth z.
+  const auto gap = [&](double z) {
+    const Eigen::Vector3d d_P = Eigen::Vector3d(x * z, y * z, z) + kDepthFromColour;
+    return z - bilinearDepth(d, kFocal * d_P.x() / d_P.z() + kU0, kFocal * d_P.y() / d_P.z() + kV0);
+  };
+  double z_prev = 0, g_prev = std::nan("");
+  for (double z = 0.05; z < 5.0; z *= 1.002) { // steps of 0.2 %: under a pixel of epipolar motion
+    const double g = gap(z);
+    if (std::isfinite(g) && std::isfinite(g_prev) && g_prev < 0 && g >= 0) {
+      double lo = z_prev, hi = z;
+      for (int it = 0; it < 40; ++it) {
+        const double mid = 0.5 * (lo + hi), gm = gap(mid);
+        if (!std::isfinite(gm))
+          return std::nan(""); // the crossing is on an occluding edge
+        (gm < 0 ? lo : hi) = mid;
+      }
+      const double z_hit = 0.5 * (lo + hi);
+      return occludingEdgeNear(d, x, y, z_hit) ? std::nan("") : z_hit;
+    }
+    if (std::isfinite(g) && g >= 0 && !std::isfinite(g_prev) && z_prev > 0)
+      return std::nan(""); // came out from behind an edge already past the surface
+    z_prev = z;
+    g_prev = g;
+  }
+  return std::nan("");
 }
 
 double quantile(std::vector<double> v, double q)
@@ -125,6 +182,9 @@ struct Args {
   std::string data = "/usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu";
   int frames = 40, max_features = 300;
   double sigma_px = 0.3;
+  std::string method = "window";
+  std::string points; // --points FILE: every compared point as CSV
+  bool no_residual_check = false;
 };
 
 /* Frames 1..frames of the sequence: the camera's motion (world = the object's frame), the images' paths, the depth maps. */
@@ -167,6 +227,9 @@ NoiseModel castleNoise(double sigma_px)
 struct Row {
   double rel, sigma_rel;
   bool within;
+  long id, frame;      // the track and the point's frame
+  std::size_t track;   // index in the tracks
+  double z, z_true, u, v;
 };
 
 /* Every ok point against the depth map of its last frame; `ok` counts them, `no_truth` those without truth there. */
@@ -187,18 +250,36 @@ std::vector<Row> compareWithDepth(const std::vector<PointEstimate> &est, const s
       ++no_truth;
       continue;
     }
-    // The point in the depth camera: 5 cm to the colour camera's left (x - 0.05), same axes.
-    const Eigen::Vector3d d_P = e.c_P + kDepthFromColour;
-    const double z = truthAt(depth[static_cast<std::size_t>(e.frame - 1)], 700.0 * d_P.x() / d_P.z() + 320.0,
-                             700.0 * d_P.y() / d_P.z() + 240.0);
+    const double z = rayTruth(depth[static_cast<std::size_t>(e.frame - 1)], obs->u, obs->v);
     if (!std::isfinite(z)) {
       ++no_truth;
       continue;
     }
-    const double err = d_P.z() - z;
-    rows.push_back({std::abs(err) / z, e.sigmaZ() / e.c_P.z(), std::abs(err) <= 2 * e.sigmaZ()});
+    const double err = e.c_P.z() - z;
+    rows.push_back({std::abs(err) / z, e.sigmaZ() / e.c_P.z(), std::abs(err) <= 2 * e.sigmaZ(), t.id, e.frame, i,
+                    e.c_P.z(), z, obs->u, obs->v});
   }
   return rows;
+}
+
+/* --points: every compared point, one CSV row each. */
+void writePoints(const std::string &path, const std::vector<Row> &rows, const std::vector<Track> &tracks,
+                 const ResidualCheckResult &check)
+{
+  std::ofstream out(path);
+  if (!out)
+    throw Error(path + ": cannot write");
+  out << "id,frame,observations,u,v,z,z_true,rel_error,sigma_rel,within_2sigma,rms_px,chi2,dof\n";
+  for (const Row &r : rows) {
+    const TrackResidual t = r.track < check.tracks.size() ? check.tracks[r.track] : TrackResidual();
+    char line[320];
+    std::snprintf(line, sizeof line, "%ld,%ld,%zu,%.3f,%.3f,%.6f,%.6f,%.6f,%.6f,%d,%.4f,%.3f,%d\n", r.id, r.frame,
+                  tracks[r.track].observations.size(), r.u, r.v, r.z, r.z_true, (r.z - r.z_true) / r.z_true,
+                  r.sigma_rel, r.within ? 1 : 0, t.rms_px, t.chi2, t.dof);
+    out << line;
+  }
+  if (!out)
+    throw Error(path + ": write failed");
 }
 
 /* The table: every ok point with truth, then those whose own relative sigma is under 1 %. */
@@ -227,9 +308,11 @@ void printTable(const std::vector<Row> &rows, int frames)
 int main(int argc, char **argv)
 {
   Args a;
-  bench::CommandLine cli("[--data DIR] [--frames N (2-40)] [--max-features N] [--sigma-px S]");
+  bench::CommandLine cli("[--data DIR] [--frames N (2-40)] [--max-features N] [--sigma-px S] [--method M] "
+                         "[--no-residual-check] [--points FILE]");
   cli.option("--data", a.data).option("--frames", a.frames);
   cli.option("--max-features", a.max_features).option("--sigma-px", a.sigma_px);
+  cli.option("--method", a.method).flag("--no-residual-check", a.no_residual_check).option("--points", a.points);
   if (!cli.parse(argc, argv))
     return 2;
   if (a.frames < 2 || a.frames > 40 || a.max_features < 1 || !(a.sigma_px > 0)) {
@@ -237,35 +320,44 @@ int main(int argc, char **argv)
     return 2;
   }
   try {
-    const CameraModel camera = CameraModel::brown(700, 700, 320, 240, {0, 0, 0, 0}, 640, 480);
+    PipelineOptions po;
+    po.method = methodFromString(a.method);
+    po.noise = castleNoise(a.sigma_px);
+    po.residual_check.enabled = !a.no_residual_check;
+    po.validate();
+    const CameraModel camera = CameraModel::brown(kFocal, kFocal, kU0, kV0, {0, 0, 0, 0}, 640, 480);
     const YawRig rig; // the camera is the vision frame
     const Sequence q = readSequence(a.data, a.frames);
-    const NoiseModel noise = castleNoise(a.sigma_px);
     KltOptions ko;
     ko.max_features = a.max_features;
     const auto t0 = std::chrono::steady_clock::now();
-    const SequenceTracks seq = trackSequence(camera, rig, q.motion, q.images, noise, ko);
+    const SequenceTracks seq = trackSequence(camera, rig, q.motion, q.images, po.noise, ko);
     const auto t1 = std::chrono::steady_clock::now();
-    WindowOptions wo;
-    wo.noise = noise;
-    const std::vector<PointEstimate> est = windowTracks(camera, rig, q.motion, seq.tracks, wo);
+    const PipelineResult est = estimatePoints(camera, rig, q.motion, seq.tracks, po);
     const auto t2 = std::chrono::steady_clock::now();
     int ok = 0, no_truth = 0;
-    const std::vector<Row> rows = compareWithDepth(est, seq.tracks, q.depth, a.frames, ok, no_truth);
+    const std::vector<Row> rows = compareWithDepth(est.points, seq.tracks, q.depth, a.frames, ok, no_truth);
 
     const double track_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     const double est_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
-    std::printf("yawdepth on Castle-simu (visp-images-data mbt-depth, someone else's renderer): KLT tracks + window "
-                "estimator vs the depth maps\n");
-    std::printf("Reproduce: build/benchmarks/bench_castle --frames %d --max-features %d --sigma-px %g\n", a.frames,
-                a.max_features, a.sigma_px);
+    std::printf("yawdepth on Castle-simu (visp-images-data mbt-depth, someone else's renderer): KLT tracks + %s "
+                "vs the depth maps\n", a.method.c_str());
+    std::printf("Reproduce: build/benchmarks/bench_castle --frames %d --max-features %d --sigma-px %g --method %s%s\n",
+                a.frames, a.max_features, a.sigma_px, a.method.c_str(), a.no_residual_check ? " --no-residual-check" : "");
     std::printf("%d frames; %zu tracks over 2+ frames (%d detected; cut: %d epipolar, %d forward-backward); %d ok "
                 "points, %d without depth truth (background, occluding edge)\n",
                 a.frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb, ok,
                 no_truth);
     std::printf("tracking %.1f ms/frame, estimation %.1f ms/frame (this machine, one core)\n", track_ms / a.frames,
                 est_ms / a.frames);
+    if (po.residual_check.enabled)
+      std::printf("residual check: pixel noise from the residuals %.2f px (given %.2f px), sigmas scaled by %.2f; %d "
+                  "of %d checked tracks not one point (inconsistent)\n",
+                  a.sigma_px * std::sqrt(est.residuals.variance_factor), a.sigma_px, est.residuals.sigma_scale,
+                  est.residuals.inconsistent, est.residuals.tracks_used);
     printTable(rows, a.frames);
+    if (!a.points.empty())
+      writePoints(a.points, rows, seq.tracks, est.residuals);
   } catch (const Error &e) {
     std::fprintf(stderr, "bench_castle: %s\n", e.what());
     return 1;

@@ -273,3 +273,190 @@ TEST_CASE("StreamEstimator: fused and window frame by frame, estimates carried t
     CHECK_THROWS_AS(StreamEstimator(camera, rig, bad), Error);
   }
 }
+
+// ---------------------------------------------------------------------------------------------
+// The residual check (residual_check.h)
+
+TEST_CASE("residual check: chi-square quantiles and medians (Wilson-Hilferty)", "[pipeline][residuals]")
+{
+  // Reference values (R's qchisq). Wilson-Hilferty is within 4 % at 1-4 degrees of freedom (above the
+  // true quantile: a gate a little wider), within 1 % from 10.
+  constexpr double kSmallDofTol = 0.04, kLargeDofTol = 0.01;
+  const struct {
+    int dof;
+    double q999, median;
+  } ref[] = {{1, 10.828, 0.45494}, {2, 13.816, 1.38629}, {5, 20.515, 4.35146},
+             {10, 29.588, 9.34182}, {50, 86.661, 49.3349}, {100, 149.449, 99.3341}};
+  for (const auto &r : ref) {
+    const double tol = r.dof < 10 ? kSmallDofTol : kLargeDofTol;
+    INFO("dof " << r.dof);
+    CHECK(chiSquareQuantile(r.dof, 0.999) == Approx(r.q999).epsilon(tol));
+    CHECK(chiSquareMedian(r.dof) == Approx(r.median).epsilon(tol));
+  }
+  CHECK(chiSquareQuantile(10, 0.95) == Approx(18.307).epsilon(kLargeDofTol));
+  CHECK_THROWS_AS(chiSquareQuantile(0, 0.99), Error);
+  CHECK_THROWS_AS(chiSquareQuantile(3, 1.0), Error);
+  CHECK_THROWS_AS(chiSquareQuantile(3, 0.4), Error);
+  CHECK_THROWS_AS(chiSquareMedian(0), Error);
+}
+
+TEST_CASE("residual check: the pose noise between two rows of a log", "[pipeline][residuals]")
+{
+  constexpr double kRoundOff = 1e-12;
+  // Planar, straight steps of d: after n increments var_rot = n s_h^2 (+ two yaw readings) and
+  // var_t = n s_o^2 + s_h^2 d^2 (0 + 1 + ... + n-1): each step turned by the heading error so far.
+  const double d = 0.02, so = 1e-3, sh = 2e-3, sy = 1e-3;
+  std::vector<MotionSample> log(6);
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    log[i].frame = static_cast<long>(i);
+    log[i].z = d * static_cast<double>(i);
+  }
+  NoiseModel n{0.3, so, sh, sy};
+  double sr = 0, st = 0;
+  relativePoseSigma(n, log, 1, 5, sr, st);
+  const double k = 4;
+  CHECK(sr == Approx(std::sqrt(k * sh * sh + 2 * sy * sy)).epsilon(kRoundOff));
+  CHECK(st == Approx(std::sqrt(k * so * so + sh * sh * d * d * k * (k - 1) / 2)).epsilon(kRoundOff));
+  double sr2 = 0, st2 = 0;
+  relativePoseSigma(n, log, 5, 1, sr2, st2); // either order
+  CHECK(sr2 == Approx(sr).epsilon(kRoundOff));
+  CHECK(st2 == Approx(st).epsilon(kRoundOff));
+  relativePoseSigma(n, log, 3, 3, sr, st);
+  CHECK(sr == 0.0);
+  CHECK(st == 0.0);
+  // Per pose (kinematics): two independent pose errors, however far apart.
+  n.motion_noise = MotionNoise::Absolute;
+  relativePoseSigma(n, log, 0, 5, sr, st);
+  CHECK(sr == Approx(std::sqrt(2 * sh * sh + 2 * sy * sy)).epsilon(kRoundOff));
+  CHECK(st == Approx(std::sqrt(2.0) * so).epsilon(kRoundOff));
+  CHECK_THROWS_AS(relativePoseSigma(n, log, 0, 6, sr, st), Error);
+}
+
+namespace {
+
+// The regime where the pixels set the residuals (an arm's kinematics, a renderer's poses): motion
+// noise of 10 um and 1 urad per increment, under 0.01 px at the paper's 1734 px focal length.
+const NoiseModel kFineMotion{0.3, 1e-5, 1e-6, 1e-6};
+
+// A scene of 60 points over 20 frames with pixel noise `true_px` and kFineMotion's motion noise.
+Scene residualScene(double true_px, std::uint64_t seed)
+{
+  SceneOptions o = test::paperScene(45 * kDeg, 0.3 * kDeg, 20, seed);
+  o.points = 60;
+  o.noise = kFineMotion;
+  o.noise.sigma_px = true_px;
+  return simulateScene(paperCamera(), paperRig(), o);
+}
+
+PipelineOptions residualOptions(double model_px, bool check, Method method = Method::Fused)
+{
+  PipelineOptions po;
+  po.method = method;
+  po.noise = kFineMotion;
+  po.noise.sigma_px = model_px;
+  po.residual_check.enabled = check;
+  return po;
+}
+
+// 2-sigma coverage of the ok points' depth.
+double depthCoverage(const Scene &s, const std::vector<PointEstimate> &points, int &ok)
+{
+  int covered = 0;
+  ok = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].ok())
+      continue;
+    ++ok;
+    const std::size_t row = static_cast<std::size_t>(rowOfFrame(s.measured, points[i].frame));
+    const double z_true = s.cameraPoint(paperRig(), s.tracks[i].id, row).z();
+    covered += std::abs(points[i].c_P.z() - z_true) <= 2 * points[i].sigmaZ() ? 1 : 0;
+  }
+  return ok > 0 ? double(covered) / ok : 0.0;
+}
+
+} // namespace
+
+TEST_CASE("residual check: the pixel noise from the residuals, the sigmas scaled when it was larger",
+          "[pipeline][residuals]")
+{
+  constexpr double kFactorTol = 0.15; // s0 from the median of 60 tracks' chi-square ratios
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  SECTION("the noise model right: s0 near 1, nothing scaled much, almost nothing cut")
+  {
+    const Scene s = residualScene(0.3, 21);
+    const PipelineResult r = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, true));
+    CHECK(std::sqrt(r.residuals.variance_factor) == Approx(1.0).margin(kFactorTol));
+    CHECK(r.residuals.sigma_scale <= 1 + kFactorTol);
+    CHECK(r.residuals.tracks_used >= 50);
+    CHECK(r.residuals.inconsistent <= 1);
+  }
+  SECTION("pixels twice as noisy as the model: s0 near 2, sigmas scaled, coverage restored")
+  {
+    // fused rejects the observations its 0.3 px model finds too far (they are not in the residuals):
+    // s0 comes out somewhat under 2, and the gate (at s0, not 2) cuts a few of the noisiest tracks.
+    constexpr double kLowTol = 0.2, kCutShare = 0.1;
+    const Scene s = residualScene(0.6, 22);
+    const PipelineResult plain = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, false));
+    const PipelineResult r = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, true));
+    CHECK(std::sqrt(r.residuals.variance_factor) >= 2.0 * (1 - kLowTol));
+    CHECK(std::sqrt(r.residuals.variance_factor) <= 2.0 * (1 + kFactorTol));
+    CHECK(r.residuals.sigma_scale == Approx(std::sqrt(r.residuals.variance_factor)));
+    CHECK(r.residuals.inconsistent <= kCutShare * r.residuals.tracks_used);
+    for (std::size_t i = 0; i < r.points.size(); ++i)
+      if (r.points[i].ok() && plain.points[i].ok())
+        CHECK(r.points[i].sigmaZ() == Approx(plain.points[i].sigmaZ() * r.residuals.sigma_scale).epsilon(1e-12));
+    int ok_plain = 0, ok_checked = 0;
+    const double before = depthCoverage(s, plain.points, ok_plain), after = depthCoverage(s, r.points, ok_checked);
+    INFO("2-sigma coverage " << before << " -> " << after);
+    CHECK(after >= 0.9);
+    CHECK(after > before);
+  }
+}
+
+TEST_CASE("residual check: a track that is not one point is inconsistent, the others stay ok", "[pipeline][residuals]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  Scene s = residualScene(0.3, 23);
+  // Track 0 slides down the image, 0.4 px more each frame (a T-junction: where a near edge crosses a
+  // far one, the corner moves along the near edge): across the epipolar lines of this forward motion
+  // (nearly horizontal here), too slowly for a frame-to-frame gate, 8 px over the track. A slide
+  // along the epipolar line would only change the depth: no check on one track can see that.
+  REQUIRE(s.tracks[0].observations.size() >= 10);
+  for (std::size_t k = 0; k < s.tracks[0].observations.size(); ++k)
+    s.tracks[0].observations[k].v += 0.4 * static_cast<double>(k);
+  // window: its robust loss takes the slide in (fused's own gate would reject the track here).
+  const PipelineResult plain =
+      estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, false, Method::Window));
+  const PipelineResult r = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, true, Method::Window));
+  CHECK(plain.points[0].ok()); // what the method alone makes of it
+  CHECK(r.points[0].status == Status::Inconsistent);
+  CHECK(r.residuals.tracks[0].rms_px > 1.0);
+  int ok_plain = 0, ok_checked = 0;
+  for (std::size_t i = 1; i < r.points.size(); ++i) {
+    ok_plain += plain.points[i].ok() ? 1 : 0;
+    ok_checked += r.points[i].ok() ? 1 : 0;
+  }
+  CHECK(ok_checked >= ok_plain - 1);
+}
+
+TEST_CASE("residual check: bad options and input", "[pipeline][residuals]")
+{
+  ResidualCheckOptions o;
+  o.gate_probability = 1.0;
+  CHECK_THROWS_AS(o.validate(), Error);
+  o.gate_probability = 0.5;
+  CHECK_THROWS_AS(o.validate(), Error);
+  o = ResidualCheckOptions();
+  o.min_tracks = 0;
+  CHECK_THROWS_AS(o.validate(), Error);
+  PipelineOptions po;
+  po.residual_check.gate_probability = std::nan("");
+  CHECK_THROWS_AS(po.validate(), Error);
+  const Scene s = residualScene(0.3, 24);
+  std::vector<PointEstimate> fewer(s.tracks.size() - 1);
+  CHECK_THROWS_AS(checkResiduals(paperCamera(), paperRig(), s.measured, s.tracks, {}, NoiseModel(),
+                                 ResidualCheckOptions(), fewer),
+                  Error);
+}

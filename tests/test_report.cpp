@@ -3,8 +3,12 @@
 #include <catch2/catch.hpp>
 
 #include <Eigen/Geometry>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <yawdepth/report/board_report.h>
+#include <yawdepth/report/cloud_report.h>
+#include "file_support.h"
 
 using namespace yawdepth;
 
@@ -90,4 +94,70 @@ TEST_CASE("board report: a chessboard's pose in the world, its scale, block-leng
   const BoardMetrics tm = boardMetrics(tags, rig, motion, tag_rows);
   CHECK_FALSE(tm.has_board_pose);
   CHECK(tm.quantile(0.5) == Approx(0.05).margin(kRoundOff));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The cloud report (cloud_report.h)
+
+namespace {
+
+// A gray 640x480 image and three points in front of a camera at the world's origin (cMw identity):
+// near (0.5 m) on the optical axis, far (2 m) to the right, and one behind the camera.
+CloudReportInput threePoints()
+{
+  CloudReportInput in;
+  in.camera = CameraModel::brown(500, 500, 320, 240, {0, 0, 0, 0}, 640, 480);
+  in.image = cv::Mat(480, 640, CV_8UC1, cv::Scalar(128));
+  in.points = {{1, Eigen::Vector3d(0, 0, 0.5), 0.01}, {2, Eigen::Vector3d(0.8, 0, 2.0), 0.05},
+               {3, Eigen::Vector3d(0, 0, -1.0), 0.01}};
+  in.title = "three points";
+  in.summary = "ok: 3\n";
+  return in;
+}
+
+} // namespace
+
+TEST_CASE("cloud report: points over the image coloured by depth, seen from above, written together", "[report]")
+{
+  const CloudReportInput in = threePoints();
+  const cv::Mat overlay = cloudOverlay(in);
+  REQUIRE(overlay.type() == CV_8UC3);
+  CHECK(overlay.cols == 640);
+  CHECK(overlay.rows == 480 + 44);
+  // The near point at the principal point, the far one at u = 320 + 500 x 0.8 / 2 = 520: the near end
+  // of the scale is TURBO's dark blue-violet, the far end its dark red; the gray image elsewhere.
+  const cv::Vec3b near = overlay.at<cv::Vec3b>(240, 320), far = overlay.at<cv::Vec3b>(240, 520);
+  CHECK(near[0] > near[2]);                  // blue over red
+  CHECK(near[0] + near[1] + near[2] < 200);  // dark
+  CHECK(far[2] > far[0] + 60);               // red
+  const cv::Vec3b plain = overlay.at<cv::Vec3b>(100, 100);
+  CHECK(plain[0] == plain[2]); // untouched gray
+  const cv::Mat top = cloudTopView(in);
+  CHECK(top.cols == 900);
+  CHECK(top.rows == 700);
+  CHECK(cv::countNonZero(top.reshape(1) != 255) > 1000); // something drawn
+
+  test::TempDir dir;
+  const std::string out = dir.file("rep");
+  writeCloudReport(out, in);
+  for (const std::string &f : cloudReportFiles(out)) {
+    INFO(f);
+    CHECK(std::filesystem::file_size(f) > 0);
+  }
+  CHECK(cv::imread(cloudReportFiles(out)[1]).size() == overlay.size());
+  CHECK(test::slurp(cloudReportFiles(out)[0]) == "three points\n\nok: 3\n");
+}
+
+TEST_CASE("cloud report: an image of another size than the camera's is refused, nothing written", "[report]")
+{
+  CloudReportInput in = threePoints();
+  in.image = cv::Mat(240, 320, CV_8UC1, cv::Scalar(128));
+  CHECK_THROWS_AS(cloudOverlay(in), Error);
+  test::TempDir dir;
+  const std::string out = dir.file("rep");
+  CHECK_THROWS_AS(writeCloudReport(out, in), Error);
+  for (const std::string &f : cloudReportFiles(out))
+    CHECK_FALSE(std::filesystem::exists(f));
+  in.image = cv::Mat();
+  CHECK_THROWS_AS(cloudOverlay(in), Error);
 }

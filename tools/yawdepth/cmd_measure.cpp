@@ -14,6 +14,7 @@
 #include <yawdepth/features/detector.h>
 #include <yawdepth/io/files.h>
 #include <yawdepth/report/board_report.h>
+#include <yawdepth/report/cloud_report.h>
 
 namespace yawdepth::cli {
 
@@ -43,7 +44,7 @@ void checkMeasureOutputs(const MeasureArgs &a, const CLI::App &sub, const Motion
   if (sub.count("--report") > 0) {
     if (a.report.empty())
       throw Error("--report: empty folder name");
-    for (const std::string &f : boardReportFiles(a.report))
+    for (const std::string &f : a.features.empty() ? boardReportFiles(a.report) : cloudReportFiles(a.report))
       outputs.push_back({"--report", f});
   }
   for (const std::string &f : debugFiles(a.debug_dir, motion.images))
@@ -161,6 +162,47 @@ void writeMeasureReport(const MeasureArgs &a, const PatternSpec &pattern, const 
     std::cerr << formatBoardMetrics(m) << "report: " << a.report << "/report.txt, " << a.report << "/figure.png\n";
 }
 
+/* --report with --features klt: the cloud over the last image and from above (cloud_report.h), and
+   the count of each status. */
+void writeKltReport(const MeasureArgs &a, const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
+                    const MethodRun &run, const std::string &method)
+{
+  CloudReportInput in;
+  in.camera = camera;
+  const std::vector<MotionSample> &poses = run.motion_estimate.empty() ? motion.samples : run.motion_estimate;
+  in.image = readGrayImage(motion.images.back(), camera);
+  in.cMw = wMc(rig, poses.back()).inverse();
+  std::map<std::string, int> by_status;
+  for (const PointRow &row : run.rows)
+    ++by_status[toString(row.estimate.status)];
+  for (const PlyPoint &p : plyPoints(rig, poses, run.rows))
+    in.points.push_back({p.id, p.w_P, p.sigma_z});
+  in.title = "yawdepth measure --features klt, method " + method + ": " + std::to_string(in.points.size()) +
+             " ok points of " + std::to_string(run.rows.size()) + " tracks, frame " +
+             std::to_string(motion.samples.back().frame);
+  std::string summary = "tracks by status:\n";
+  for (const auto &[word, count] : by_status)
+    summary += "  " + word + ": " + std::to_string(count) + "\n";
+  std::vector<double> rel;
+  for (const PointRow &row : run.rows)
+    if (row.estimate.ok())
+      rel.push_back(row.estimate.sigmaZ() / row.estimate.c_P.z());
+  if (!rel.empty()) {
+    std::sort(rel.begin(), rel.end());
+    char line[160];
+    std::snprintf(line, sizeof line, "ok points' relative depth sigma: median %.3g %%, 90th percentile %.3g %%\n",
+                  100 * rel[rel.size() / 2], 100 * rel[std::min(rel.size() - 1, rel.size() * 9 / 10)]);
+    summary += line;
+  }
+  summary += "pictures: overlay.png (the points over the last image, coloured by depth), top_view.png (seen from "
+             "above in the last camera, 2-sigma depth intervals)\n";
+  in.summary = summary;
+  writeCloudReport(a.report, in);
+  if (!a.quiet)
+    std::cerr << summary << "report: " << a.report << "/report.txt, " << a.report << "/overlay.png, " << a.report
+              << "/top_view.png\n";
+}
+
 int runMeasure(const MeasureArgs &a, const CLI::App &sub)
 {
   a.method.noise.validate();
@@ -168,8 +210,6 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
   const bool klt = !a.features.empty();
   if (klt == (sub.count("--pattern") > 0))
     throw Error(klt ? "give --pattern or --features klt, not both" : "give --pattern or --features klt");
-  if (klt && sub.count("--report") > 0)
-    throw Error("--report draws a pattern's blocks: it needs --pattern");
   if (klt && sub.count("--debug-dir") > 0)
     throw Error("--debug-dir draws pattern detections: it needs --pattern");
   const PatternSpec pattern = klt ? PatternSpec() : PatternSpec::parse(a.pattern);
@@ -199,12 +239,18 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
 
   MethodArgs method = a.method;
   method.progress = !a.quiet;
+  if (klt && method.method_option != nullptr && method.method_option->count() == 0)
+    method.method = "fused"; // natural features: hundreds of tracks, the method that keeps up with the tracker
+  if (klt && method.residual_option != nullptr && method.residual_option->count() == 0)
+    method.residual_check = "on"; // natural features: T-junctions and silhouettes are not points
   const MethodRun run = runMethodOnLog(camera, rig, motion, tracks, method);
   if (sub.count("--outliers") > 0)
     writeTracksCsv(a.outliers, rejectedObservations(tracks, run.outliers));
   if (!a.quiet && !klt)
     reportUnmeasured(pattern, tracks, run.rows);
-  if (!a.report.empty())
+  if (!a.report.empty() && klt)
+    writeKltReport(a, camera, rig, motion, run, method.method);
+  else if (!a.report.empty())
     writeMeasureReport(a, pattern, rig, run, found, n);
   writePointOutputs(a.out, sub.count("--ply") > 0 ? &a.ply : nullptr, rig, motion, run, gray);
   return 0;
@@ -229,9 +275,12 @@ Runner addMeasure(CLI::App &app)
       ->check(CLI::IsMember({"klt"}));
   addKltOptions(sub, a->klt);
   addMethodOptions(sub, a->method, bestMethod());
+  sub->get_option("--method")->description(sub->get_option("--method")->get_description() +
+                                           ". With --features klt the default is fused");
   sub->add_option("--out", a->out, "Output points CSV (default: standard output)");
   sub->add_option("--report", a->report,
-                  "Folder for the paper's Fig. 3 report: report.txt, blocks.csv, plane.csv, figure.png");
+                  "Folder for the paper's Fig. 3 report: report.txt, blocks.csv, plane.csv, figure.png; with --features "
+                  "klt: report.txt, overlay.png (the points over the last image, coloured by depth), top_view.png");
   sub->add_option("--ply", a->ply,
                   "Also write the ok points as a PLY point cloud (world frame, gray level at the feature, sigma_z, id)");
   sub->add_option("--tracks-out", a->tracks_out, "Also write the detected features as a tracks CSV (frame,id,u,v)");

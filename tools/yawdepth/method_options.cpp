@@ -42,7 +42,7 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
   args.method = default_method;
   args.robust_px = RefineOptions().robust_threshold_px;
   args.outlier_px = RefineOptions().outlier_threshold_px;
-  sub->add_option("--method", args.method,
+  args.method_option = sub->add_option("--method", args.method,
                   "paper: eq. (5) on the last increment as published; exact: finite-increment two-view form (exact on "
                   "noise-free data); fused: recursive filter per feature over every frame (cheapest); window: "
                   "frame-by-frame smoother of every point with the last 10 frames' motion, older frames marginalised "
@@ -68,6 +68,13 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
   sub->add_option("--threads", args.threads, "refine: threads of the solver (Ceres)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
+  args.residual_option =
+      sub->add_option("--residual-check", args.residual_check,
+                      "fused, window, refine: every ok point against its whole track; the pixel noise estimated from "
+                      "the residuals scales the sigmas when larger than --sigma-px, and a track that is not one point "
+                      "(chi-square gate, 99.9 %) is inconsistent (on by default with --features klt)")
+          ->check(CLI::IsMember({"on", "off"}))
+          ->capture_default_str();
 }
 
 NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
@@ -151,9 +158,21 @@ MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const Mot
   po.robust_threshold_px = args.robust_px;
   po.outlier_threshold_px = args.outlier_px;
   po.threads = args.threads;
-  ProgressLine line(args.progress && po.method == Method::Refine);
-  po.progress = line.callback();
-  PipelineResult r = estimatePoints(camera, rig, motion.samples, tracks, po);
+  po.residual_check.enabled = args.residual_check == "on";
+  PipelineResult r;
+  {
+    ProgressLine line(args.progress && po.method == Method::Refine);
+    po.progress = line.callback();
+    r = estimatePoints(camera, rig, motion.samples, tracks, po);
+  }
+  const bool checked = po.residual_check.enabled && po.method != Method::Paper && po.method != Method::Exact;
+  if (checked && args.progress)
+    std::fprintf(stderr,
+                 "residual check: pixel noise from the residuals %.3g px (--sigma-px %.3g)%s; %d of %d tracks not one "
+                 "point (inconsistent)\n",
+                 po.noise.sigma_px * std::sqrt(r.residuals.variance_factor), po.noise.sigma_px,
+                 r.residuals.sigma_scale > 1 ? (", sigmas scaled by " + std::to_string(r.residuals.sigma_scale).substr(0, 5)).c_str() : "",
+                 r.residuals.inconsistent, r.residuals.tracks_used);
   MethodRun run;
   run.outliers = std::move(r.outliers);
   run.motion_estimate = std::move(r.motion);

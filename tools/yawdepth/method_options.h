@@ -20,14 +20,19 @@ struct MethodArgs {
   GateOptions gates;
   double robust_px = 1.0;
   double outlier_px = 2.0;
+  const CLI::Option *method_option = nullptr; // to tell whether --method was given
+  std::string residual_check = "off";           // --residual-check on|off
+  const CLI::Option *residual_option = nullptr; // to tell whether --residual-check was given
   int threads = 1;      // refine: Ceres threads (--threads)
-  bool progress = true; // refine: a progress line on a terminal's stderr for solves over 2 s (off with --quiet)
+  bool progress = true; // refine's progress line on a terminal's stderr for solves over 2 s, and the residual
+                        // check's summary line (both off with --quiet)
 };
 
 /*! \brief Register the motion's noise options (--sigma-odom, --sigma-heading, --sigma-rot, --motion-noise,
     --sigma-yaw) on `sub`. */
 void addMotionNoiseOptions(CLI::App *sub, MethodArgs &args);
-/*! \brief Register --method (with `default_method`), --sigma-px, the motion's noise, gate and refine options on `sub`. */
+/*! \brief Register --method (with `default_method`), --sigma-px, the motion's noise, gate and refine options and
+    --residual-check on `sub`. */
 void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &default_method);
 
 /*!

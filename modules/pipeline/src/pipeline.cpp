@@ -94,16 +94,19 @@ void PipelineOptions::validate() const
     throw Error("method window needs a window of at least 2 frames");
   if (threads < 1)
     throw Error("refine needs at least one thread");
+  residual_check.validate();
 }
 
 bool methodAvailable(Method m) { return m != Method::Refine || refineAvailable(); }
 
 Method bestMethod() { return refineAvailable() ? Method::Refine : Method::Fused; }
 
-PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                              const std::vector<Track> &tracks, const PipelineOptions &options)
+namespace {
+
+/* The method with the observations no method can use taken out first (see the file). */
+PipelineResult runUsable(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                         const std::vector<Track> &tracks, const PipelineOptions &options)
 {
-  options.validate();
   if (!options.drop_unusable)
     return run(camera, rig, motion, tracks, options);
   // Observations that no method can use are taken out before estimation and reported as outliers:
@@ -145,6 +148,21 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
       }
   }
   r.outliers = std::move(full);
+  return r;
+}
+
+} // namespace
+
+PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                              const std::vector<Track> &tracks, const PipelineOptions &options)
+{
+  options.validate();
+  PipelineResult r = runUsable(camera, rig, motion, tracks, options);
+  const bool whole_track = options.method == Method::Fused || options.method == Method::Window ||
+                           options.method == Method::Refine;
+  if (options.residual_check.enabled && whole_track)
+    r.residuals = checkResiduals(camera, rig, r.motion, tracks, r.outliers, options.noise, options.residual_check,
+                                 r.points);
   return r;
 }
 

@@ -14,7 +14,11 @@
 #include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
+#include "figure_support.h"
+
 namespace yawdepth {
+
+using report_detail::text;
 
 Eigen::Vector3d BoardMetrics::stats(const std::vector<BlockLength> &v)
 {
@@ -268,11 +272,6 @@ cv::Scalar errorColour(double err, double scale)
   return cv::Scalar(40, 200 * (1 - t) + 40 * t, 60 + 180 * t);
 }
 
-void text(cv::Mat &img, const std::string &s, cv::Point p, double scale = 0.45, const cv::Scalar &c = cv::Scalar(30, 30, 30),
-          int thickness = 1)
-{
-  cv::putText(img, s, p, cv::FONT_HERSHEY_SIMPLEX, scale, c, thickness, cv::LINE_AA);
-}
 
 /* blocks.csv: one row per block, its length and error against the nominal. */
 std::string blocksTable(const BoardMetrics &m)
@@ -426,21 +425,6 @@ cv::Mat boardFigure(const BoardMetrics &m, const std::string &title)
   return img;
 }
 
-/* The figure's PNG bytes; `png` (its file name) for the messages. */
-std::string encodePng(const cv::Mat &img, const std::string &png)
-{
-  std::vector<unsigned char> bytes;
-  bool ok = false;
-  try {
-    ok = cv::imencode(".png", img, bytes);
-  } catch (const cv::Exception &e) {
-    throw Error(png + ": cannot encode the figure: " + e.what());
-  }
-  if (!ok)
-    throw Error(png + ": cannot encode the figure");
-  return std::string(bytes.begin(), bytes.end());
-}
-
 } // namespace
 
 void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::string &title)
@@ -456,7 +440,7 @@ void writeBoardReport(const std::string &dir, const BoardMetrics &m, const std::
   files.add((d / "blocks.csv").string(), blocksTable(m));
   files.add((d / "plane.csv").string(), planeTable(m));
   const std::string png = (d / "figure.png").string();
-  files.add(png, encodePng(boardFigure(m, title), png));
+  files.add(png, report_detail::encodePng(boardFigure(m, title), png));
   files.commit();
 }
 

@@ -20,6 +20,7 @@
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/pipeline/residual_check.h>
 #include <yawdepth/refine/refine.h>
 #include <yawdepth/window/window_estimator.h>
 
@@ -39,6 +40,10 @@ struct PipelineOptions {
   /*! Take out the observations no method can use and flag them as outliers (see the file); false
       gives them to the method as they are. */
   bool drop_unusable = true;
+  /*! After fused, window or refine: every ok point against its whole track (noise from the
+      residuals, the tracks that are not one point made `inconsistent`; residual_check.h). Off by
+      default; paper and exact are never checked. */
+  ResidualCheckOptions residual_check;
   /*!
     \brief Throws yawdepth::Error, one line, when the options cannot give an answer: a bad noise
     model or gate, a pixel noise under 1e-6 px for fused, window or refine (they weigh every
@@ -53,6 +58,7 @@ struct PipelineResult {
   std::vector<PointEstimate> points;       //!< One per track, same order, at the track's last observation.
   std::vector<std::vector<bool>> outliers; //!< Per track and observation: rejected (or unusable).
   std::vector<MotionSample> motion;        //!< The motion as estimated (refine) or as given (the others).
+  ResidualCheckResult residuals;           //!< The residual check's findings (defaults when it did not run).
 };
 
 /*! \brief Whether this build has the method (every one but refine always; refine with Ceres). */

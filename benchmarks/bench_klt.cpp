@@ -1,0 +1,190 @@
+/*
+  bench_klt: what natural-feature depth costs per frame at 640x480 with up to 300 tracks, against the
+  tracking alone.
+
+    bench_klt [--frames N] [--repeat R] [--max-features N]
+
+  Scene: a textured wall 2 m in front of the first camera (smoothed uniform noise, seeded, with
+  blur 0.8 px and noise 2 gray levels added to each frame), the camera stepping 4 mm sideways per
+  frame with a slow pan of +-1 degree; each image is the first warped by the wall's homography,
+  rendered once before timing. One core: cv::setNumThreads(1), Eigen single-threaded by the build.
+
+  Stages, each over the whole sequence R times after one warm-up pass (the median per frame printed;
+  frames per second and the ratio from the tracking alone's median plus the stage's estimation):
+  - tracking: yawdepth::KltTracker::track with the epipolar gate (pyramidal LK forward and
+    backward, re-detection, the gate);
+  - tracking + fused / + window: the same, and every frame's features into a
+    yawdepth::StreamEstimator (the servo's and a live program's entry point).
+  Targets (issue 14): tracking at 30 frames per second or more; tracking + estimation within 1.2 x
+  the tracking alone.
+*/
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <yawdepth/error.h>
+#include <yawdepth/features/klt_tracker.h>
+#include <yawdepth/window/stream_estimator.h>
+
+#include "bench_common.h"
+
+using namespace yawdepth;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+constexpr double kFocal = 600, kU0 = 320, kV0 = 240, kWallDepth = 2.0;
+
+/* The sequence: its motion rows and rendered images. */
+struct Sequence {
+  std::vector<MotionSample> motion;
+  std::vector<cv::Mat> images;
+};
+
+/* The wall's homography from the first camera's pixels to the camera at `cMc0`'s. */
+cv::Matx33d wallHomography(const vpHomogeneousMatrix &cMc0)
+{
+  const cv::Matx33d K(kFocal, 0, kU0, 0, kFocal, kV0, 0, 0, 1);
+  cv::Matx33d A;
+  for (unsigned i = 0; i < 3; ++i)
+    for (unsigned j = 0; j < 3; ++j)
+      A(i, j) = cMc0[i][j] + (j == 2 ? cMc0[i][3] / kWallDepth : 0.0);
+  return K * A * K.inv();
+}
+
+Sequence renderSequence(int frames)
+{
+  cv::Mat noise(480, 640, CV_32F), smooth;
+  cv::RNG rng(11);
+  rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
+  cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 2.0);
+  cv::normalize(smooth, smooth, 20, 235, cv::NORM_MINMAX);
+  cv::Mat texture;
+  smooth.convertTo(texture, CV_8U);
+  Sequence s;
+  const YawRig rig;
+  for (int k = 0; k < frames; ++k) {
+    MotionSample m;
+    m.frame = k;
+    m.x = 0.004 * k;
+    m.heading = 0.0175 * std::sin(k / 8.0);
+    s.motion.push_back(m);
+    const vpHomogeneousMatrix cMc0 = wMc(rig, m).inverse() * wMc(rig, s.motion.front());
+    cv::Mat warped, blurred, frame_noise(480, 640, CV_32F), out;
+    cv::warpPerspective(texture, warped, cv::Mat(wallHomography(cMc0)), texture.size(), cv::INTER_CUBIC,
+                        cv::BORDER_REFLECT);
+    cv::GaussianBlur(warped, blurred, cv::Size(0, 0), 0.8);
+    rng.fill(frame_noise, cv::RNG::NORMAL, 0.0, 2.0);
+    cv::Mat f;
+    blurred.convertTo(f, CV_32F);
+    f += frame_noise;
+    f.convertTo(out, CV_8U);
+    s.images.push_back(out);
+  }
+  return s;
+}
+
+/* One pass over the sequence: tracking, and the estimator when `method` is fused or window. Returns
+   the per-frame milliseconds of tracking and of estimation (summed over the frames), and the mean
+   live features per frame. */
+struct Pass {
+  double track_ms = 0, estimate_ms = 0, features = 0;
+};
+
+Pass runPass(const Sequence &s, const CameraModel &camera, const KltOptions &ko, const Method *method)
+{
+  const YawRig rig;
+  NoiseModel noise;
+  noise.sigma_px = 0.5;
+  KltTracker tracker(camera, ko);
+  std::unique_ptr<StreamEstimator> estimator;
+  if (method) {
+    StreamOptions so;
+    so.method = *method;
+    so.window.noise = noise;
+    so.fused.sigma_px = noise.sigma_px;
+    estimator = std::make_unique<StreamEstimator>(camera, rig, so);
+  }
+  Pass p;
+  for (std::size_t k = 0; k < s.images.size(); ++k) {
+    KltMotion m;
+    const bool gate = k > 0;
+    if (gate) {
+      m.cMp = wMc(rig, s.motion[k]).inverse() * wMc(rig, s.motion[k - 1]);
+      m.sigma_trans = noise.sigma_odom;
+      m.sigma_rot = noise.sigma_heading;
+    }
+    const auto t0 = Clock::now();
+    const std::vector<FeatureObservation> obs = tracker.track(s.images[k], gate ? &m : nullptr);
+    const auto t1 = Clock::now();
+    if (estimator)
+      estimator->addFrame(s.motion[k], obs);
+    const auto t2 = Clock::now();
+    p.track_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
+    p.estimate_ms += std::chrono::duration<double, std::milli>(t2 - t1).count();
+    p.features += static_cast<double>(obs.size());
+  }
+  const double n = static_cast<double>(s.images.size());
+  p.track_ms /= n;
+  p.estimate_ms /= n;
+  p.features /= n;
+  return p;
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+  int frames = 60, repeat = 5, max_features = 300;
+  bench::CommandLine cli("[--frames N (>= 2)] [--repeat R] [--max-features N]");
+  cli.option("--frames", frames).option("--repeat", repeat).option("--max-features", max_features);
+  if (!cli.parse(argc, argv))
+    return 2;
+  if (frames < 2 || repeat < 1 || max_features < 1) {
+    std::fprintf(stderr, "bench_klt: --frames >= 2, --repeat >= 1, --max-features >= 1\n");
+    return 2;
+  }
+  try {
+    cv::setNumThreads(1);
+    const CameraModel camera = CameraModel::brown(kFocal, kFocal, kU0, kV0, {0, 0, 0, 0}, 640, 480);
+    const Sequence s = renderSequence(frames);
+    KltOptions ko;
+    ko.max_features = max_features;
+    const Method fused = Method::Fused, window = Method::Window;
+    const struct {
+      const char *name;
+      const Method *method;
+    } stages[] = {{"tracking alone", nullptr}, {"tracking + fused", &fused}, {"tracking + window", &window}};
+    std::printf("bench_klt: KLT tracking and depth per frame, 640x480, a textured wall 2 m away (our render), "
+                "one core\n");
+    std::printf("Reproduce: build/benchmarks/bench_klt --frames %d --repeat %d --max-features %d\n", frames, repeat,
+                max_features);
+    std::printf("| stage | features per frame | tracking ms | estimation ms | frames per second | (tracking + "
+                "estimation) / tracking |\n|---|---|---|---|---|---|\n");
+    runPass(s, camera, ko, nullptr); // warm-up: allocations, OpenCV's first calls
+    double alone = 0;
+    for (const auto &stage : stages) {
+      std::vector<double> track_ms, est_ms;
+      double features = 0;
+      for (int r = 0; r < repeat; ++r) {
+        const Pass p = runPass(s, camera, ko, stage.method);
+        track_ms.push_back(p.track_ms);
+        est_ms.push_back(p.estimate_ms);
+        features = p.features;
+      }
+      const double t = bench::median(track_ms), e = stage.method ? bench::median(est_ms) : 0.0;
+      if (!stage.method)
+        alone = t;
+      // The ratio against the tracking alone's median: every stage tracks the same images the same way.
+      std::printf("| %s | %.0f | %.2f | %.2f | %.0f | %.3f |\n", stage.name, features, t, e, 1000.0 / (alone + e),
+                  (alone + e) / alone);
+    }
+  } catch (const Error &e) {
+    std::fprintf(stderr, "bench_klt: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

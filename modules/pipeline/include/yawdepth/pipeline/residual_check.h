@@ -1,0 +1,106 @@
+#pragma once
+/*!
+  \file residual_check.h
+  \brief Does each track behave as one rigid point, and was the pixel noise right? A check of every
+  `ok` point against its whole track, after any method that fits the whole track (fused, window,
+  refine).
+
+  For point \f$ {}^wP \f$ (the estimate, moved to the world through its frame's pose) and each
+  observation j of its track that the method did not flag as an outlier, the reprojection residual
+  \f$ r_j = \pi({}^{c_j}M_w\,{}^wP) - (u_j, v_j) \f$ with the log's poses, and
+  \f[ \chi^2 = \sum_j \frac{\lVert r_j \rVert^2}{\sigma_{px}^2 + f^2 \left(\sigma_{\theta,j}^2 + \sigma_{t,j}^2 / Z_j^2\right)},
+      \qquad \nu = 2N - 3 \f]
+  where \f$ \sigma_{\theta,j}, \sigma_{t,j} \f$ are the rotation and translation uncertainty (per
+  axis) of the pose between frame j and the point's frame under the noise model (relativePoseSigma()),
+  f the focal length and \f$ Z_j \f$ the point's depth in frame j. The variance is per pixel axis,
+  isotropic: a conservative stand-in for the full covariance that keeps the check O(observations).
+
+  - **Noise from residuals** (the a-posteriori variance factor of adjustment theory): with at least
+    `min_tracks` tracks, \f$ s_0^2 = \mathrm{median}_i\, \chi^2_i / m(\nu_i) \f$, where \f$ m(\nu) \f$
+    is the median of a \f$ \chi^2_\nu \f$ variable (Wilson-Hilferty). The median makes it robust to
+    the tracks that are not points. \f$ s_0 > 1 \f$ says the pixel noise was larger than the noise
+    model's; every `ok` point's covariance is then multiplied by \f$ s_0^2 \f$ (`scale_sigma`). A
+    smaller \f$ s_0 \f$ is reported but never shrinks a covariance (the motion noise, which pixel
+    residuals see only in part, may be what the sigma is made of).
+  - **The gate**: a track with \f$ \chi^2 > \max(1, s_0^2)\, q_p(\nu) \f$ (\f$ q_p \f$ the
+    `gate_probability` quantile) is not one rigid point (a T-junction where a near edge crosses a
+    far one, a corner on a silhouette, a track that slid along its epipolar line, which the
+    tracker's epipolar gate cannot see): its status becomes `inconsistent`.
+
+  `paper` and `exact` use only the last two observations, so the rest of their track says nothing
+  about their estimate: they are not checked.
+*/
+#include <limits>
+#include <vector>
+#include <yawdepth/camera/camera_model.h>
+#include <yawdepth/core/types.h>
+#include <yawdepth/geometry/rig.h>
+
+namespace yawdepth {
+
+/*! \brief Options of checkResiduals(). */
+struct ResidualCheckOptions {
+  bool enabled = false;            //!< estimatePoints(): run the check after the method
+  double gate_probability = 0.999; //!< p of the chi-square gate, in (0.5, 1)
+  bool scale_sigma = true;         //!< multiply the ok points' covariance by s0^2 when s0 > 1
+  int min_tracks = 20;             //!< fewest checked tracks for s0 (else s0 = 1)
+  /*! \brief Throws yawdepth::Error for a probability outside (0.5, 1) or min_tracks < 1. */
+  void validate() const;
+};
+
+/*! \brief One track's fit: chi-square and its degrees of freedom (0: nothing to check). */
+struct TrackResidual {
+  double chi2 = std::numeric_limits<double>::quiet_NaN(); //!< see the file
+  int dof = 0;                                            //!< 2N - 3 (N the observations used)
+  double rms_px = std::numeric_limits<double>::quiet_NaN(); //!< root mean square residual (px, per observation)
+};
+
+/*! \brief What checkResiduals() found. */
+struct ResidualCheckResult {
+  double variance_factor = 1.0; //!< s0^2 (1 with fewer than min_tracks tracks)
+  double sigma_scale = 1.0;     //!< factor applied to every ok point's sigma (1 or s0)
+  int tracks_used = 0;          //!< ok tracks with dof >= 1
+  int inconsistent = 0;         //!< ok points the gate turned `inconsistent`
+  std::vector<TrackResidual> tracks; //!< per track (same order as the tracks)
+};
+
+/*!
+  \brief Per-axis 1-sigma of the pose between rows `a` and `b` of a motion log under `noise`: the
+  increments' noise composed for MotionNoise::Increment (translation per increment and per metre,
+  rotation per increment, per radian and per metre, and the translation the accumulated rotation
+  error moves over each later step), two poses' errors for MotionNoise::Absolute; two yaw readings
+  added to the rotation.
+  \param noise The noise model. \param motion The log. \param a, b Rows (any order; equal: no motion noise).
+  \param sigma_rot Receives the rotation sigma (rad). \param sigma_trans Receives the translation sigma (m).
+*/
+void relativePoseSigma(const NoiseModel &noise, const std::vector<MotionSample> &motion, std::size_t a, std::size_t b,
+                       double &sigma_rot, double &sigma_trans);
+
+/*! \brief Median of a chi-square variable with `dof` degrees of freedom (Wilson-Hilferty; dof >= 1). */
+double chiSquareMedian(int dof);
+/*! \brief The `p` quantile of a chi-square variable with `dof` degrees of freedom (Wilson-Hilferty, p in (0.5, 1)). */
+double chiSquareQuantile(int dof, double p);
+
+/*!
+  \brief One point against its track (see the file).
+  \param camera Camera model. \param rig Yaw rig. \param motion The log (sorted by frame).
+  \param track The feature's observations. \param outliers Per observation: flagged by the method
+         (empty: none). \param point The estimate (must be ok). \param noise The noise model.
+*/
+TrackResidual trackResidual(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                            const Track &track, const std::vector<bool> &outliers, const PointEstimate &point,
+                            const NoiseModel &noise);
+
+/*!
+  \brief The check on every ok point (see the file): s0 from the residuals, the covariances scaled,
+  the tracks that are not one point made `inconsistent`.
+  \param camera, rig, motion, noise As for trackResidual().
+  \param tracks The features. \param outliers Per track and observation: flagged by the method (may be empty).
+  \param options Options (validated). \param points The estimates, one per track; changed in place.
+*/
+ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
+                                   const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                   const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
+                                   const ResidualCheckOptions &options, std::vector<PointEstimate> &points);
+
+} // namespace yawdepth
