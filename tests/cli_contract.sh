@@ -319,6 +319,30 @@ if [ "$(rc_of "$PK.k")" -eq 0 ] && [ "$res" = OK ]; then pass; else
   fail "measure --features klt: exit $(rc_of "$PK.k"), $res: $(first "$PK.k.err")"; fi
 [ -s "$PK/report/report.txt" ] && [ -s "$PK/report/overlay.png" ] && [ -s "$PK/report/top_view.png" ] &&
   grep -q '^  ok: ' "$PK/report/report.txt" && pass || fail "measure --features klt --report: report files missing"
+# --video: the same images as a numbered sequence (vpVideoReader), the log without its image column:
+# the same tracks; a log longer than the video is an error that says so, and nothing is written.
+cut -d, -f1-6 "$PK/motion.csv" > "$PK/motion_noimg.csv"
+run "$PK.ti" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion.csv" --out "$PK/tracks_img.csv"
+run "$PK.tv" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_noimg.csv" --video "$PK/frame_%04d.png" \
+    --out "$PK/tracks_video.csv"
+[ "$(rc_of "$PK.ti")" -eq 0 ] && [ "$(rc_of "$PK.tv")" -eq 0 ] && cmp -s "$PK/tracks_img.csv" "$PK/tracks_video.csv" &&
+  pass || fail "track --video: exit $(rc_of "$PK.tv"), tracks differ from the images': $(first "$PK.tv.err")"
+{ cat "$PK/motion_noimg.csv"; tail -n +2 "$PK/motion_noimg.csv" | awk -F, -v OFS=, '{ $1 = $1 + 8; $4 = $4 - 0.064; print }'; } \
+  > "$PK/motion_long.csv"
+run "$PK.tl" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_long.csv" --video "$PK/frame_%04d.png" \
+    --out "$PK/tracks_long.csv"
+[ "$(rc_of "$PK.tl")" -eq 1 ] && [ ! -e "$PK/tracks_long.csv" ] && [ "$(wc -l < "$PK.tl.err")" -eq 1 ] &&
+  grep -q "ended after 8 frames; the motion log has 16 rows" "$PK.tl.err" && pass ||
+  fail "track --video shorter than the log: exit $(rc_of "$PK.tl"): $(first "$PK.tl.err")"
+run "$PK.mv" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion.csv" --pattern chessboard:5x4:0.02 \
+    --video "$PK/frame_%04d.png"
+[ "$(rc_of "$PK.mv")" -eq 1 ] && grep -q "needs --features klt" "$PK.mv.err" && pass ||
+  fail "measure --pattern --video: exit $(rc_of "$PK.mv"), not refused: $(first "$PK.mv.err")"
+run "$PK.kv" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_noimg.csv" --features klt \
+    --video "$PK/frame_%04d.png" --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-yaw 1e-6 --out "$PK/points_video.csv" \
+    --report "$PK/report_video"
+[ "$(rc_of "$PK.kv")" -eq 0 ] && cmp -s "$PK/points.csv" "$PK/points_video.csv" && [ -s "$PK/report_video/overlay.png" ] &&
+  pass || fail "measure --features klt --video: exit $(rc_of "$PK.kv"), points differ: $(first "$PK.kv.err")"
 # --residual-check off keeps every track the method found ok; on (the default here) cuts some.
 run "$PK.ko" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion.csv" --features klt --sigma-odom 1e-5 \
     --sigma-heading 1e-6 --sigma-yaw 1e-6 --residual-check off --out "$PK/points_off.csv"

@@ -15,14 +15,17 @@
 #include <vector>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 #include <unistd.h>
 #include <yawdepth/error.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/features/klt_tracker.h>
 #include <yawdepth/features/pattern.h>
+#include <yawdepth/features/video_frames.h>
 #include <yawdepth/render/renderer.h>
 
 #include "corner_metrics.h"
+#include "file_support.h"
 #include "render_scenes.h"
 
 using namespace yawdepth;
@@ -707,4 +710,104 @@ TEST_CASE("klt: bad input", "[features][klt]")
   const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(128));
   CHECK(tracker.track(blank).empty());
   CHECK(tracker.track(blank).empty());
+}
+
+namespace {
+
+// Six frames of the textured plane, the camera 5 mm further sideways each time.
+std::vector<cv::Mat> planeFrames(const PlaneScene &scene)
+{
+  const cv::Mat first = scene.texture(5);
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < 6; ++k)
+    frames.push_back(scene.warp(first, vpHomogeneousMatrix(-0.005 * k, 0.0, 0.0, 0.0, 0.0, 0.0)));
+  return frames;
+}
+
+std::vector<MotionSample> sidewaysLog(std::size_t n)
+{
+  std::vector<MotionSample> log(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    log[k].frame = static_cast<long>(k);
+    log[k].x = 0.005 * static_cast<double>(k);
+  }
+  return log;
+}
+
+} // namespace
+
+TEST_CASE("video: an image sequence and a movie read frame by frame, tracked as the files are", "[features][klt]")
+{
+  const PlaneScene scene;
+  const std::vector<cv::Mat> frames = planeFrames(scene);
+  test::TempDir dir;
+  std::vector<std::string> files;
+  char name[32];
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    std::snprintf(name, sizeof name, "f%04zu.png", k);
+    files.push_back(dir.file(name));
+    REQUIRE(cv::imwrite(files.back(), frames[k]));
+  }
+  // The numbered sequence: the same pixels, in order, then the end.
+  VideoFrames seq(dir.file("f%04d.png"));
+  for (const cv::Mat &f : frames) {
+    const cv::Mat got = seq.next();
+    REQUIRE(got.type() == CV_8UC1);
+    CHECK(cv::norm(got, f, cv::NORM_INF) == 0);
+  }
+  CHECK(seq.framesRead() == frames.size());
+  const std::string ended = test::errorOf([&] { seq.next(); });
+  CHECK(ended.find("ended after 6 frames") != std::string::npos);
+  // trackSequence from the sequence gives the tracks the files give.
+  const std::vector<MotionSample> log = sidewaysLog(frames.size());
+  VideoFrames again(dir.file("f%04d.png"));
+  const SequenceTracks from_files = trackSequence(scene.camera, YawRig(), log, files, NoiseModel());
+  const SequenceTracks from_video =
+      trackSequence(scene.camera, YawRig(), log, [&](std::size_t) { return again.next(); }, NoiseModel());
+  REQUIRE(from_files.tracks.size() >= 50);
+  REQUIRE(from_video.tracks.size() == from_files.tracks.size());
+  for (std::size_t i = 0; i < from_files.tracks.size(); ++i) {
+    REQUIRE(from_video.tracks[i].observations.size() == from_files.tracks[i].observations.size());
+    CHECK(from_video.tracks[i].observations.back().u == from_files.tracks[i].observations.back().u);
+  }
+  CHECK(cv::norm(from_video.last_image, frames.back(), cv::NORM_INF) == 0);
+  // A movie (Motion JPEG in AVI, through OpenCV's writer): six frames, colour converted to gray.
+  const std::string movie = dir.file("plane.avi");
+  {
+    cv::VideoWriter writer(movie, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, frames[0].size(), true);
+    REQUIRE(writer.isOpened());
+    for (const cv::Mat &f : frames) {
+      cv::Mat bgr;
+      cv::cvtColor(f, bgr, cv::COLOR_GRAY2BGR);
+      writer.write(bgr);
+    }
+  }
+  VideoFrames video(movie);
+  for (const cv::Mat &f : frames) {
+    const cv::Mat got = video.next();
+    REQUIRE(got.type() == CV_8UC1);
+    REQUIRE(got.size() == f.size());
+    CHECK(cv::norm(got, f, cv::NORM_L1) / static_cast<double>(f.total()) < 3.0); // JPEG: a few gray levels
+  }
+  CHECK_THROWS_AS(video.next(), Error);
+}
+
+TEST_CASE("video: bad input is one line, never a crash", "[features][klt]")
+{
+  const PlaneScene scene;
+  test::TempDir dir;
+  CHECK_THROWS_AS(VideoFrames(""), Error);
+  CHECK_THROWS_AS(VideoFrames(dir.file("missing.avi")), Error);
+  CHECK_THROWS_AS(VideoFrames(dir.file("none%04d.png")), Error);
+  const std::string junk = dir.write("junk.avi", "this is not a movie");
+  CHECK_THROWS_AS(VideoFrames(junk), Error);
+  // A frame of another size than the camera's names its frame.
+  const std::vector<MotionSample> log = sidewaysLog(3);
+  const std::string what = test::errorOf([&] {
+    trackSequence(scene.camera, YawRig(), log,
+                  [&](std::size_t i) { return cv::Mat(i == 1 ? 240 : 480, i == 1 ? 320 : 640, CV_8UC1, cv::Scalar(9)); },
+                  NoiseModel());
+  });
+  CHECK(what.find("frame 1") != std::string::npos);
+  CHECK(what.find("320x240") != std::string::npos);
 }

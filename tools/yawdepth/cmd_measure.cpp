@@ -33,9 +33,13 @@ struct MeasureArgs {
 void checkMeasureOutputs(const MeasureArgs &a, const CLI::App &sub, const MotionLog &motion)
 {
   std::vector<NamedPath> inputs = {{"--camera", a.camera}, {"--rig", a.rig}, {"--motion", a.motion}};
-  for (const std::string &image : motion.images)
-    if (!image.empty())
-      inputs.push_back({"--motion's image", image});
+  if (a.klt.video.empty()) {
+    for (const std::string &image : motion.images)
+      if (!image.empty())
+        inputs.push_back({"--motion's image", image});
+  } else if (a.klt.video.find('%') == std::string::npos) {
+    inputs.push_back({"--video", a.klt.video});
+  }
   std::vector<NamedPath> outputs = {{"--out", a.out.empty() ? std::string("-") : a.out}};
   for (const auto &[option, value] : {std::pair<const char *, const std::string *>{"--tracks-out", &a.tracks_out},
                                       {"--outliers", &a.outliers}, {"--ply", &a.ply}})
@@ -165,12 +169,12 @@ void writeMeasureReport(const MeasureArgs &a, const PatternSpec &pattern, const 
 /* --report with --features klt: the cloud over the last image and from above (cloud_report.h), and
    the count of each status. */
 void writeKltReport(const MeasureArgs &a, const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
-                    const MethodRun &run, const std::string &method)
+                    const MethodRun &run, const std::string &method, const cv::Mat &last_image)
 {
   CloudReportInput in;
   in.camera = camera;
   const std::vector<MotionSample> &poses = run.motion_estimate.empty() ? motion.samples : run.motion_estimate;
-  in.image = readGrayImage(motion.images.back(), camera);
+  in.image = last_image;
   in.cMw = wMc(rig, poses.back()).inverse();
   std::map<std::string, int> by_status;
   for (const PointRow &row : run.rows)
@@ -219,17 +223,22 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
   MotionLog motion = readMotionCsv(a.motion, rig_file.yaw, a.input.limits());
   checkMotionSteps(motion, a.motion);
   applyRigFile(rig_file, motion.samples);
-  if (motion.images.empty())
-    throw Error(a.motion + ": no 'image' column: measure needs the image of each frame");
+  if (!klt && sub.count("--video") > 0)
+    throw Error("--video gives natural features' images: it needs --features klt");
+  if (motion.images.empty() && a.klt.video.empty())
+    throw Error(a.motion + ": no 'image' column: measure needs the image of each frame" +
+                std::string(klt ? " (or --video)" : ""));
   checkMeasureOutputs(a, sub, motion);
 
   const std::size_t n = motion.samples.size();
   std::size_t found = 0;
   std::map<std::pair<long, long>, int> gray; // the gray level at each feature, for --ply
   std::vector<Track> tracks;
+  cv::Mat last_image; // --features klt: the last image tracked, for --report
   if (klt) {
     const bool six_dof = n > 0 && motion.samples.front().six_dof;
-    tracks = kltTracks(camera, rig, motion, noiseForLog(a.method, six_dof, motion.yaw_column), a.klt, a.quiet, &gray);
+    tracks = kltTracks(camera, rig, motion, noiseForLog(a.method, six_dof, motion.yaw_column), a.klt, a.quiet, &gray,
+                       &last_image);
     found = n;
   } else {
     tracks = patternTracks(a, pattern, camera, motion, found, gray);
@@ -249,7 +258,7 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
   if (!a.quiet && !klt)
     reportUnmeasured(pattern, tracks, run.rows);
   if (!a.report.empty() && klt)
-    writeKltReport(a, camera, rig, motion, run, method.method);
+    writeKltReport(a, camera, rig, motion, run, method.method, last_image);
   else if (!a.report.empty())
     writeMeasureReport(a, pattern, rig, run, found, n);
   writePointOutputs(a.out, sub.count("--ply") > 0 ? &a.ply : nullptr, rig, motion, run, gray);
@@ -267,7 +276,9 @@ Runner addMeasure(CLI::App &app)
   sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
   sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset)")->required();
-  sub->add_option("--motion", a->motion, "Motion log CSV with an image column (paths relative to the CSV's folder)")
+  sub->add_option("--motion", a->motion,
+                  "Motion log CSV with an image column (paths relative to the CSV's folder); with --features klt "
+                  "--video, any motion log")
       ->required();
   sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE or apriltag:FAMILY:SIZE (metres)");
   sub->add_option("--features", a->features,

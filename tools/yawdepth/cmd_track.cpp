@@ -10,6 +10,7 @@
 #include <unistd.h>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
+#include <yawdepth/features/video_frames.h>
 #include <yawdepth/io/files.h>
 
 namespace yawdepth::cli {
@@ -32,24 +33,40 @@ void addKltOptions(CLI::App *sub, KltArgs &args)
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_flag("--no-gate", args.no_gate, "KLT: do not gate the tracks with the motion (no epipolar band)");
+  sub->add_option("--video", args.video,
+                  "Take the images from a video file or an image sequence (e.g. frames/%04d.png; ViSP's vpVideoReader), "
+                  "one frame per motion-log row in order, instead of the log's image column");
 }
 
 std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
                              const NoiseModel &noise, const KltArgs &args, bool quiet,
-                             std::map<std::pair<long, long>, int> *gray)
+                             std::map<std::pair<long, long>, int> *gray, cv::Mat *last_image)
 {
-  if (motion.images.empty())
-    throw Error("the motion log has no 'image' column: KLT tracking needs the image of each frame");
+  if (motion.images.empty() && args.video.empty())
+    throw Error("the motion log has no 'image' column: KLT tracking needs the image of each frame (or --video)");
   if (camera.width() == 0 || camera.height() == 0)
     throw Error("KLT tracking needs the camera's image size (image_width, image_height in the camera file)");
   const std::size_t n = motion.samples.size();
   const bool progress = !quiet && n >= 20 && isatty(STDERR_FILENO);
   const std::size_t every = std::max<std::size_t>(1, n / 10);
-  SequenceTracks seq = trackSequence(camera, rig, motion.samples, motion.images, noise, args.klt, !args.no_gate,
-                                     [&](std::size_t done, std::size_t total) {
-                                       if (progress && (done % every == 0 || done == total))
-                                         std::cerr << "track: " << done << "/" << total << " frames\n";
-                                     });
+  const auto report = [&](std::size_t done, std::size_t total) {
+    if (progress && (done % every == 0 || done == total))
+      std::cerr << "track: " << done << "/" << total << " frames\n";
+  };
+  SequenceTracks seq;
+  if (args.video.empty()) {
+    seq = trackSequence(camera, rig, motion.samples, motion.images, noise, args.klt, !args.no_gate, report);
+  } else {
+    VideoFrames video(args.video);
+    const FrameSource frames = [&](std::size_t) {
+      try {
+        return video.next();
+      } catch (const Error &e) {
+        throw Error(std::string(e.what()) + "; the motion log has " + std::to_string(n) + " rows");
+      }
+    };
+    seq = trackSequence(camera, rig, motion.samples, frames, noise, args.klt, !args.no_gate, report);
+  }
   const KltStats &t = seq.totals;
   if (!quiet)
     std::cerr << "track: " << n << " frames, " << t.detected << " features detected, " << seq.tracks.size()
@@ -58,6 +75,8 @@ std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const
               << " left the image\n";
   if (gray)
     *gray = std::move(seq.gray);
+  if (last_image)
+    *last_image = seq.last_image;
   return std::move(seq.tracks);
 }
 
@@ -82,7 +101,8 @@ Runner addTrack(CLI::App &app)
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
   sub->add_option("--rig", a->rig,
                   "Rig file (YAML): where the camera sits; without it the camera is at the vision frame's origin");
-  sub->add_option("--motion", a->motion, "Motion log CSV with an image column (paths relative to the CSV's folder)")
+  sub->add_option("--motion", a->motion,
+                  "Motion log CSV with an image column (paths relative to the CSV's folder), or any with --video")
       ->required();
   sub->add_option("--out", a->out, "Output tracks CSV (frame,id,u,v)")->required();
   addMotionNoiseOptions(sub, a->method);
@@ -102,9 +122,13 @@ Runner addTrack(CLI::App &app)
       std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};
       if (!a->rig.empty())
         inputs.push_back({"--rig", a->rig});
-      for (const std::string &image : motion.images)
-        if (!image.empty())
-          inputs.push_back({"--motion's image", image});
+      if (a->klt.video.empty()) {
+        for (const std::string &image : motion.images)
+          if (!image.empty())
+            inputs.push_back({"--motion's image", image});
+      } else if (a->klt.video.find('%') == std::string::npos) {
+        inputs.push_back({"--video", a->klt.video});
+      }
       checkOutputs(inputs, {{"--out", a->out}});
     }
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);

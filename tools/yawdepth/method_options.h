@@ -48,8 +48,9 @@ std::string bestMethod();
 struct KltArgs {
   KltOptions klt;
   bool no_gate = false;
+  std::string video; // --video: the images from a video or image sequence (VideoFrames) instead of the log's
 };
-/*! \brief Register --max-features, --min-distance, --track-sigma-px, --min-depth, --gate-sigmas, --no-gate. */
+/*! \brief Register --max-features, --min-distance, --track-sigma-px, --min-depth, --gate-sigmas, --no-gate, --video. */
 void addKltOptions(CLI::App *sub, KltArgs &args);
 /*!
   \brief KLT tracks (KltTracker) through the images of a motion log, each frame gated by the motion's
@@ -60,7 +61,7 @@ void addKltOptions(CLI::App *sub, KltArgs &args);
 */
 std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
                              const NoiseModel &noise, const KltArgs &args, bool quiet,
-                             std::map<std::pair<long, long>, int> *gray = nullptr);
+                             std::map<std::pair<long, long>, int> *gray = nullptr, cv::Mat *last_image = nullptr);
 
 /*! \brief The observations flagged in `outliers`, as tracks (for --outliers). */
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers);

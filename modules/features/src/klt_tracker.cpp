@@ -236,16 +236,30 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
   if (images.size() != samples.size())
     throw Error("klt: " + std::to_string(images.size()) + " images for " + std::to_string(samples.size()) +
                 " motion rows");
+  const FrameSource files = [&](std::size_t i) {
+    if (images[i].empty())
+      throw Error("frame " + std::to_string(samples[i].frame) + ": no image (KLT tracking needs every frame's image)");
+    return readGrayImage(images[i], camera); // the camera has a size: KltTracker requires one
+  };
+  return trackSequence(camera, rig, samples, files, noise, options, gate, progress);
+}
+
+SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &samples,
+                             const FrameSource &frames, const NoiseModel &noise, const KltOptions &options, bool gate,
+                             const std::function<void(std::size_t, std::size_t)> &progress)
+{
   KltTracker tracker(camera, options);
   const std::size_t n = samples.size();
   SequenceTracks out;
-  std::vector<FrameDetection> frames;
-  frames.reserve(n);
+  std::vector<FrameDetection> detections;
+  detections.reserve(n);
   for (std::size_t i = 0; i < n; ++i) {
     const MotionSample &s = samples[i];
-    if (images[i].empty())
-      throw Error("frame " + std::to_string(s.frame) + ": no image (KLT tracking needs every frame's image)");
-    const cv::Mat image = readGrayImage(images[i], camera); // the camera has a size: KltTracker requires one
+    const cv::Mat image = frames(i);
+    if (image.cols != static_cast<int>(camera.width()) || image.rows != static_cast<int>(camera.height()))
+      throw Error("frame " + std::to_string(s.frame) + ": the image is " + std::to_string(image.cols) + "x" +
+                  std::to_string(image.rows) + " but the camera is " + std::to_string(camera.width()) + "x" +
+                  std::to_string(camera.height()));
     FrameDetection d;
     d.frame = s.frame;
     if (i > 0 && gate) {
@@ -270,11 +284,13 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
     out.totals.lost_epipolar += st.lost_epipolar;
     out.totals.detected += st.detected;
     d.found = !d.features.empty();
-    frames.push_back(std::move(d));
+    detections.push_back(std::move(d));
+    if (i + 1 == n)
+      out.last_image = image;
     if (progress)
       progress(i + 1, n);
   }
-  for (Track &t : PatternDetector::toTracks(frames))
+  for (Track &t : PatternDetector::toTracks(detections))
     if (t.observations.size() >= 2) // a feature seen once measures nothing
       out.tracks.push_back(std::move(t));
   return out;

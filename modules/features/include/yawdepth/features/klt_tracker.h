@@ -124,7 +124,15 @@ struct SequenceTracks {
   std::vector<Track> tracks;                   //!< every feature seen in 2 frames or more, by id
   KltStats totals;                             //!< the per-frame KltStats summed
   std::map<std::pair<long, long>, int> gray;   //!< gray level (0-255) at each feature, keyed (frame, id)
+  cv::Mat last_image;                          //!< the last image tracked (8-bit gray)
 };
+
+/*!
+  \brief The images of a sequence, one per motion-log row: called with the row's index (0, 1, ... in
+  order, each once), it returns that row's image, 8-bit gray, or throws yawdepth::Error (a missing or
+  unreadable image, a video that ended). See VideoFrames (video_frames.h) for a video or camera.
+*/
+using FrameSource = std::function<cv::Mat(std::size_t row)>;
 
 /*!
   \brief KLT tracks through a sequence of images with known motion: KltTracker on each image in turn,
@@ -141,5 +149,13 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
                              const std::vector<std::string> &images, const NoiseModel &noise,
                              const KltOptions &options = KltOptions(), bool gate = true,
                              const std::function<void(std::size_t, std::size_t)> &progress = {});
+
+/*!
+  \brief The same, each row's image from `frames` (FrameSource) instead of a file; an image of another
+  size than the camera's is an error that names the row's frame.
+*/
+SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &samples,
+                             const FrameSource &frames, const NoiseModel &noise, const KltOptions &options = KltOptions(),
+                             bool gate = true, const std::function<void(std::size_t, std::size_t)> &progress = {});
 
 } // namespace yawdepth
