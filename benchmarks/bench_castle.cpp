@@ -1,8 +1,8 @@
 /*
   bench_castle: natural-feature depth on someone else's rendered sequence, against its depth maps.
 
-    bench_castle [--data DIR] [--frames N] [--max-features N] [--sigma-px S] [--method window|fused|refine]
-                 [--no-residual-check] [--points FILE]
+    bench_castle [--data DIR] [--frames N] [--max-features N] [--sigma-px S] [--method fused|window|refine]
+                 [--no-residual-check] [--max-depth-sigma R] [--points FILE]
 
   Data: Debian's visp-images-data, mbt-depth/Castle-simu (ViSP's RGB-D tracker test sequence): 40
   rendered 640x480 gray images of a castle model, a 700 px pinhole camera (Config/chateau.xml),
@@ -12,14 +12,15 @@
 
   The camera's motion is the given poses (world = the object's frame, wMc = cMo^-1, a 6-DoF log
   with absolute noise 0.1 mm and 0.1 mrad). Tracks: yawdepth::trackSequence (KLT with the epipolar
-  gate); points: yawdepth::estimatePoints with `--method` (window by default) and the residual
-  check (noise from residuals, tracks that are not one point cut; residual_check.h), each point at
-  its last frame. The truth of an ok point is where the ray of its observed pixel in that frame first
+  gate); points: yawdepth::estimatePoints as `measure --features klt` runs it by default (fused,
+  the residual check: noise from residuals, tracks that are not one point cut, residual_check.h;
+  depths not resolved to 5 % degenerate), each point at its last frame. The truth of an ok point is where the ray of its observed pixel in that frame first
   meets the surface of the frame's depth map (rendered from a second camera 5 cm beside the colour
   camera, see kDepthFromColour): the ray is marched in depth, each depth projected into the depth
   camera and compared with the map there (bilinear); the crossing is refined by bisection. The
-  truth does not depend on the estimate. A ray that meets no surface, or meets it within 3 px of
-  an occluding edge (the map spans more than 2 % of depth there), has no truth and is counted apart.
+  truth does not depend on the estimate. A ray that meets no surface, meets it within 3 px of an
+  occluding edge (the map spans more than 2 % of depth there), or grazes an occluding edge on its way
+  (within 3 % of depth of a surface), has no truth and is counted apart.
   Reported: points per frame, median and 95th-percentile relative depth error, the share within
   2 sigma (the estimator's own), the largest error; for every ok point and for those whose own
   relative sigma is under 1 %.
@@ -54,6 +55,9 @@ constexpr double kFocal = 700.0, kU0 = 320.0, kV0 = 240.0;
 /* A feature within this many pixels of an occluding edge of the depth map has no truth: a corner
    on a silhouette may be on either surface, and the two cameras see the edge from 5 cm apart. */
 constexpr int kEdgePx = 3;
+/* A ray that passes an occluding edge of the map within this share of its depth from the surface, on
+   its way to the surface it meets, grazes a silhouette: a corner there may be on either side. */
+constexpr double kGraze = 0.03;
 
 struct DepthMap {
   int width = 0, height = 0;
@@ -103,6 +107,15 @@ vpHomogeneousMatrix readPose(const std::string &path)
   return M;
 }
 
+double quantile(std::vector<double> v, double q)
+{
+  if (v.empty())
+    return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
+  return v[k];
+}
+
 /* The depth map at a sub-pixel position, bilinear; NaN outside, without depth or across an occluding
    edge (the 2x2 cell spans more than 2 % of depth). */
 double bilinearDepth(const DepthMap &d, double u, double v)
@@ -147,9 +160,15 @@ double rayTruth(const DepthMap &d, double u, double v)
     return z - bilinearDepth(d, kFocal * d_P.x() / d_P.z() + kU0, kFocal * d_P.y() / d_P.z() + kV0);
   };
   double z_prev = 0, g_prev = std::nan("");
+  bool grazed = false; // the ray passed an occluding edge within kGraze of a surface: it may hit either side
   for (double z = 0.05; z < 5.0; z *= 1.002) { // steps of 0.2 %: under a pixel of epipolar motion
     const double g = gap(z);
+    if (std::isfinite(g) != std::isfinite(g_prev) && z_prev > 0 &&
+        std::abs(std::isfinite(g) ? g : g_prev) < kGraze * z)
+      grazed = true;
     if (std::isfinite(g) && std::isfinite(g_prev) && g_prev < 0 && g >= 0) {
+      if (grazed)
+        return std::nan("");
       double lo = z_prev, hi = z;
       for (int it = 0; it < 40; ++it) {
         const double mid = 0.5 * (lo + hi), gm = gap(mid);
@@ -168,13 +187,39 @@ double rayTruth(const DepthMap &d, double u, double v)
   return std::nan("");
 }
 
-double quantile(std::vector<double> v, double q)
+
+/* How well the depth maps agree with the poses, the truth's own accuracy: each smooth pixel of frame k's
+   map (its 5x5 neighbourhood within 2 % of depth; a 7 px grid), moved through the poses into frame
+   k + 5's depth camera and compared with that map there (bilinear); the median and 90th percentile
+   of |dz| / z over every third k. */
+std::pair<double, double> depthMapConsistency(const std::vector<DepthMap> &depth, const std::vector<MotionSample> &motion)
 {
-  if (v.empty())
-    return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
-  return v[k];
+  constexpr std::size_t kGap = 5;
+  std::vector<double> rel;
+  for (std::size_t k = 0; k + kGap < depth.size(); k += 3) {
+    const DepthMap &a = depth[k], &b = depth[k + kGap];
+    // Depth camera k to depth camera k + 5: d_M_c c_k+5_M_w w_M_c_k c_M_d, d_M_c a translation.
+    vpHomogeneousMatrix dMc;
+    for (unsigned i = 0; i < 3; ++i)
+      dMc[i][3] = kDepthFromColour[static_cast<int>(i)];
+    const vpHomogeneousMatrix bMa = dMc * wMc(YawRig(), motion[k + kGap]).inverse() * wMc(YawRig(), motion[k]) * dMc.inverse();
+    for (int v = 20; v < a.height - 20; v += 7)
+      for (int u = 20; u < a.width - 20; u += 7) {
+        const double z = a.at(u, v);
+        bool smooth = z > 0;
+        for (int dv = -2; dv <= 2 && smooth; ++dv)
+          for (int du = -2; du <= 2 && smooth; ++du)
+            smooth = a.at(u + du, v + dv) > 0 && std::abs(a.at(u + du, v + dv) - z) <= 0.02 * z;
+        if (!smooth)
+          continue;
+        const vpColVector P({(u - kU0) / kFocal * z, (v - kV0) / kFocal * z, z, 1.0});
+        const vpColVector Q = bMa * P;
+        const double zb = bilinearDepth(b, kFocal * Q[0] / Q[2] + kU0, kFocal * Q[1] / Q[2] + kV0);
+        if (std::isfinite(zb))
+          rel.push_back(std::abs(Q[2] - zb) / zb);
+      }
+  }
+  return {quantile(rel, 0.5), quantile(rel, 0.9)};
 }
 
 /* The command line's values. */
@@ -182,7 +227,8 @@ struct Args {
   std::string data = "/usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu";
   int frames = 40, max_features = 300;
   double sigma_px = 0.3;
-  std::string method = "window";
+  std::string method = "fused";   // measure --features klt's defaults: fused, the residual check, 5 %
+  double max_depth_sigma = 0.05;
   std::string points; // --points FILE: every compared point as CSV
   bool no_residual_check = false;
 };
@@ -309,10 +355,11 @@ int main(int argc, char **argv)
 {
   Args a;
   bench::CommandLine cli("[--data DIR] [--frames N (2-40)] [--max-features N] [--sigma-px S] [--method M] "
-                         "[--no-residual-check] [--points FILE]");
+                         "[--no-residual-check] [--max-depth-sigma R] [--points FILE]");
   cli.option("--data", a.data).option("--frames", a.frames);
   cli.option("--max-features", a.max_features).option("--sigma-px", a.sigma_px);
   cli.option("--method", a.method).flag("--no-residual-check", a.no_residual_check).option("--points", a.points);
+  cli.option("--max-depth-sigma", a.max_depth_sigma);
   if (!cli.parse(argc, argv))
     return 2;
   if (a.frames < 2 || a.frames > 40 || a.max_features < 1 || !(a.sigma_px > 0)) {
@@ -324,6 +371,7 @@ int main(int argc, char **argv)
     po.method = methodFromString(a.method);
     po.noise = castleNoise(a.sigma_px);
     po.residual_check.enabled = !a.no_residual_check;
+    po.max_depth_sigma = a.max_depth_sigma;
     po.validate();
     const CameraModel camera = CameraModel::brown(kFocal, kFocal, kU0, kV0, {0, 0, 0, 0}, 640, 480);
     const YawRig rig; // the camera is the vision frame
@@ -342,8 +390,10 @@ int main(int argc, char **argv)
     const double est_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
     std::printf("yawdepth on Castle-simu (visp-images-data mbt-depth, someone else's renderer): KLT tracks + %s "
                 "vs the depth maps\n", a.method.c_str());
-    std::printf("Reproduce: build/benchmarks/bench_castle --frames %d --max-features %d --sigma-px %g --method %s%s\n",
-                a.frames, a.max_features, a.sigma_px, a.method.c_str(), a.no_residual_check ? " --no-residual-check" : "");
+    std::printf("Reproduce: build/benchmarks/bench_castle --frames %d --max-features %d --sigma-px %g --method %s "
+                "--max-depth-sigma %g%s\n",
+                a.frames, a.max_features, a.sigma_px, a.method.c_str(), a.max_depth_sigma,
+                a.no_residual_check ? " --no-residual-check" : "");
     std::printf("%d frames; %zu tracks over 2+ frames (%d detected; cut: %d epipolar, %d forward-backward); %d ok "
                 "points, %d without depth truth (background, occluding edge)\n",
                 a.frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb, ok,
@@ -351,11 +401,17 @@ int main(int argc, char **argv)
     std::printf("tracking %.1f ms/frame, estimation %.1f ms/frame (this machine, one core)\n", track_ms / a.frames,
                 est_ms / a.frames);
     if (po.residual_check.enabled)
-      std::printf("residual check: pixel noise from the residuals %.2f px (given %.2f px), sigmas scaled by %.2f; %d "
-                  "of %d checked tracks not one point (inconsistent)\n",
+      std::printf("residual check: pixel noise from the residuals %.2f px (given %.2f px), sigmas scaled by %.2f; "
+                  "tracker errors' correlation %.2f (%d depths' sigma raised for it); %d of %d checked tracks not one "
+                  "point (inconsistent)\n",
                   a.sigma_px * std::sqrt(est.residuals.variance_factor), a.sigma_px, est.residuals.sigma_scale,
-                  est.residuals.inconsistent, est.residuals.tracks_used);
+                  est.residuals.correlation, est.residuals.correlation_scaled, est.residuals.inconsistent,
+                  est.residuals.tracks_used);
     printTable(rows, a.frames);
+    const auto [cons_median, cons_90] = depthMapConsistency(q.depth, q.motion);
+    std::printf("the truth's own accuracy: the depth maps against the poses, smooth surfaces, frames 5 apart: median "
+                "|dz|/z %.4f %%, 90th percentile %.4f %%\n",
+                100 * cons_median, 100 * cons_90);
     if (!a.points.empty())
       writePoints(a.points, rows, seq.tracks, est.residuals);
   } catch (const Error &e) {

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include "scene_support.h"
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
@@ -439,6 +440,68 @@ TEST_CASE("residual check: a track that is not one point is inconsistent, the ot
     ok_checked += r.points[i].ok() ? 1 : 0;
   }
   CHECK(ok_checked >= ok_plain - 1);
+}
+
+TEST_CASE("residual check: correlated tracker errors raise the sigmas they make too small", "[pipeline][residuals]")
+{
+  // Each track's pixel errors an AR(1) sequence along the track (correlation 0.9 per frame, 0.3 px
+  // per axis): a tracker whose error persists from frame to frame. window weighs every frame as new
+  // information; the check finds the correlation in the residuals and raises its depth sigmas.
+  constexpr double kRho = 0.9, kSigma = 0.3;
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  Scene s = residualScene(0.0, 25);
+  std::mt19937_64 rng(26);
+  std::normal_distribution<double> g(0.0, kSigma * std::sqrt(1 - kRho * kRho));
+  std::normal_distribution<double> g0(0.0, kSigma);
+  for (Track &t : s.tracks) {
+    Eigen::Vector2d e(g0(rng), g0(rng));
+    for (Observation &o : t.observations) {
+      o.u += e.x();
+      o.v += e.y();
+      e = kRho * e + Eigen::Vector2d(g(rng), g(rng));
+    }
+  }
+  const PipelineResult plain = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(kSigma, false, Method::Window));
+  const PipelineResult r = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(kSigma, true, Method::Window));
+  CHECK(r.residuals.correlation > 0.5);
+  CHECK(r.residuals.correlation_scaled > 20);
+  int ok_plain = 0, ok_checked = 0;
+  const double before = depthCoverage(s, plain.points, ok_plain), after = depthCoverage(s, r.points, ok_checked);
+  INFO("2-sigma coverage " << before << " (" << ok_plain << " ok) -> " << after << " (" << ok_checked << " ok)");
+  CHECK(before < 0.85);
+  CHECK(after >= 0.85);
+  CHECK(ok_checked >= ok_plain - 3);
+  // White errors: no correlation found, nothing raised (the first test case's scene).
+  const Scene w = residualScene(0.3, 21);
+  const PipelineResult white = estimatePoints(camera, rig, w.measured, w.tracks, residualOptions(0.3, true, Method::Window));
+  CHECK(white.residuals.correlation < 0.2);
+  CHECK(white.residuals.correlation_scaled <= 3);
+}
+
+TEST_CASE("max_depth_sigma: an ok depth not resolved to the share asked is degenerate", "[pipeline][residuals]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  const Scene s = residualScene(0.3, 27);
+  PipelineOptions po = residualOptions(0.3, false);
+  const PipelineResult all = estimatePoints(camera, rig, s.measured, s.tracks, po);
+  po.max_depth_sigma = 0.01;
+  const PipelineResult gated = estimatePoints(camera, rig, s.measured, s.tracks, po);
+  int kept = 0, cut = 0;
+  for (std::size_t i = 0; i < all.points.size(); ++i) {
+    if (!all.points[i].ok())
+      continue;
+    const bool precise = all.points[i].sigmaZ() <= 0.01 * all.points[i].c_P.z();
+    CHECK(gated.points[i].status == (precise ? Status::Ok : Status::Degenerate));
+    (precise ? kept : cut) += 1;
+  }
+  CHECK(kept > 0);
+  CHECK(cut > 0);
+  po.max_depth_sigma = -1;
+  CHECK_THROWS_AS(po.validate(), Error);
+  po.max_depth_sigma = std::nan("");
+  CHECK_THROWS_AS(po.validate(), Error);
 }
 
 TEST_CASE("residual check: bad options and input", "[pipeline][residuals]")

@@ -252,6 +252,8 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
     method.method = "fused"; // natural features: hundreds of tracks, the method that keeps up with the tracker
   if (klt && method.residual_option != nullptr && method.residual_option->count() == 0)
     method.residual_check = "on"; // natural features: T-junctions and silhouettes are not points
+  if (klt && method.max_depth_sigma_option != nullptr && method.max_depth_sigma_option->count() == 0)
+    method.max_depth_sigma = 0.05; // a point cloud: each point's depth within 10 % at 2 sigma
   const MethodRun run = runMethodOnLog(camera, rig, motion, tracks, method);
   if (sub.count("--outliers") > 0)
     writeTracksCsv(a.outliers, rejectedObservations(tracks, run.outliers));

@@ -75,6 +75,12 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
                       "(chi-square gate, 99.9 %) is inconsistent (on by default with --features klt)")
           ->check(CLI::IsMember({"on", "off"}))
           ->capture_default_str();
+  args.max_depth_sigma_option =
+      sub->add_option("--max-depth-sigma", args.max_depth_sigma,
+                      "An ok point whose depth sigma exceeds this share of its depth is degenerate (0: no such gate; "
+                      "0.05 by default with --features klt)")
+          ->check(FiniteNonNegative)
+          ->capture_default_str();
 }
 
 NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
@@ -159,6 +165,7 @@ MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const Mot
   po.outlier_threshold_px = args.outlier_px;
   po.threads = args.threads;
   po.residual_check.enabled = args.residual_check == "on";
+  po.max_depth_sigma = args.max_depth_sigma;
   PipelineResult r;
   {
     ProgressLine line(args.progress && po.method == Method::Refine);
@@ -168,11 +175,12 @@ MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const Mot
   const bool checked = po.residual_check.enabled && po.method != Method::Paper && po.method != Method::Exact;
   if (checked && args.progress)
     std::fprintf(stderr,
-                 "residual check: pixel noise from the residuals %.3g px (--sigma-px %.3g)%s; %d of %d tracks not one "
-                 "point (inconsistent)\n",
+                 "residual check: pixel noise from the residuals %.3g px (--sigma-px %.3g)%s; tracker errors' "
+                 "correlation %.2f (%d depths' sigma raised for it); %d of %d tracks not one point (inconsistent)\n",
                  po.noise.sigma_px * std::sqrt(r.residuals.variance_factor), po.noise.sigma_px,
                  r.residuals.sigma_scale > 1 ? (", sigmas scaled by " + std::to_string(r.residuals.sigma_scale).substr(0, 5)).c_str() : "",
-                 r.residuals.inconsistent, r.residuals.tracks_used);
+                 r.residuals.correlation, r.residuals.correlation_scaled, r.residuals.inconsistent,
+                 r.residuals.tracks_used);
   MethodRun run;
   run.outliers = std::move(r.outliers);
   run.motion_estimate = std::move(r.motion);

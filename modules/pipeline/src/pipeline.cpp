@@ -95,6 +95,8 @@ void PipelineOptions::validate() const
   if (threads < 1)
     throw Error("refine needs at least one thread");
   residual_check.validate();
+  if (!(std::isfinite(max_depth_sigma) && max_depth_sigma >= 0))
+    throw Error("the largest relative depth sigma must be finite and non-negative (0: no gate)");
 }
 
 bool methodAvailable(Method m) { return m != Method::Refine || refineAvailable(); }
@@ -163,6 +165,10 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
   if (options.residual_check.enabled && whole_track)
     r.residuals = checkResiduals(camera, rig, r.motion, tracks, r.outliers, options.noise, options.residual_check,
                                  r.points);
+  if (options.max_depth_sigma > 0)
+    for (PointEstimate &p : r.points)
+      if (p.ok() && !(p.sigmaZ() <= options.max_depth_sigma * p.c_P.z()))
+        p.status = Status::Degenerate;
   return r;
 }
 

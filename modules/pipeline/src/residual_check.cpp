@@ -111,14 +111,76 @@ struct CameraPoses {
   }
 };
 
-TrackResidual residualOf(const CameraModel &camera, const std::vector<MotionSample> &motion, const CameraPoses &poses,
-                         const Track &track, const std::vector<bool> &outliers, const PointEstimate &point,
-                         const NoiseModel &noise)
+/* The observed pixel of camera-frame point c_P and its Jacobian with respect to c_P (false behind the camera). */
+bool projectPoint(const CameraModel &camera, const Eigen::Vector3d &c_P, Eigen::Vector2d &uv, Eigen::Matrix<double, 2, 3> &J)
 {
-  TrackResidual out;
+  if (!(c_P.z() > 0))
+    return false;
+  const double iz = 1.0 / c_P.z();
+  const Eigen::Vector2d m(c_P.x() * iz, c_P.y() * iz);
+  Eigen::Matrix2d Jd;
+  const Eigen::Vector2d md = camera.distortNormalized(m, &Jd);
+  uv = Eigen::Vector2d(camera.u0() + camera.kx() * md.x(), camera.v0() + camera.ky() * md.y());
+  Eigen::Matrix<double, 2, 3> Jm;
+  Jm << iz, 0, -m.x() * iz, 0, iz, -m.y() * iz;
+  J = Eigen::DiagonalMatrix<double, 2>(camera.kx(), camera.ky()) * Jd * Jm;
+  return true;
+}
+
+/* Residuals of the track's least-squares point (Gauss-Newton from w_P, equal weights): what its
+   errors look like once no estimator's own error is in them. Empty when the fit fails. */
+std::vector<Eigen::Vector2d> leastSquaresResiduals(const CameraModel &camera, const CameraPoses &poses,
+                                                   const std::vector<std::pair<std::size_t, const Observation *>> &used,
+                                                   Eigen::Vector3d w_P)
+{
+  constexpr int kIterations = 5;
+  std::vector<Eigen::Vector2d> r(used.size());
+  for (int it = 0; it <= kIterations; ++it) {
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (std::size_t u = 0; u < used.size(); ++u) {
+      const std::size_t row = used[u].first;
+      Eigen::Vector2d uv;
+      Eigen::Matrix<double, 2, 3> J;
+      if (!projectPoint(camera, poses.R[row] * w_P + poses.t[row], uv, J))
+        return {};
+      r[u] = uv - Eigen::Vector2d(used[u].second->u, used[u].second->v);
+      const Eigen::Matrix<double, 2, 3> Jw = J * poses.R[row];
+      H += Jw.transpose() * Jw;
+      g += Jw.transpose() * r[u];
+    }
+    if (it == kIterations)
+      break;
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0))
+      return {};
+    w_P -= ldlt.solve(g);
+  }
+  return r;
+}
+
+/* One point against its track, with what the correlation correction needs: per observation used (in
+   row order) the residual (px), the Jacobian of its pixel with respect to the point in the point's
+   camera frame (distortion's own derivative left out), and whether the pixel noise dominates its
+   variance (the motion's part under a quarter of it). */
+struct TrackFit {
+  TrackResidual summary;
+  std::vector<Eigen::Vector2d> r; // the track's least-squares point's residuals (empty: that fit failed)
+  std::vector<Eigen::Matrix<double, 2, 3>> J;
+  std::vector<bool> pixel_dominated;
+};
+
+/* Share of an observation's variance that per-increment motion noise (a drift) may have for its
+   residual to say something about the tracker's own errors (their correlation). */
+constexpr double kPixelDominated = 0.25;
+
+TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motion, const CameraPoses &poses,
+               const Track &track, const std::vector<bool> &outliers, const PointEstimate &point, const NoiseModel &noise)
+{
+  TrackFit fit;
   const long k = rowOfFrame(motion, point.frame);
   if (k < 0 || !point.c_P.allFinite())
-    return out;
+    return fit;
   const std::size_t kr = static_cast<std::size_t>(k);
   const Eigen::Vector3d w_P = poses.R[kr].transpose() * (point.c_P - poses.t[kr]);
   // Observations used, by row; the walk starts at the point's row and goes back to the first.
@@ -131,24 +193,30 @@ TrackResidual residualOf(const CameraModel &camera, const std::vector<MotionSamp
       used.emplace_back(static_cast<std::size_t>(row), &track.observations[j]);
   }
   if (used.size() < 2)
-    return out;
+    return fit;
   std::sort(used.begin(), used.end(), [](const auto &a, const auto &b) { return a.first < b.first; });
-  const double f = std::max(camera.kx(), camera.ky());
+  fit.J.assign(used.size(), Eigen::Matrix<double, 2, 3>::Zero());
+  fit.pixel_dominated.assign(used.size(), false);
+  const double f = std::max(camera.kx(), camera.ky()), var_px = noise.sigma_px * noise.sigma_px;
   double chi2 = 0, sum2 = 0;
   const auto visit = [&](std::size_t row, double var_rot, double var_t) {
     for (std::size_t u = 0; u < used.size(); ++u) {
       if (used[u].first != row)
         continue;
       const Eigen::Vector3d c_P = poses.R[row] * w_P + poses.t[row];
-      if (!(c_P.z() > 0)) {
+      Eigen::Vector2d uv;
+      Eigen::Matrix<double, 2, 3> J;
+      if (!projectPoint(camera, c_P, uv, J)) {
         chi2 = std::numeric_limits<double>::infinity();
         continue;
       }
-      const Eigen::Vector2d uv = camera.project(Eigen::Vector2d(c_P.x() / c_P.z(), c_P.y() / c_P.z()));
       const double r2 = (uv - Eigen::Vector2d(used[u].second->u, used[u].second->v)).squaredNorm();
-      const double var = noise.sigma_px * noise.sigma_px + f * f * (var_rot + var_t / (c_P.z() * c_P.z()));
-      chi2 += r2 / var;
+      const double var_motion = f * f * (var_rot + var_t / (c_P.z() * c_P.z()));
+      chi2 += r2 / (var_px + var_motion);
       sum2 += r2;
+      // Pose errors per pose are white; per increment they drift, and would look like the tracker's.
+      fit.pixel_dominated[u] = noise.motion_noise == MotionNoise::Absolute || var_motion < kPixelDominated * var_px;
+      fit.J[u] = J * poses.R[row] * poses.R[kr].transpose(); // d(pixel) / d(point in the point's camera)
     }
   };
   walkPoseNoise(noise, motion, kr, std::min(kr, used.front().first), visit);
@@ -157,10 +225,63 @@ TrackResidual residualOf(const CameraModel &camera, const std::vector<MotionSamp
       if (row != kr)
         visit(row, vr, vt);
     });
-  out.chi2 = chi2;
-  out.dof = static_cast<int>(2 * used.size()) - 3;
-  out.rms_px = std::sqrt(sum2 / static_cast<double>(used.size()));
-  return out;
+  if (std::isfinite(chi2))
+    fit.r = leastSquaresResiduals(camera, poses, used, w_P);
+  fit.summary.chi2 = chi2;
+  fit.summary.dof = static_cast<int>(2 * used.size()) - 3;
+  fit.summary.rms_px = std::sqrt(sum2 / static_cast<double>(used.size()));
+  return fit;
+}
+
+/* The tracks' pooled lag-one correlation of consecutive residuals (both axes), over the pairs whose
+   pixel noise dominates, from tracks of at least kMinCorrelationObs observations; 0 with fewer than
+   `min_tracks` such tracks; clamped to [0, kMaxCorrelation]. */
+constexpr std::size_t kMinCorrelationObs = 5;
+constexpr double kMaxCorrelation = 0.99;
+
+double pooledCorrelation(const std::vector<TrackFit> &fits, int min_tracks)
+{
+  double num = 0, den = 0;
+  int tracks = 0;
+  for (const TrackFit &fit : fits) {
+    if (fit.r.size() < kMinCorrelationObs)
+      continue;
+    bool any = false;
+    for (std::size_t u = 0; u + 1 < fit.r.size(); ++u)
+      if (fit.pixel_dominated[u] && fit.pixel_dominated[u + 1]) {
+        num += fit.r[u].dot(fit.r[u + 1]);
+        den += 0.5 * (fit.r[u].squaredNorm() + fit.r[u + 1].squaredNorm());
+        any = true;
+      }
+    tracks += any ? 1 : 0;
+  }
+  if (tracks < min_tracks || !(den > 0))
+    return 0.0;
+  return std::clamp(num / den, 0.0, kMaxCorrelation);
+}
+
+/* Depth variance (per unit pixel variance) of the point from its track when each axis' tracker errors
+   form an AR(1) sequence of correlation rho along the track: the ZZ element of (J^T C^-1 J)^-1, C^-1
+   the AR(1) inverse correlation (tridiagonal). rho = 0: white errors. NaN when not invertible. */
+double depthVarianceAr1(const TrackFit &fit, double rho)
+{
+  const std::size_t n = fit.J.size();
+  Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
+  const double scale = 1.0 / (1.0 - rho * rho);
+  for (int axis = 0; axis < 2; ++axis)
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::RowVector3d a = fit.J[i].row(axis);
+      const double d = (i == 0 || i + 1 == n) ? 1.0 : 1.0 + rho * rho;
+      info += scale * d * a.transpose() * a;
+      if (i + 1 < n) {
+        const Eigen::RowVector3d b = fit.J[i + 1].row(axis);
+        info -= scale * rho * (a.transpose() * b + b.transpose() * a);
+      }
+    }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(info);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0))
+    return std::numeric_limits<double>::quiet_NaN();
+  return ldlt.solve(Eigen::Matrix3d::Identity())(2, 2);
 }
 
 } // namespace
@@ -199,7 +320,7 @@ TrackResidual trackResidual(const CameraModel &camera, const YawRig &rig, const 
                             const Track &track, const std::vector<bool> &outliers, const PointEstimate &point,
                             const NoiseModel &noise)
 {
-  return residualOf(camera, motion, CameraPoses(rig, motion), track, outliers, point, noise);
+  return fitOf(camera, motion, CameraPoses(rig, motion), track, outliers, point, noise).summary;
 }
 
 ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
@@ -215,12 +336,13 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
   out.tracks.resize(tracks.size());
   const CameraPoses poses(rig, motion);
   const std::vector<bool> none;
+  std::vector<TrackFit> fits(tracks.size());
   std::vector<double> ratios;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     if (!points[i].ok())
       continue;
-    out.tracks[i] = residualOf(camera, motion, poses, tracks[i], i < outliers.size() ? outliers[i] : none, points[i],
-                               noise);
+    fits[i] = fitOf(camera, motion, poses, tracks[i], i < outliers.size() ? outliers[i] : none, points[i], noise);
+    out.tracks[i] = fits[i].summary;
     if (out.tracks[i].dof >= 1) {
       ratios.push_back(out.tracks[i].chi2 / chiSquareMedian(out.tracks[i].dof));
       ++out.tracks_used;
@@ -234,6 +356,9 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
   const double factor = std::max(1.0, out.variance_factor);
   if (options.scale_sigma)
     out.sigma_scale = std::sqrt(factor);
+  if (options.correlated)
+    out.correlation = pooledCorrelation(fits, std::max(1, options.min_tracks / 2));
+  const double var_px = factor * noise.sigma_px * noise.sigma_px;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const TrackResidual &t = out.tracks[i];
     if (!points[i].ok())
@@ -244,6 +369,14 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
       continue;
     }
     points[i].c_cov *= out.sigma_scale * out.sigma_scale;
+    if (out.correlation > 0 && fits[i].J.size() >= 3) {
+      // Correlated tracker errors: the depth cannot be better known than the pixels allow with them.
+      const double var_z = var_px * depthVarianceAr1(fits[i], out.correlation);
+      if (std::isfinite(var_z) && var_z > points[i].c_cov(2, 2)) {
+        points[i].c_cov *= var_z / points[i].c_cov(2, 2);
+        ++out.correlation_scaled;
+      }
+    }
   }
   return out;
 }

@@ -44,8 +44,13 @@ struct PipelineOptions {
       residuals, the tracks that are not one point made `inconsistent`; residual_check.h). Off by
       default; paper and exact are never checked. */
   ResidualCheckOptions residual_check;
+  /*! An ok point whose relative depth sigma (sigma_Z / Z, after the residual check) exceeds this is
+      `degenerate`: the frames do not resolve its depth to the precision asked (e.g. 0.05 for a point
+      cloud whose points should be within 10 % at 2 sigma). 0: no such gate. */
+  double max_depth_sigma = 0;
   /*!
-    \brief Throws yawdepth::Error, one line, when the options cannot give an answer: a bad noise
+    \brief Throws yawdepth::Error, one line, when the options cannot give an answer: a negative or
+    non-finite max_depth_sigma, a bad noise
     model or gate, a pixel noise under 1e-6 px for fused, window or refine (they weigh every
     observation by it), a robust or outlier threshold under 1e-6 px for window and refine, fewer
     than one thread, or refine in a build without Ceres.

@@ -27,6 +27,19 @@
     far one, a corner on a silhouette, a track that slid along its epipolar line, which the
     tracker's epipolar gate cannot see): its status becomes `inconsistent`.
 
+  - **Correlated tracker errors**: a tracker that follows a corner from frame to frame makes errors
+    that persist (the corner's appearance changes slowly with the view); the fit absorbs much of
+    them, and its covariance, computed as if each frame's error were new, is then too small for a
+    long track. The pooled lag-one correlation \f$ \rho \f$ of consecutive residuals (both axes;
+    tracks of 5 observations or more; only the observations whose pixel noise dominates their
+    variance, the motion's part under a quarter, so that modelled pose drift is not taken for the
+    tracker's) gives an AR(1) model of the tracker's errors; for each ok track of 3 observations or
+    more, the depth variance that model allows with the Jacobians J of its pixels,
+    \f[ \sigma_Z^2 \ge \max(1, s_0^2)\, \sigma_{px}^2 \left[(J^\top C_\rho^{-1} J)^{-1}\right]_{ZZ}, \f]
+    (\f$ C_\rho \f$ the AR(1) correlation along the track, per axis), raises its covariance when the
+    method's is smaller (the whole matrix scaled). White errors give \f$ \rho \approx 0 \f$: nothing
+    changes.
+
   `paper` and `exact` use only the last two observations, so the rest of their track says nothing
   about their estimate: they are not checked.
 */
@@ -44,6 +57,7 @@ struct ResidualCheckOptions {
   double gate_probability = 0.999; //!< p of the chi-square gate, in (0.5, 1)
   bool scale_sigma = true;         //!< multiply the ok points' covariance by s0^2 when s0 > 1
   int min_tracks = 20;             //!< fewest checked tracks for s0 (else s0 = 1)
+  bool correlated = true;          //!< the tracker's correlated errors: each ok depth's variance at least the AR(1) one
   /*! \brief Throws yawdepth::Error for a probability outside (0.5, 1) or min_tracks < 1. */
   void validate() const;
 };
@@ -61,6 +75,8 @@ struct ResidualCheckResult {
   double sigma_scale = 1.0;     //!< factor applied to every ok point's sigma (1 or s0)
   int tracks_used = 0;          //!< ok tracks with dof >= 1
   int inconsistent = 0;         //!< ok points the gate turned `inconsistent`
+  double correlation = 0;       //!< rho: pooled lag-one correlation of the tracks' residuals (0: not estimated)
+  int correlation_scaled = 0;   //!< ok points whose covariance the correlation made larger
   std::vector<TrackResidual> tracks; //!< per track (same order as the tracks)
 };
 
