@@ -400,11 +400,13 @@ int main(int argc, char **argv)
                 no_truth);
     std::printf("tracking %.1f ms/frame, estimation %.1f ms/frame (this machine, one core)\n", track_ms / a.frames,
                 est_ms / a.frames);
+    const double px = std::max(0.01, a.sigma_px * est.residuals.noise_scale); // the model's pixel noise at the end
     if (po.residual_check.enabled)
-      std::printf("residual check: pixel noise from the residuals %.2f px (given %.2f px), sigmas scaled by %.2f; "
+      std::printf("residual check: noise model scaled by %.2f from the residuals; then pixel noise %.2f px (model "
+                  "%.2f px), sigmas scaled by %.2f; "
                   "tracker errors' correlation %.2f (%d depths' sigma raised for it); %d of %d checked tracks not one "
                   "point (inconsistent)\n",
-                  a.sigma_px * std::sqrt(est.residuals.variance_factor), a.sigma_px, est.residuals.sigma_scale,
+                  est.residuals.noise_scale, px * std::sqrt(est.residuals.variance_factor), px, est.residuals.sigma_scale,
                   est.residuals.correlation, est.residuals.correlation_scaled, est.residuals.inconsistent,
                   est.residuals.tracks_used);
     printTable(rows, a.frames);

@@ -1,6 +1,8 @@
 #include <yawdepth/features/video_frames.h>
 
+#include <filesystem>
 #include <opencv2/core/utils/logger.hpp>
+#include <opencv2/videoio.hpp>
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpImage.h>
 #include <visp3/core/vpImageConvert.h>
@@ -39,6 +41,15 @@ VideoFrames::VideoFrames(const std::string &path) : reader_(std::make_unique<Rea
   if (path.empty())
     throw Error("video: empty path");
   const QuietOpenCv quiet;
+  if (path.find('%') == std::string::npos) { // a movie: a readable file that FFmpeg can open
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+      throw Error(path + ": no such video file");
+    // Asked of FFmpeg alone first: a file it cannot read would otherwise go to every other back end
+    // (GStreamer loads its plugins, some probe USB devices and leak).
+    if (!cv::VideoCapture(path, cv::CAP_FFMPEG).isOpened())
+      throw Error(path + ": cannot open: not a video file FFmpeg can read");
+  }
   try {
     reader_->video.setFileName(path);
     reader_->video.open(reader_->image);

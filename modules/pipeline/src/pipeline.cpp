@@ -1,5 +1,6 @@
 #include <yawdepth/pipeline/pipeline.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -105,6 +106,43 @@ Method bestMethod() { return refineAvailable() ? Method::Refine : Method::Fused;
 
 namespace {
 
+/* The noise model scaled by s (the pixel noise at least kMinPixelNoise): every sigma when the motion
+   errs per pose (white: the residuals see all of it), only the pixels' when it errs per increment (its
+   drift mostly hides in the fit: the residuals do not say it was wrong). */
+constexpr double kMinPixelNoise = 0.01; // px: no tracker is more precise than this
+NoiseModel scaledNoise(const NoiseModel &n, double s)
+{
+  NoiseModel out = n;
+  out.sigma_px = std::max(kMinPixelNoise, n.sigma_px * s);
+  if (n.motion_noise == MotionNoise::Absolute)
+    for (double *v : {&out.sigma_odom, &out.sigma_heading, &out.sigma_yaw, &out.sigma_rot})
+      *v *= s;
+  return out;
+}
+
+/* s0 when the residuals see the whole noise model and say it is off by more than kReestimate (see
+   ResidualCheckOptions::reestimate_noise), else 1. */
+constexpr double kReestimate = 1.1;
+constexpr double kMaxCorrelationToTighten = 0.5;
+double noiseScaleFromResiduals(const CameraModel &camera, const YawRig &rig, const std::vector<Track> &tracks,
+                               const PipelineResult &r, const PipelineOptions &options)
+{
+  ResidualCheckOptions probe = options.residual_check;
+  probe.scale_sigma = false;
+  std::vector<PointEstimate> points = r.points; // the probe's gate must not change the result
+  const ResidualCheckResult c = checkResiduals(camera, rig, r.motion, tracks, r.outliers, options.noise, probe, points);
+  const bool sees_all = options.noise.motion_noise == MotionNoise::Absolute || c.pixel_share >= 0.5;
+  const double s0 = std::sqrt(c.variance_factor);
+  if (c.tracks_used < options.residual_check.min_tracks || !sees_all || !(s0 > 0) ||
+      std::abs(std::log(s0)) <= std::log(kReestimate))
+    return 1.0;
+  // Errors that persist from frame to frame hide in the fit: small residuals then do not say the
+  // tracker is precise, and the model is not made tighter.
+  if (s0 < 1 && c.correlation >= kMaxCorrelationToTighten)
+    return 1.0;
+  return s0;
+}
+
 /* The method with the observations no method can use taken out first (see the file). */
 PipelineResult runUsable(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                          const std::vector<Track> &tracks, const PipelineOptions &options)
@@ -162,9 +200,18 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
   PipelineResult r = runUsable(camera, rig, motion, tracks, options);
   const bool whole_track = options.method == Method::Fused || options.method == Method::Window ||
                            options.method == Method::Refine;
-  if (options.residual_check.enabled && whole_track)
-    r.residuals = checkResiduals(camera, rig, r.motion, tracks, r.outliers, options.noise, options.residual_check,
-                                 r.points);
+  if (options.residual_check.enabled && whole_track) {
+    NoiseModel noise = options.noise;
+    const double s0 = options.residual_check.reestimate_noise ? noiseScaleFromResiduals(camera, rig, tracks, r, options) : 1.0;
+    if (s0 != 1.0) {
+      PipelineOptions again = options;
+      again.noise = scaledNoise(options.noise, s0);
+      noise = again.noise;
+      r = runUsable(camera, rig, motion, tracks, again);
+    }
+    r.residuals = checkResiduals(camera, rig, r.motion, tracks, r.outliers, noise, options.residual_check, r.points);
+    r.residuals.noise_scale = s0;
+  }
   if (options.max_depth_sigma > 0)
     for (PointEstimate &p : r.points)
       if (p.ok() && !(p.sigmaZ() <= options.max_depth_sigma * p.c_P.z()))

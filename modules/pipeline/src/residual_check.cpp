@@ -168,6 +168,7 @@ struct TrackFit {
   std::vector<Eigen::Vector2d> r; // the track's least-squares point's residuals (empty: that fit failed)
   std::vector<Eigen::Matrix<double, 2, 3>> J;
   std::vector<bool> pixel_dominated;
+  double pixel_share_sum = 0; // sum over the observations of the pixels' share of their variance
 };
 
 /* Share of an observation's variance that per-increment motion noise (a drift) may have for its
@@ -216,6 +217,7 @@ TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motio
       sum2 += r2;
       // Pose errors per pose are white; per increment they drift, and would look like the tracker's.
       fit.pixel_dominated[u] = noise.motion_noise == MotionNoise::Absolute || var_motion < kPixelDominated * var_px;
+      fit.pixel_share_sum += var_px / (var_px + var_motion);
       fit.J[u] = J * poses.R[row] * poses.R[kr].transpose(); // d(pixel) / d(point in the point's camera)
     }
   };
@@ -338,6 +340,8 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
   const std::vector<bool> none;
   std::vector<TrackFit> fits(tracks.size());
   std::vector<double> ratios;
+  double share_sum = 0;
+  std::size_t observations = 0;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     if (!points[i].ok())
       continue;
@@ -346,8 +350,12 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     if (out.tracks[i].dof >= 1) {
       ratios.push_back(out.tracks[i].chi2 / chiSquareMedian(out.tracks[i].dof));
       ++out.tracks_used;
+      share_sum += fits[i].pixel_share_sum;
+      observations += fits[i].J.size();
     }
   }
+  if (observations > 0)
+    out.pixel_share = share_sum / static_cast<double>(observations);
   if (out.tracks_used >= options.min_tracks) {
     const auto mid = ratios.begin() + static_cast<long>(ratios.size() / 2);
     std::nth_element(ratios.begin(), mid, ratios.end());

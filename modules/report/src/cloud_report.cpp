@@ -64,7 +64,7 @@ cv::Scalar depthColour(double z, double lo, double hi)
     return out;
   }();
   const int i = static_cast<int>(std::lround(255 * std::clamp((z - lo) / (hi - lo), 0.0, 1.0)));
-  const cv::Vec3b c = lut.at<cv::Vec3b>(0, i);
+  const cv::Vec3b &c = lut.at<cv::Vec3b>(0, i);
   return cv::Scalar(c[0], c[1], c[2]);
 }
 

@@ -27,7 +27,9 @@ public:
   ~VideoFrames();
   VideoFrames(const VideoFrames &) = delete;
   VideoFrames &operator=(const VideoFrames &) = delete;
+  /*! \brief Takes over another reader (which is left empty). */
   VideoFrames(VideoFrames &&) noexcept;
+  /*! \brief Takes over another reader (which is left empty). */
   VideoFrames &operator=(VideoFrames &&) noexcept;
 
   /*! \brief The next frame, 8-bit gray (a colour video is converted); throws yawdepth::Error

@@ -40,6 +40,16 @@
     method's is smaller (the whole matrix scaled). White errors give \f$ \rho \approx 0 \f$: nothing
     changes.
 
+  - **The noise model from the residuals** (estimatePoints(), `reestimate_noise`): when the residuals
+    see all of the modelled noise (per-pose motion noise is white and shows in them; per-increment
+    drift mostly does not, so then only when the pixels hold at least half of the variance), an
+    s0 outside [1/1.1, 1.1] means the model was s0 times too small or too large: the method runs
+    again with the model scaled by s0, every sigma for per-pose motion noise, the pixels' alone for
+    per-increment noise (whose drift the residuals do not show) (so that a tracker better than the model gives
+    sigmas that say so, not only one worse than it), and the check runs on that result. The model is
+    never made tighter when the residuals' correlation is 0.5 or more: errors that persist from
+    frame to frame hide in the fit, and small residuals then do not say the tracker is precise.
+
   `paper` and `exact` use only the last two observations, so the rest of their track says nothing
   about their estimate: they are not checked.
 */
@@ -58,6 +68,12 @@ struct ResidualCheckOptions {
   bool scale_sigma = true;         //!< multiply the ok points' covariance by s0^2 when s0 > 1
   int min_tracks = 20;             //!< fewest checked tracks for s0 (else s0 = 1)
   bool correlated = true;          //!< the tracker's correlated errors: each ok depth's variance at least the AR(1) one
+  /*! estimatePoints(): when the residuals see the whole noise model (per-pose motion noise, or the
+      pixels at least half of the variance) and s0 is outside [1/1.1, 1.1], run the method again with
+      the noise model times s0 (every sigma for per-pose motion noise, the pixels' for per-increment;
+      the pixel noise at least 0.01 px; never tighter when the residuals' correlation is 0.5 or more),
+      then check. */
+  bool reestimate_noise = true;
   /*! \brief Throws yawdepth::Error for a probability outside (0.5, 1) or min_tracks < 1. */
   void validate() const;
 };
@@ -77,6 +93,8 @@ struct ResidualCheckResult {
   int inconsistent = 0;         //!< ok points the gate turned `inconsistent`
   double correlation = 0;       //!< rho: pooled lag-one correlation of the tracks' residuals (0: not estimated)
   int correlation_scaled = 0;   //!< ok points whose covariance the correlation made larger
+  double pixel_share = 0;       //!< mean share of the pixels in the checked observations' modelled variance
+  double noise_scale = 1;       //!< estimatePoints(): the factor the noise model was scaled by before the final run (1: none)
   std::vector<TrackResidual> tracks; //!< per track (same order as the tracks)
 };
 
