@@ -14,7 +14,7 @@
   with absolute noise 0.1 mm and 0.1 mrad). Tracks: yawdepth::trackSequence (KLT with the epipolar
   gate); points: yawdepth::estimatePoints as `measure --features klt` runs it by default (fused,
   the residual check: noise from residuals, tracks that are not one point cut, residual_check.h;
-  depths not resolved to 5 % degenerate), each point at its last frame. The truth of an ok point is where the ray of its observed pixel in that frame first
+  depths not resolved to 5 % degenerate), each point at its last frame; or with the --method given. The truth of an ok point is where the ray of its observed pixel in that frame first
   meets the surface of the frame's depth map (rendered from a second camera 5 cm beside the colour
   camera, see kDepthFromColour): the ray is marched in depth, each depth projected into the depth
   camera and compared with the map there (bilinear); the crossing is refined by bisection. The

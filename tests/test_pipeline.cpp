@@ -533,6 +533,9 @@ TEST_CASE("residual check: bad options and input", "[pipeline][residuals]")
   o = ResidualCheckOptions();
   o.min_tracks = 0;
   CHECK_THROWS_AS(o.validate(), Error);
+  o = ResidualCheckOptions();
+  o.gate_scale = 0.5; // a gate tighter than the model given
+  CHECK_THROWS_AS(o.validate(), Error);
   PipelineOptions po;
   po.residual_check.gate_probability = std::nan("");
   CHECK_THROWS_AS(po.validate(), Error);

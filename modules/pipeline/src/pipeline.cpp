@@ -209,7 +209,9 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
       noise = again.noise;
       r = runUsable(camera, rig, motion, tracks, again);
     }
-    r.residuals = checkResiduals(camera, rig, r.motion, tracks, r.outliers, noise, options.residual_check, r.points);
+    ResidualCheckOptions check = options.residual_check;
+    check.gate_scale = s0 < 1 ? 1 / (s0 * s0) : 1.0; // the gate at the model given, never tighter
+    r.residuals = checkResiduals(camera, rig, r.motion, tracks, r.outliers, noise, check, r.points);
     r.residuals.noise_scale = s0;
   }
   if (options.max_depth_sigma > 0)

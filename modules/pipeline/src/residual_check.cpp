@@ -12,6 +12,8 @@ void ResidualCheckOptions::validate() const
     throw Error("residual check: the gate probability must be in (0.5, 1)");
   if (min_tracks < 1)
     throw Error("residual check: min_tracks must be at least 1");
+  if (!(std::isfinite(gate_scale) && gate_scale >= 1))
+    throw Error("residual check: gate_scale must be finite and at least 1");
 }
 
 namespace {
@@ -371,7 +373,7 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     const TrackResidual &t = out.tracks[i];
     if (!points[i].ok())
       continue;
-    if (t.dof >= 1 && !(t.chi2 <= factor * chiSquareQuantile(t.dof, options.gate_probability))) {
+    if (t.dof >= 1 && !(t.chi2 <= options.gate_scale * factor * chiSquareQuantile(t.dof, options.gate_probability))) {
       points[i].status = Status::Inconsistent;
       ++out.inconsistent;
       continue;

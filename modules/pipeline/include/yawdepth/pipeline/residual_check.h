@@ -48,7 +48,9 @@
     per-increment noise (whose drift the residuals do not show) (so that a tracker better than the model gives
     sigmas that say so, not only one worse than it), and the check runs on that result. The model is
     never made tighter when the residuals' correlation is 0.5 or more: errors that persist from
-    frame to frame hide in the fit, and small residuals then do not say the tracker is precise.
+    frame to frame hide in the fit, and small residuals then do not say the tracker is precise. A
+    tighter model does not tighten the gate: what counts as a track that is not one point stays what
+    the model given says.
 
   `paper` and `exact` use only the last two observations, so the rest of their track says nothing
   about their estimate: they are not checked.
@@ -74,7 +76,12 @@ struct ResidualCheckOptions {
       the pixel noise at least 0.01 px; never tighter when the residuals' correlation is 0.5 or more),
       then check. */
   bool reestimate_noise = true;
-  /*! \brief Throws yawdepth::Error for a probability outside (0.5, 1) or min_tracks < 1. */
+  /*! Multiplies the gate's threshold (estimatePoints() sets it to 1 / s0^2 when it made the model
+      tighter: the gate is never tighter than the model given, which says what counts as a track that
+      is not one point). */
+  double gate_scale = 1;
+  /*! \brief Throws yawdepth::Error for a probability outside (0.5, 1), min_tracks < 1 or a gate_scale that
+      is not finite and at least 1. */
   void validate() const;
 };
 
