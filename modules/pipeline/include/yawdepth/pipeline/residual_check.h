@@ -20,10 +20,12 @@
     is the median of a \f$ \chi^2_\nu \f$ variable (Wilson-Hilferty). The median makes it robust to
     the tracks that are not points. \f$ s_0 > 1 \f$ says the pixel noise was larger than the noise
     model's; every `ok` point's covariance is then multiplied by \f$ s_0^2 \f$ (`scale_sigma`). A
-    smaller \f$ s_0 \f$ is reported but never shrinks a covariance (the motion noise, which pixel
-    residuals see only in part, may be what the sigma is made of).
-  - **The gate**: a track with \f$ \chi^2 > \max(1, s_0^2)\, q_p(\nu) \f$ (\f$ q_p \f$ the
-    `gate_probability` quantile) is not one rigid point (a T-junction where a near edge crosses a
+    smaller \f$ s_0 \f$ never shrinks a covariance here (the motion noise, which pixel residuals see
+    only in part, may be what the sigma is made of); estimatePoints() may make the model tighter
+    first (below).
+  - **The gate**: a track with \f$ \chi^2 > g \max(1, s_0^2)\, q_p(\nu) \f$ (\f$ q_p \f$ the
+    `gate_probability` quantile, g the `gate_scale`, 1 unless estimatePoints() made the model
+    tighter) is not one rigid point (a T-junction where a near edge crosses a
     far one, a corner on a silhouette, a track that slid along its epipolar line, which the
     tracker's epipolar gate cannot see): its status becomes `inconsistent`.
 
@@ -44,9 +46,9 @@
     see all of the modelled noise (per-pose motion noise is white and shows in them; per-increment
     drift mostly does not, so then only when the pixels hold at least half of the variance), an
     s0 outside [1/1.1, 1.1] means the model was s0 times too small or too large: the method runs
-    again with the model scaled by s0, every sigma for per-pose motion noise, the pixels' alone for
-    per-increment noise (whose drift the residuals do not show) (so that a tracker better than the model gives
-    sigmas that say so, not only one worse than it), and the check runs on that result. The model is
+    again with the model scaled by s0 (every sigma for per-pose motion noise; the pixels' alone for
+    per-increment noise, whose drift the residuals do not show), so that a tracker better than the
+    model gets sigmas that say so, not only one worse than it, and the check runs on that result. The model is
     never made tighter when the residuals' correlation is 0.5 or more: errors that persist from
     frame to frame hide in the fit, and small residuals then do not say the tracker is precise. A
     tighter model does not tighten the gate: what counts as a track that is not one point stays what
