@@ -70,9 +70,10 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
       ->capture_default_str();
   args.residual_option =
       sub->add_option("--residual-check", args.residual_check,
-                      "fused, window, refine: every ok point against its whole track; the pixel noise estimated from "
-                      "the residuals scales the sigmas when larger than --sigma-px, and a track that is not one point "
-                      "(chi-square gate, 99.9 %) is inconsistent (on by default with --features klt)")
+                      "fused, window, refine: every ok point against its whole track; the noise model scaled to what "
+                      "the residuals show (the method run again) when they see all of it, the sigmas raised when they "
+                      "show more noise, and a track that is not one point (chi-square gate at 99.9 %, at the model "
+                      "given) inconsistent (on by default with --features klt)")
           ->check(CLI::IsMember({"on", "off"}))
           ->capture_default_str();
   args.max_depth_sigma_option =
