@@ -1,5 +1,6 @@
 #include <yawdepth/features/klt_tracker.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -58,14 +59,9 @@ double KltTracker::epipolarDistance(const Eigen::Vector2d &uv_prev, const Eigen:
   Eigen::Vector2d mp, mc;
   if (!camera_.undistort(uv_prev, mp) || !camera_.undistort(uv, mc))
     return kNaN;
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j)
-      R(i, j) = cMp[static_cast<unsigned>(i)][static_cast<unsigned>(j)];
-    t[i] = cMp[static_cast<unsigned>(i)][3];
-  }
-  const Eigen::Vector3d dir = R * Eigen::Vector3d(mp.x(), mp.y(), 1.0);
+  const Eigen::Isometry3d M = toIsometry(cMp);
+  const Eigen::Vector3d t = M.translation();
+  const Eigen::Vector3d dir = M.linear() * Eigen::Vector3d(mp.x(), mp.y(), 1.0);
   // Depths Z in [Z_min, inf): P(Z) = dir Z + t, a segment in the image from the near end to the
   // point at infinity (dir). Keep the part in front of the camera.
   constexpr double kFront = 1e-9;

@@ -1,5 +1,6 @@
 #include <yawdepth/pipeline/residual_check.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <yawdepth/error.h>
@@ -90,26 +91,14 @@ void walkPoseNoise(const NoiseModel &noise, const std::vector<MotionSample> &mot
   }
 }
 
-/* cMw of every row, as Eigen (rotation, translation). */
+/* cMw of every row (the world's pose in each row's camera). */
 struct CameraPoses {
-  std::vector<Eigen::Matrix3d> R;
-  std::vector<Eigen::Vector3d> t;
+  std::vector<Eigen::Isometry3d> cMw;
   CameraPoses(const YawRig &rig, const std::vector<MotionSample> &motion)
   {
-    R.reserve(motion.size());
-    t.reserve(motion.size());
-    for (const MotionSample &s : motion) {
-      const vpHomogeneousMatrix cMw = wMc(rig, s).inverse();
-      Eigen::Matrix3d r;
-      Eigen::Vector3d v;
-      for (unsigned i = 0; i < 3; ++i) {
-        for (unsigned j = 0; j < 3; ++j)
-          r(i, j) = cMw[i][j];
-        v[i] = cMw[i][3];
-      }
-      R.push_back(r);
-      t.push_back(v);
-    }
+    cMw.reserve(motion.size());
+    for (const MotionSample &s : motion)
+      cMw.push_back(toIsometry(wMc(rig, s)).inverse());
   }
 };
 
@@ -144,10 +133,10 @@ std::vector<Eigen::Vector2d> leastSquaresResiduals(const CameraModel &camera, co
       const std::size_t row = used[u].first;
       Eigen::Vector2d uv;
       Eigen::Matrix<double, 2, 3> J;
-      if (!projectPoint(camera, poses.R[row] * w_P + poses.t[row], uv, J))
+      if (!projectPoint(camera, poses.cMw[row] * w_P, uv, J))
         return {};
       r[u] = uv - Eigen::Vector2d(used[u].second->u, used[u].second->v);
-      const Eigen::Matrix<double, 2, 3> Jw = J * poses.R[row];
+      const Eigen::Matrix<double, 2, 3> Jw = J * poses.cMw[row].linear();
       H += Jw.transpose() * Jw;
       g += Jw.transpose() * r[u];
     }
@@ -185,7 +174,7 @@ TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motio
   if (k < 0 || !point.c_P.allFinite())
     return fit;
   const std::size_t kr = static_cast<std::size_t>(k);
-  const Eigen::Vector3d w_P = poses.R[kr].transpose() * (point.c_P - poses.t[kr]);
+  const Eigen::Vector3d w_P = poses.cMw[kr].inverse() * point.c_P;
   // Observations used, by row; the walk starts at the point's row and goes back to the first.
   std::vector<std::pair<std::size_t, const Observation *>> used;
   for (std::size_t j = 0; j < track.observations.size(); ++j) {
@@ -206,7 +195,7 @@ TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motio
     for (std::size_t u = 0; u < used.size(); ++u) {
       if (used[u].first != row)
         continue;
-      const Eigen::Vector3d c_P = poses.R[row] * w_P + poses.t[row];
+      const Eigen::Vector3d c_P = poses.cMw[row] * w_P;
       Eigen::Vector2d uv;
       Eigen::Matrix<double, 2, 3> J;
       if (!projectPoint(camera, c_P, uv, J)) {
@@ -220,7 +209,7 @@ TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motio
       // Pose errors per pose are white; per increment they drift, and would look like the tracker's.
       fit.pixel_dominated[u] = noise.motion_noise == MotionNoise::Absolute || var_motion < kPixelDominated * var_px;
       fit.pixel_share_sum += var_px / (var_px + var_motion);
-      fit.J[u] = J * poses.R[row] * poses.R[kr].transpose(); // d(pixel) / d(point in the point's camera)
+      fit.J[u] = J * poses.cMw[row].linear() * poses.cMw[kr].linear().transpose(); // d(pixel) / d(point in the point's camera)
     }
   };
   walkPoseNoise(noise, motion, kr, std::min(kr, used.front().first), visit);

@@ -1,5 +1,6 @@
 #include <yawdepth/report/cloud_report.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
+#include <yawdepth/geometry/rig.h>
 
 #include "figure_support.h"
 
@@ -27,10 +29,9 @@ std::vector<CameraPoint> inCamera(const CloudReportInput &in)
 {
   std::vector<CameraPoint> out;
   out.reserve(in.points.size());
+  const Eigen::Isometry3d cMw = toIsometry(in.cMw);
   for (const CloudPoint &p : in.points) {
-    Eigen::Vector3d c;
-    for (unsigned i = 0; i < 3; ++i)
-      c[i] = in.cMw[i][0] * p.w_P.x() + in.cMw[i][1] * p.w_P.y() + in.cMw[i][2] * p.w_P.z() + in.cMw[i][3];
+    const Eigen::Vector3d c = cMw * p.w_P;
     if (c.allFinite())
       out.push_back({c, p.sigma_z});
   }
