@@ -107,14 +107,6 @@ vpHomogeneousMatrix readPose(const std::string &path)
   return M;
 }
 
-double quantile(std::vector<double> v, double q)
-{
-  if (v.empty())
-    return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
-  return v[k];
-}
 
 /* The depth map at a sub-pixel position, bilinear; NaN outside, without depth or across an occluding
    edge (the 2x2 cell spans more than 2 % of depth). */
@@ -219,7 +211,7 @@ std::pair<double, double> depthMapConsistency(const std::vector<DepthMap> &depth
           rel.push_back(std::abs(Q[2] - zb) / zb);
       }
   }
-  return {quantile(rel, 0.5), quantile(rel, 0.9)};
+  return {bench::quantile(rel, 0.5), bench::quantile(rel, 0.9)};
 }
 
 /* The command line's values. */
@@ -343,7 +335,7 @@ void printTable(const std::vector<Row> &rows, int frames)
       }
     const std::string label = subset == 0 ? "every ok point with truth" : "own sigma under 1 %";
     std::printf("| %s | %zu | %.1f | %.3f %% | %.3f %% | %.3f | %.2f %% |\n", label.c_str(), rel.size(),
-                static_cast<double>(rel.size()) / frames, 100 * quantile(rel, 0.5), 100 * quantile(rel, 0.95),
+                static_cast<double>(rel.size()) / frames, 100 * bench::quantile(rel, 0.5), 100 * bench::quantile(rel, 0.95),
                 rel.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(rel.size()),
                 rel.empty() ? 0.0 : 100 * *std::max_element(rel.begin(), rel.end()));
   }

@@ -1,7 +1,7 @@
 #pragma once
 /*!
   \file bench_common.h
-  \brief What the benchmarks share: the paper's camera and rig, the median, and a plain command
+  \brief What the benchmarks share: the paper's camera and rig, the median and quantiles, and a plain command
   line of "--name value" options. Header-only, not installed.
 */
 #include <algorithm>
@@ -35,6 +35,16 @@ inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/*! \brief The q-quantile (0..1, the nearest rank) of `v`; NaN when empty. */
+inline double quantile(std::vector<double> v, double q) {
+  if (v.empty())
+    return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t k =
+      std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
+  return v[k];
 }
 
 /*!
