@@ -334,6 +334,11 @@ run "$PK.tl" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_lon
 [ "$(rc_of "$PK.tl")" -eq 1 ] && [ ! -e "$PK/tracks_long.csv" ] && [ "$(wc -l < "$PK.tl.err")" -eq 1 ] &&
   grep -q "ended after 8 frames; the motion log has 16 rows" "$PK.tl.err" && pass ||
   fail "track --video shorter than the log: exit $(rc_of "$PK.tl"): $(first "$PK.tl.err")"
+cp "$PK/frame_0003.png" "$PK/frame_0003.keep"
+run "$PK.to" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_noimg.csv" --video "$PK/frame_%04d.png" \
+    --out "$PK/frame_0003.png"
+[ "$(rc_of "$PK.to")" -eq 1 ] && cmp -s "$PK/frame_0003.png" "$PK/frame_0003.keep" && grep -q "refusing to overwrite" "$PK.to.err" &&
+  pass || fail "track --out onto a frame of its --video sequence: exit $(rc_of "$PK.to"), not refused: $(first "$PK.to.err")"
 run "$PK.mv" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion.csv" --pattern chessboard:5x4:0.02 \
     --video "$PK/frame_%04d.png"
 [ "$(rc_of "$PK.mv")" -eq 1 ] && grep -q "needs --features klt" "$PK.mv.err" && pass ||

@@ -33,13 +33,8 @@ struct MeasureArgs {
 void checkMeasureOutputs(const MeasureArgs &a, const CLI::App &sub, const MotionLog &motion)
 {
   std::vector<NamedPath> inputs = {{"--camera", a.camera}, {"--rig", a.rig}, {"--motion", a.motion}};
-  if (a.klt.video.empty()) {
-    for (const std::string &image : motion.images)
-      if (!image.empty())
-        inputs.push_back({"--motion's image", image});
-  } else if (a.klt.video.find('%') == std::string::npos) {
-    inputs.push_back({"--video", a.klt.video});
-  }
+  for (NamedPath &image : imageInputs(motion, a.klt.video))
+    inputs.push_back(std::move(image));
   std::vector<NamedPath> outputs = {{"--out", a.out.empty() ? std::string("-") : a.out}};
   for (const auto &[option, value] : {std::pair<const char *, const std::string *>{"--tracks-out", &a.tracks_out},
                                       {"--outliers", &a.outliers}, {"--ply", &a.ply}})

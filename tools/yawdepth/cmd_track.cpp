@@ -4,6 +4,8 @@
 #include "method_options.h"
 
 #include <algorithm>
+#include <filesystem>
+#include <regex>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -36,6 +38,45 @@ void addKltOptions(CLI::App *sub, KltArgs &args)
   sub->add_option("--video", args.video,
                   "Take the images from a video file or an image sequence (e.g. frames/%04d.png; ViSP's vpVideoReader), "
                   "one frame per motion-log row in order, instead of the log's image column");
+}
+
+std::vector<NamedPath> imageInputs(const MotionLog &motion, const std::string &video)
+{
+  std::vector<NamedPath> out;
+  if (video.empty()) {
+    for (const std::string &image : motion.images)
+      if (!image.empty())
+        out.push_back({"--motion's image", image});
+    return out;
+  }
+  const std::filesystem::path pattern(video);
+  const std::string name = pattern.filename().string();
+  if (name.find('%') == std::string::npos) {
+    out.push_back({"--video", video});
+    return out;
+  }
+  // The pattern's printf conversion (%d, %04d) as a regular expression on the folder's file names.
+  static const std::regex conversion("%0?([0-9]*)d");
+  const auto literal = [](char c) {
+    return std::string("\\^$.|?*+()[]{}").find(c) != std::string::npos ? std::string(1, '\\') + c : std::string(1, c);
+  };
+  std::string re;
+  std::size_t last = 0;
+  for (std::sregex_iterator it(name.begin(), name.end(), conversion), end; it != end; ++it) {
+    for (std::size_t i = last; i < static_cast<std::size_t>(it->position()); ++i)
+      re += literal(name[i]);
+    re += (*it)[1].length() > 0 ? "[0-9]{" + (*it)[1].str() + ",}" : "[0-9]+";
+    last = static_cast<std::size_t>(it->position() + it->length());
+  }
+  for (std::size_t i = last; i < name.size(); ++i)
+    re += literal(name[i]);
+  const std::regex files(re);
+  std::error_code ec;
+  const std::filesystem::path folder = pattern.has_parent_path() ? pattern.parent_path() : std::filesystem::path(".");
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
+    if (std::regex_match(it->path().filename().string(), files))
+      out.push_back({"--video", it->path().string()});
+  return out;
 }
 
 std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
@@ -122,13 +163,8 @@ Runner addTrack(CLI::App &app)
       std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};
       if (!a->rig.empty())
         inputs.push_back({"--rig", a->rig});
-      if (a->klt.video.empty()) {
-        for (const std::string &image : motion.images)
-          if (!image.empty())
-            inputs.push_back({"--motion's image", image});
-      } else if (a->klt.video.find('%') == std::string::npos) {
-        inputs.push_back({"--video", a->klt.video});
-      }
+      for (NamedPath &image : imageInputs(motion, a->klt.video))
+        inputs.push_back(std::move(image));
       checkOutputs(inputs, {{"--out", a->out}});
     }
     const CameraModel camera = loadCameraFile(a->camera, a->camera_name);

@@ -52,6 +52,12 @@ struct KltArgs {
   bool no_gate = false;
   std::string video; // --video: the images from a video or image sequence (VideoFrames) instead of the log's
 };
+/*!
+  \brief The image files a command reads, for checkOutputs(): the log's `image` column, or `video`: the
+  file itself, or every file of its folder whose name a numbered sequence's pattern (`%d`, `%04d`, ...)
+  matches.
+*/
+std::vector<NamedPath> imageInputs(const MotionLog &motion, const std::string &video);
 /*! \brief Register --max-features, --min-distance, --track-sigma-px, --min-depth, --gate-sigmas, --no-gate, --video. */
 void addKltOptions(CLI::App *sub, KltArgs &args);
 /*!
