@@ -73,7 +73,8 @@ struct CameraArgs {
 };
 
 struct RigArgs {
-  std::string camera, camera_name, motion, pattern, out, tags = "1x1";
+  std::string camera, camera_name, pattern, out, tags = "1x1";
+  MotionOptions motion;
   std::string hand_eye; // --hand-eye eye-in-hand|eye-to-hand, or empty for the yaw rig
   const CLI::Option *max_rms_option = nullptr;
   std::vector<double> initial_offset;
@@ -412,14 +413,15 @@ int runCalibrateRig(const RigArgs &a)
 {
   const BoardLayout board = makeBoard(a.pattern, a.tags, a.tag_gap, a.first_tag_id);
   const CameraModel camera = loadCameraFile(a.camera, a.camera_name);
-  const MotionLog motion = readMotionCsv(a.motion, std::nullopt, a.input.limits());
+  const MotionLog motion = loadCommandMotion("calibrate-rig", a.motion, nullptr, a.input.limits(), a.quiet).log;
   if (motion.images.empty())
-    throw Error(a.motion + ": no 'image' column: calibrate-rig needs the image of each frame");
+    throw Error(a.motion.name() + ": no 'image' column: calibrate-rig needs the image of each frame");
   if (!a.hand_eye.empty() && !motion.samples.front().six_dof)
-    throw Error(a.motion + ": --hand-eye needs the hand's 6-DoF poses (columns tx,ty,tz,tux,tuy,tuz), not a planar "
+    throw Error(a.motion.name() + ": --hand-eye needs the hand's 6-DoF poses (columns tx,ty,tz,tux,tuy,tuz), not a planar "
                 "log");
   {
-    std::vector<NamedPath> inputs = {{"--camera", a.camera}, {"--motion", a.motion}};
+    std::vector<NamedPath> inputs = a.motion.inputs();
+    inputs.push_back({"--camera", a.camera});
     for (const std::string &image : motion.images)
       if (!image.empty())
         inputs.push_back({"--motion's image", image});
@@ -449,10 +451,10 @@ Runner addCalibrateRig(CLI::App &app)
       "hand's poses, written as the rig file's camera_pose.");
   sub->add_option("--camera", a->camera, "Calibrated camera file: ViSP XML or OpenCV YAML/XML")->required();
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
-  sub->add_option("--motion", a->motion,
-                  "Motion log CSV with the yaw readings and an image column (frame,x,y,z,heading,yaw,image); with "
-                  "--hand-eye, the hand's pose in the robot base per image (frame,tx,ty,tz,tux,tuy,tuz,image)")
-      ->required();
+  addMotionOptions(sub, a->motion,
+                   "Motion log with the yaw readings and an image column (frame,x,y,z,heading,yaw,image); with "
+                   "--hand-eye, the hand's pose in the robot base per image (frame,tx,ty,tz,tux,tuy,tuz,image, or "
+                   "ViSP pose files with --images)");
   CLI::Option *hand_eye =
       sub->add_option("--hand-eye", a->hand_eye,
                       "Hand-eye calibration instead of the yaw rig: eye-in-hand (camera on the hand, board fixed) "

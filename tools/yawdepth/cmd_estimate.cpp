@@ -11,7 +11,8 @@ namespace yawdepth::cli {
 namespace {
 
 struct EstimateArgs {
-  std::string camera, camera_name, rig, motion, tracks, out, outliers, ply;
+  std::string camera, camera_name, rig, tracks, out, outliers, ply;
+  MotionOptions motion;
   bool outliers_given = false, ply_given = false;
   MethodArgs method;
   InputOptions input;
@@ -26,7 +27,7 @@ Runner addEstimate(CLI::App &app)
   sub->add_option("--camera", args->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
   sub->add_option("--camera-name", args->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
   sub->add_option("--rig", args->rig, "Rig file (YAML with camera_offset)")->required();
-  sub->add_option("--motion", args->motion, "Motion log CSV (frame,x,y,z,heading,yaw)")->required();
+  addMotionOptions(sub, args->motion, "Motion log (frame,x,y,z,heading,yaw or 6-DoF)");
   sub->add_option("--tracks", args->tracks, "Feature tracks CSV (frame,id,u,v)")->required();
   addMethodOptions(sub, args->method, "exact");
   sub->add_option("--outliers", args->outliers,
@@ -42,8 +43,9 @@ Runner addEstimate(CLI::App &app)
     args->method.noise.validate();
     args->method.gates.validate();
     // Before anything is read or written: no output may replace an input or another output.
-    const std::vector<NamedPath> inputs = {
-        {"--camera", args->camera}, {"--rig", args->rig}, {"--motion", args->motion}, {"--tracks", args->tracks}};
+    std::vector<NamedPath> inputs = {{"--camera", args->camera}, {"--rig", args->rig}, {"--tracks", args->tracks}};
+    for (const NamedPath &m : args->motion.inputs())
+      inputs.push_back(m);
     std::vector<NamedPath> outputs = {{"--out", args->out.empty() ? std::string("-") : args->out}};
     if (args->outliers_given)
       outputs.push_back({"--outliers", args->outliers});
@@ -53,8 +55,8 @@ Runner addEstimate(CLI::App &app)
     const CameraModel camera = loadCameraFile(args->camera, args->camera_name);
     const RigFile rig_file = readRigFile(args->rig);
     const YawRig rig = rigOf(rig_file);
-    MotionLog motion = readMotionCsv(args->motion, rig_file.yaw, args->input.limits());
-    checkMotionSteps(motion, args->motion);
+    MotionLog motion = loadCommandMotion("estimate", args->motion, &rig_file, args->input.limits(), false).log;
+    checkMotionSteps(motion, args->motion.name());
     applyRigFile(rig_file, motion.samples);
     const std::vector<Track> tracks = readTracksCsv(args->tracks, args->input.limits());
     checkTracksAgainstMotion(tracks, motion, args->tracks);

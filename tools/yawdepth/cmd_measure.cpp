@@ -21,7 +21,8 @@ namespace yawdepth::cli {
 namespace {
 
 struct MeasureArgs {
-  std::string camera, camera_name, rig, motion, pattern, features, out, report, tracks_out, outliers, ply;
+  std::string camera, camera_name, rig, pattern, features, out, report, tracks_out, outliers, ply;
+  MotionOptions motion;
   KltArgs klt;
   MethodArgs method;
   InputOptions input;
@@ -32,7 +33,9 @@ struct MeasureArgs {
 /* Before anything is written: no output may replace an input (the images too) or another output. */
 void checkMeasureOutputs(const MeasureArgs &a, const CLI::App &sub, const MotionLog &motion)
 {
-  std::vector<NamedPath> inputs = {{"--camera", a.camera}, {"--rig", a.rig}, {"--motion", a.motion}};
+  std::vector<NamedPath> inputs = a.motion.inputs();
+  inputs.push_back({"--camera", a.camera});
+  inputs.push_back({"--rig", a.rig});
   for (NamedPath &image : imageInputs(motion, a.klt.video))
     inputs.push_back(std::move(image));
   std::vector<NamedPath> outputs = {{"--out", a.out.empty() ? std::string("-") : a.out}};
@@ -215,13 +218,13 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
   const CameraModel camera = loadCameraFile(a.camera, a.camera_name);
   const RigFile rig_file = readRigFile(a.rig);
   const YawRig rig = rigOf(rig_file);
-  MotionLog motion = readMotionCsv(a.motion, rig_file.yaw, a.input.limits());
-  checkMotionSteps(motion, a.motion);
+  MotionLog motion = loadCommandMotion("measure", a.motion, &rig_file, a.input.limits(), a.quiet).log;
+  checkMotionSteps(motion, a.motion.name());
   applyRigFile(rig_file, motion.samples);
   if (!klt && sub.count("--video") > 0)
     throw Error("--video gives natural features' images: it needs --features klt");
   if (motion.images.empty() && a.klt.video.empty())
-    throw Error(a.motion + ": no 'image' column: measure needs the image of each frame" +
+    throw Error(a.motion.name() + ": no 'image' column: measure needs the image of each frame" +
                 std::string(klt ? " (or --video)" : ""));
   checkMeasureOutputs(a, sub, motion);
 
@@ -273,10 +276,9 @@ Runner addMeasure(CLI::App &app)
   sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
   sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset)")->required();
-  sub->add_option("--motion", a->motion,
-                  "Motion log CSV with an image column (paths relative to the CSV's folder); with --features klt "
-                  "--video, any motion log")
-      ->required();
+  addMotionOptions(sub, a->motion,
+                   "Motion log with an image column (paths relative to the CSV's folder), a timestamped one with "
+                   "--images, or with --features klt --video any motion log");
   sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE or apriltag:FAMILY:SIZE (metres)");
   sub->add_option("--features", a->features,
                   "klt: instead of a pattern, track natural corners (as `yawdepth track`) and measure them")

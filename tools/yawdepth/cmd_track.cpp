@@ -124,7 +124,8 @@ std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const
 namespace {
 
 struct TrackArgs {
-  std::string camera, camera_name, rig, motion, out;
+  std::string camera, camera_name, rig, out;
+  MotionOptions motion;
   MethodArgs method;
   KltArgs klt;
   InputOptions input;
@@ -142,9 +143,9 @@ Runner addTrack(CLI::App &app)
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
   sub->add_option("--rig", a->rig,
                   "Rig file (YAML): where the camera sits; without it the camera is at the vision frame's origin");
-  sub->add_option("--motion", a->motion,
-                  "Motion log CSV with an image column (paths relative to the CSV's folder), or any with --video")
-      ->required();
+  addMotionOptions(sub, a->motion,
+                   "Motion log with an image column (paths relative to the CSV's folder), any with --video, or a "
+                   "timestamped one with --images");
   sub->add_option("--out", a->out, "Output tracks CSV (frame,id,u,v)")->required();
   addMotionNoiseOptions(sub, a->method);
   addKltOptions(sub, a->klt);
@@ -156,11 +157,12 @@ Runner addTrack(CLI::App &app)
     if (!a->rig.empty())
       rig_file = readRigFile(a->rig);
     const YawRig rig = rigOf(rig_file);
-    MotionLog motion = readMotionCsv(a->motion, rig_file.yaw, a->input.limits());
-    checkMotionSteps(motion, a->motion);
+    MotionLog motion = loadCommandMotion("track", a->motion, &rig_file, a->input.limits(), a->quiet).log;
+    checkMotionSteps(motion, a->motion.name());
     applyRigFile(rig_file, motion.samples);
     {
-      std::vector<NamedPath> inputs = {{"--camera", a->camera}, {"--motion", a->motion}};
+      std::vector<NamedPath> inputs = a->motion.inputs();
+      inputs.push_back({"--camera", a->camera});
       if (!a->rig.empty())
         inputs.push_back({"--rig", a->rig});
       for (NamedPath &image : imageInputs(motion, a->klt.video))

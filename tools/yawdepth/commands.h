@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <yawdepth/core/files.h>
 #include <yawdepth/features/detector.h>
+#include <yawdepth/io/recording.h>
 
 namespace yawdepth::cli {
 
@@ -21,6 +22,7 @@ Runner addMeasure(CLI::App &app);
 Runner addTrack(CLI::App &app);
 Runner addCalibrateCamera(CLI::App &app);
 Runner addCalibrateRig(CLI::App &app);
+Runner addImport(CLI::App &app);
 
 /*! \brief The bounds on CSV inputs (motion log, tracks), set by --max-input-mb. */
 struct InputOptions {
@@ -35,6 +37,35 @@ struct InputOptions {
 };
 /*! \brief Add --max-input-mb to `sub`. */
 void addInputOptions(CLI::App *sub, InputOptions &options);
+
+/*!
+  \brief `--motion` (one file; ViSP pose files: several, or a folder), `--motion-format`, `--images`,
+  `--time-offset`, `--max-pose-gap`: every command that reads a motion log takes them
+  (yawdepth/io/recording.h: loadMotion()).
+*/
+struct MotionOptions {
+  std::vector<std::string> motion;   //!< --motion
+  std::string format = "auto";       //!< --motion-format
+  std::string images;                //!< --images
+  double time_offset = 0.0;          //!< --time-offset (s)
+  double max_pose_gap = 0.2;         //!< --max-pose-gap (s)
+  CLI::Option *time_offset_option = nullptr;
+  /*! \brief As loadMotion() takes them. */
+  MotionInput input() const;
+  /*! \brief The files read (for the output clash checks): the motion files and --images' list. */
+  std::vector<NamedPath> inputs() const;
+  /*! \brief The motion file's name, for messages (the first one). */
+  const std::string &name() const { return motion.front(); }
+};
+/*! \brief Add the motion options to `sub`; `what` describes --motion. */
+void addMotionOptions(CLI::App *sub, MotionOptions &options, const std::string &what);
+/*!
+  \brief loadMotion() for a command; the time alignment's summary (and a warning when fewer than half
+  the images got a pose) on stderr unless `quiet`. The rig file gives the fixed yaw and the default
+  time offset.
+*/
+LoadedMotion loadCommandMotion(const std::string &command, const MotionOptions &options, const RigFile *rig,
+                               const InputLimits &limits, bool quiet);
 
 /*! \brief The --debug-dir pictures of `images`: DIR/NNNN_STEM.png (NNNN the image's position);
     empty when `dir` is empty. Throws yawdepth::Error for an existing path that is not a folder. */

@@ -43,6 +43,69 @@ void addInputOptions(CLI::App *sub, InputOptions &options)
       ->capture_default_str();
 }
 
+void addMotionOptions(CLI::App *sub, MotionOptions &options, const std::string &what)
+{
+  sub->add_option("--motion", options.motion,
+                  what + ". Any of: a yawdepth CSV (frame-based, or timestamped with a column t), a TUM trajectory "
+                         "(timestamp tx ty tz qx qy qz qw), an EuRoC CSV, or ViSP vpPoseVector YAML files (several, "
+                         "or a folder; paired with --images in name order)")
+      ->required();
+  sub->add_option("--motion-format", options.format, "The motion file's format (auto: by its content)")
+      ->check(CLI::IsMember({"auto", "yawdepth", "tum", "euroc", "visp"}))
+      ->capture_default_str();
+  sub->add_option("--images", options.images,
+                  "The images of a timestamped motion log, with their times: a folder named by timestamps "
+                  "(1305031102.175304.png in s, 1403636579763555584.png in ns), TUM's rgb.txt or EuRoC's data.csv; "
+                  "with ViSP pose files, a folder or list paired in order");
+  options.time_offset_option =
+      sub->add_option("--time-offset", options.time_offset,
+                      "The image at camera time t was taken at motion time t + S (s; default: the rig file's "
+                      "time_offset, else 0)")
+          ->check(Finite);
+  sub->add_option("--max-pose-gap", options.max_pose_gap,
+                  "An image between two poses further apart than this is skipped, never extrapolated (s)")
+      ->check(CLI::PositiveNumber & Finite)
+      ->capture_default_str();
+}
+
+MotionInput MotionOptions::input() const
+{
+  MotionInput in;
+  in.motion = motion;
+  in.format = motionFormatFromString(format);
+  in.images = images;
+  if (time_offset_option && time_offset_option->count() > 0)
+    in.time_offset = time_offset;
+  in.max_pose_gap = max_pose_gap;
+  return in;
+}
+
+std::vector<NamedPath> MotionOptions::inputs() const
+{
+  std::vector<NamedPath> out;
+  for (const std::string &m : motion)
+    out.push_back({"--motion", m});
+  if (!images.empty())
+    out.push_back({"--images", images});
+  return out;
+}
+
+LoadedMotion loadCommandMotion(const std::string &command, const MotionOptions &options, const RigFile *rig,
+                               const InputLimits &limits, bool quiet)
+{
+  LoadedMotion m = loadMotion(options.input(), rig ? rig->yaw : std::nullopt,
+                              rig ? rig->time_offset : std::nullopt, limits);
+  if (m.alignment && !quiet) {
+    const TimeAlignment &a = *m.alignment;
+    std::cerr << "yawdepth " << command << ": " << options.name() << " (" << toString(m.format) << ") with "
+              << options.images << ": " << a.summary() << "; time offset " << m.time_offset << " s\n";
+    if (2 * a.matched < a.images)
+      std::cerr << "yawdepth " << command << ": warning: only " << a.matched << " of " << a.images
+                << " images have a pose: check the clocks and --time-offset\n";
+  }
+  return m;
+}
+
 std::vector<std::string> debugFiles(const std::string &dir, const std::vector<std::string> &images)
 {
   std::vector<std::string> out;
@@ -106,6 +169,7 @@ static std::vector<Command> addCommands(CLI::App &app)
   add(addSimulate);
   add(addCalibrateCamera);
   add(addCalibrateRig);
+  add(addImport);
   return commands;
 }
 

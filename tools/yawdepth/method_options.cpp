@@ -25,6 +25,20 @@ void addMotionNoiseOptions(CLI::App *sub, MethodArgs &args)
   sub->add_option("--sigma-rot", args.noise.sigma_rot, "Rotation noise per increment, per axis (rad), 6-DoF motion logs")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option("--odom-per-metre", args.noise.odom_per_metre,
+                  "Odometry translation noise per metre travelled, per axis (m/m), added to --sigma-odom in variance: "
+                  "the drift of wheel odometry whatever the rate of the images (increment noise only)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--rot-per-radian", args.noise.rot_per_radian,
+                  "Rotation noise per radian turned (rad/rad), added to --sigma-heading/--sigma-rot in variance "
+                  "(increment noise only)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
+  sub->add_option("--rot-per-metre", args.noise.rot_per_metre,
+                  "Rotation noise per metre travelled (rad/m): wheel slip turning the heading (increment noise only)")
+      ->check(FiniteNonNegative)
+      ->capture_default_str();
   sub->add_option_function<std::string>(
          "--motion-noise", [&args](const std::string &w) { args.noise.motion_noise = motionNoiseFromString(w); },
          "How the motion log errs: increment (odometry, VIO: --sigma-odom/--sigma-heading/--sigma-rot per increment, "

@@ -87,6 +87,32 @@ MotionSample MotionSample::fromPose(long frame, const vpHomogeneousMatrix &wMv, 
   return s;
 }
 
+double wrapAngle(double angle)
+{
+  double a = std::remainder(angle, 2 * M_PI); // in [-pi, pi]
+  if (a <= -M_PI)
+    a += 2 * M_PI;
+  return a;
+}
+
+MotionSample interpolateMotion(const MotionSample &a, const MotionSample &b, double s)
+{
+  if (a.six_dof != b.six_dof)
+    throw Error("interpolateMotion: a planar and a 6-DoF sample");
+  MotionSample r = a;
+  r.x = a.x + s * (b.x - a.x);
+  r.y = a.y + s * (b.y - a.y);
+  r.z = a.z + s * (b.z - a.z);
+  r.yaw = a.yaw + s * wrapAngle(b.yaw - a.yaw);
+  if (a.six_dof) {
+    const Eigen::Matrix3d Ra = a.rotation();
+    r.theta_u = logSO3(Ra * expSO3<double>(Eigen::Vector3d(s * logSO3(Ra.transpose() * b.rotation()))));
+  } else {
+    r.heading = a.heading + s * wrapAngle(b.heading - a.heading);
+  }
+  return r;
+}
+
 static Eigen::Vector3d toEigen3(const vpColVector &v, const char *what)
 {
   if (v.size() != 3)

@@ -5,6 +5,8 @@
   one-line error messages. Not installed.
 */
 #include <cstddef>
+#include <functional>
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -56,6 +58,8 @@ public:
   const std::string &path() const { return path_; }
   /*! \brief Line number of the header row (1-based). */
   std::size_t headerLine() const { return header_line_; }
+  /*! \brief The header's column names, in file order. */
+  const std::vector<std::string> &names() const { return names_; }
   /*! \brief Index of column `name`, if the header has it. */
   std::optional<std::size_t> column(const std::string &name) const;
   /*! \brief Index of column `name`; throws "<file>:<header line>: missing column 'name'". */
@@ -93,6 +97,19 @@ private:
   std::vector<std::string> names_;
   std::vector<std::string> fields_;
 };
+
+/*! \brief How far from 1 a quaternion's norm may be (rounding of printed digits) before it is refused. */
+constexpr double kQuaternionNormTolerance = 1e-3;
+
+/*!
+  \brief The rotation vector (theta-u) of a Hamilton quaternion (qx, qy, qz, qw), normalised; calls
+  `fail` (which throws) for a norm of 0 or one more than kQuaternionNormTolerance from 1.
+*/
+Eigen::Vector3d thetaUOfQuaternion(double qx, double qy, double qz, double qw,
+                                   const std::function<void(const std::string &)> &fail);
+/*! \brief Calls `fail` (which throws) unless `t` is after `previous` (when there is one). */
+void checkTimeIncreasing(double t, std::optional<double> previous,
+                         const std::function<void(const std::string &)> &fail);
 
 } // namespace io_detail
 } // namespace yawdepth

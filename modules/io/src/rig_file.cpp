@@ -1,4 +1,5 @@
 #include "csv.h"
+#include "yaml_support.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,38 +15,13 @@ using io_detail::formatNumber;
 using io_detail::NumberStatus;
 using io_detail::parseDouble;
 using io_detail::throwError;
+using io_detail::where;
+using io_detail::finiteNumber;
 
 namespace {
 
 /* A rig file is a few lines; anything much larger is not one. */
 constexpr std::size_t kMaxRigFileBytes = 1 << 20;
-
-std::string where(const std::string &path, const YAML::Mark &mark)
-{
-  if (mark.is_null() || mark.line < 0)
-    return path + ": ";
-  return path + ":" + std::to_string(mark.line + 1) + ": ";
-}
-
-double finiteNumber(const std::string &path, const YAML::Node &node, const std::string &what)
-{
-  if (!node.IsScalar())
-    throwError(where(path, node.Mark()) + what + " must be a number");
-  double v = 0;
-  const std::string &text = node.Scalar();
-  switch (parseDouble(text, v)) {
-  case NumberStatus::Ok:
-    return v;
-  case NumberStatus::Empty:
-    throwError(where(path, node.Mark()) + what + " is empty");
-  case NumberStatus::NotFinite:
-    throwError(where(path, node.Mark()) + what + ": '" + excerpt(text) + "' is not a finite number");
-  case NumberStatus::OutOfRange:
-    throwError(where(path, node.Mark()) + what + ": '" + excerpt(text) + "' is out of range");
-  default:
-    throwError(where(path, node.Mark()) + what + ": '" + excerpt(text) + "' is not a number");
-  }
-}
 
 /* A rig file's text is not empty and not binary. */
 void checkRigText(const std::string &path, const std::string &text)
@@ -65,7 +41,8 @@ YAML::Mark checkRigKeys(const std::string &path, const YAML::Node &root)
   static const std::set<std::string> kKnown = {"camera_offset",       "camera_pose",   "yaw",
                                                "yaw_offset",          "yaw_axis",      "camera_offset_sigma",
                                                "camera_pose_sigma",   "yaw_offset_sigma",
-                                               "yaw_offset_estimated", "yaw_axis_sigma", "reprojection_rms_px"};
+                                               "yaw_offset_estimated", "yaw_axis_sigma", "reprojection_rms_px",
+                                               "time_offset",         "time_offset_sigma"};
   std::set<std::string> seen;
   YAML::Mark yaw_mark = YAML::Mark::null_mark();
   for (const auto &kv : root) {
@@ -117,7 +94,7 @@ void readMount(const std::string &path, const YAML::Node &root, RigFile &rig)
   } else {
     const std::vector<double> v = finiteNumbers(path, pose, "camera_pose", 6);
     // theta-u beyond pi is the same rotation as a smaller one, but a file with it is more likely wrong.
-    if (!(Eigen::Vector3d(v[3], v[4], v[5]).norm() <= M_PI + 1e-9))
+    if (!(Eigen::Vector3d(v[3], v[4], v[5]).norm() <= M_PI + 1e-6)) // printed digits of a half turn
       throwError(where(path, pose.Mark()) + "'camera_pose' rotation (tux, tuy, tuz) must have a norm of at most pi");
     rig.camera_pose = vpPoseVector(v[0], v[1], v[2], v[3], v[4], v[5]);
     rig.camera_offset = Eigen::Vector3d(v[0], v[1], v[2]);
@@ -191,6 +168,13 @@ RigFile readRigFile(const std::string &path)
     const YAML::Node axis = root["yaw_axis"];
     if (axis)
       rig.yaw_axis = readYawAxis(path, axis);
+    if (const YAML::Node t = root["time_offset"])
+      rig.time_offset = finiteNumber(path, t, "'time_offset'");
+    if (const YAML::Node t = root["time_offset_sigma"]) {
+      rig.time_offset_sigma = finiteNumber(path, t, "'time_offset_sigma'");
+      if (*rig.time_offset_sigma < 0)
+        throwError(where(path, t.Mark()) + "'time_offset_sigma' must not be negative");
+    }
   } catch (const YAML::Exception &e) {
     throwError(where(path, e.mark) + "not valid YAML (" + e.msg + ")");
   }
@@ -243,6 +227,16 @@ void writeRigFile(const std::string &path, const RigFile &rig)
       throwError(path + ": yaw_axis is not finite");
     out += "yaw_axis: [" + formatNumber(rig.yaw_axis->x()) + ", " + formatNumber(rig.yaw_axis->y()) + ", " +
            formatNumber(rig.yaw_axis->z()) + "]\n";
+  }
+  if (rig.time_offset) {
+    if (!std::isfinite(*rig.time_offset))
+      throwError(path + ": time_offset is not finite");
+    out += "time_offset: " + formatNumber(*rig.time_offset) + "\n";
+  }
+  if (rig.time_offset_sigma) {
+    if (!std::isfinite(*rig.time_offset_sigma))
+      throwError(path + ": time_offset_sigma is not finite");
+    out += "time_offset_sigma: " + formatNumber(*rig.time_offset_sigma) + "\n";
   }
   writeFileAtomically(path, out);
 }

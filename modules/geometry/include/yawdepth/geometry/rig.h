@@ -106,6 +106,19 @@ struct MotionSample {
   Eigen::Vector3d position() const { return Eigen::Vector3d(x, y, z); }
 };
 
+/*! \brief `angle` wrapped to (-pi, pi] (rad). */
+double wrapAngle(double angle);
+
+/*!
+  \brief The motion a fraction `s` of the way from sample `a` to sample `b` (s in [0, 1]): the
+  position linear; the orientation by slerp on SO(3), \f$ R_a \exp(s \log(R_a^T R_b)) \f$ (6-DoF)
+  or the heading linear along the shorter way round (planar); the yaw linear along the shorter way
+  round. Both samples must have the same form (throws yawdepth::Error otherwise). The result has
+  a's frame number. Time alignment (yawdepth/io/recording.h) interpolates a pose log at each image
+  time with it.
+*/
+MotionSample interpolateMotion(const MotionSample &a, const MotionSample &b, double s);
+
 /*!
   \brief The row of a motion log (sorted by strictly increasing frame) that holds `frame`, or -1.
   Binary search: every estimator, the refiner and the report find a frame's pose with it.

@@ -37,6 +37,11 @@ struct RigFile {
       (unit; ideally (0, 1, 0)). Informational: the estimators take the yaw axis as the vision
       frame's Y; `calibrate-rig` measures it so that a tilted mechanism can be noticed and fixed. */
   std::optional<Eigen::Vector3d> yaw_axis;
+  /*! optional `time_offset:` (s): the image at camera time t was taken at motion time
+      t + time_offset; used by the commands when `--time-offset` is not given. Written by
+      `calibrate-rig --estimate-time-offset`. */
+  std::optional<double> time_offset;
+  std::optional<double> time_offset_sigma; //!< optional `time_offset_sigma:` (s), informational.
 };
 
 /*! \brief The camera mount a rig file describes (from `camera_pose` or `camera_offset`). */
@@ -63,6 +68,13 @@ struct MotionLog {
   std::vector<std::string> images;   //!< same size as samples when the `image` column exists (paths
                                      //!< resolved against the CSV's folder), else empty
   bool yaw_column = true;            //!< whether the yaws were read from a `yaw` column (else fixed)
+  /*! Whether the rows are pose samples at times (TUM, EuRoC, a `t` column without `frame`;
+      yawdepth/io/recording.h) rather than one per frame: `frame` is then the row's index, and the
+      log must be aligned to timed images (alignMotionToImages()) before it meets tracks. */
+  bool timestamped = false;
+  /*! Each row's time (s, motion clock): the samples' times of a timestamped log, or the images'
+      motion-clock times of an aligned one (written as the `t` column); empty when unknown. */
+  std::vector<double> times;
   /*! \brief The sample of `frame`, or nullptr when the log has no such frame. */
   const MotionSample *find(long frame) const;
   /*! \brief Index of `frame` in samples, or -1. */
