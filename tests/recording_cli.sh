@@ -25,75 +25,13 @@ rig=$CALIB/paper_rig.yaml
 pattern=chessboard:5x4:0.02
 exact=(--sigma-px 0.05 --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-rot 1e-6 --sigma-yaw 1e-6 --quiet)
 
-# The scene in today's form: ten side-view frames 8 mm apart, rendered.
-"$YAWDEPTH" simulate --camera "$cam" --rig "$rig" --out-dir "$W/sim" --frames 10 --step 0.008 --yaw 1.5708 \
-  --board-offset-x -0.035 --pattern "$pattern" --board-distance 0.62 --blur 0.7 --image-noise 2 >/dev/null ||
-  { fail "simulate"; echo "$PASSED passed, $FAILED failed"; exit 1; }
-
-# The same scene as a ROS recording (python3: the poses at 200 Hz between the frames, which move at
-# constant velocity, so that interpolating them back is exact; the REP 103 frames; the image names).
-python3 - "$W" "$rig" <<'PY' || { fail "writing the recording"; echo "$PASSED passed, $FAILED failed"; exit 1; }
-import csv, math, os, sys
-w, rig_path = sys.argv[1], sys.argv[2]
-rows = list(csv.DictReader(open(os.path.join(w, "sim", "motion.csv"))))
-T0, RATE_IMG, RATE_POSE, LATENCY = 1700000000.0, 30.0, 200.0, 0.035
-def matmul(a, b): return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-def matvec(a, v): return [sum(a[i][k] * v[k] for k in range(3)) for i in range(3)]
-def T(a): return [[a[j][i] for j in range(3)] for i in range(3)]
-def roty(h): c, s = math.cos(h), math.sin(h); return [[c, 0, s], [0, 1, 0], [-s, 0, c]]
-def quat(R):  # Hamilton (x, y, z, w)
-    tr = R[0][0] + R[1][1] + R[2][2]
-    if tr > 0:
-        s = math.sqrt(tr + 1.0) * 2; return ((R[2][1] - R[1][2]) / s, (R[0][2] - R[2][0]) / s, (R[1][0] - R[0][1]) / s, 0.25 * s)
-    i = max(range(3), key=lambda k: R[k][k]); j, k = (i + 1) % 3, (i + 2) % 3
-    s = math.sqrt(1.0 + R[i][i] - R[j][j] - R[k][k]) * 2
-    q = [0.0] * 3; q[i] = 0.25 * s; q[j] = (R[j][i] + R[i][j]) / s; q[k] = (R[k][i] + R[i][k]) / s
-    return (q[0], q[1], q[2], (R[k][j] - R[j][k]) / s)
-def thetau(R):  # from the quaternion: stable at every angle, pi included
-    x, y, z, w = quat(R); n = math.sqrt(x * x + y * y + z * z)
-    if n < 1e-15: return (0.0, 0.0, 0.0)
-    a = 2 * math.atan2(n, w)
-    if a > math.pi: a -= 2 * math.pi
-    return (a * x / n, a * y / n, a * z / n)
-# ROS world W (x forward, y left, z up) from the camera-convention world w; base_link b in the vision frame v.
-WRw = [[0, 0, 1], [-1, 0, 0], [0, -1, 0]]
-vRb = T(WRw)
-f = [float(r["frame"]) for r in rows]
-def pose(frame):  # wMv at a fractional frame: constant velocity between (and beyond) the rows
-    i = min(max(int(math.floor(frame - f[0])), 0), len(rows) - 2); s = frame - f[i]
-    a, b = rows[i], rows[i + 1]
-    p = [float(a[k]) + s * (float(b[k]) - float(a[k])) for k in "xyz"]
-    h = float(a["heading"]) + s * (float(b["heading"]) - float(a["heading"]))
-    return roty(h), p
-def ros(frame):
-    R, p = pose(frame); return matmul(matmul(WRw, R), vRb), matvec(WRw, p)
-t_first = T0 + LATENCY - 0.05; t_last = T0 + LATENCY + (len(rows) - 1) / RATE_IMG + 0.05
-n = int(round((t_last - t_first) * RATE_POSE))
-tum = open(os.path.join(w, "traj.tum"), "w"); tum.write("# timestamp tx ty tz qx qy qz qw\n")
-euroc = open(os.path.join(w, "groundtruth.csv"), "w")
-euroc.write("#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z []\n")
-for i in range(n + 1):
-    t = t_first + i / RATE_POSE
-    frame = f[0] + (t - T0 - LATENCY) * RATE_IMG
-    R, p = ros(frame); qx, qy, qz, qw = quat(R)
-    tum.write("%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n" % (t, p[0], p[1], p[2], qx, qy, qz, qw))
-    ns = int(round(t_first * 1e9)) + i * 5000000
-    euroc.write("%d,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n" % (ns, p[0], p[1], p[2], qw, qx, qy, qz))
-os.makedirs(os.path.join(w, "rgb")); os.makedirs(os.path.join(w, "cam0", "data"))
-lst = open(os.path.join(w, "cam0", "data.csv"), "w"); lst.write("#timestamp [ns],filename\n")
-for k, r in enumerate(rows):
-    t = T0 + k / RATE_IMG
-    src = os.path.join(w, "sim", r["image"])
-    os.symlink(src, os.path.join(w, "rgb", "%.6f.png" % t))
-    ns = "%d" % round(t * 1e9)
-    os.symlink(src, os.path.join(w, "cam0", "data", ns + ".png")); lst.write("%s,%s.png\n" % (ns, ns))
-# base_link -> camera optical frame: bMc = bMv vMc(yaw), the camera at the paper rig's offset.
-off = [float(v) for v in open(rig_path).read().split("[")[1].split("]")[0].split(",")]
-yaw = float(rows[0]["yaw"]); Ry = roty(yaw)
-R = matmul(T(vRb), Ry); t = matvec(T(vRb), matvec(Ry, off))
-tu = thetau(R)
-open(os.path.join(w, "rig_ros.yaml"), "w").write("camera_pose: [%.17g, %.17g, %.17g, %.17g, %.17g, %.17g]\n" % (t[0], t[1], t[2], tu[0], tu[1], tu[2]))
-PY
+# The scene, as a ROS recording and in today's frame-based form (examples/ros_recording).
+bash "$(dirname "${BASH_SOURCE[0]}")/../examples/ros_recording/make_recording.sh" "$YAWDEPTH" "$W/rec" >/dev/null ||
+  { fail "make_recording.sh"; echo "$PASSED passed, $FAILED failed"; exit 1; }
+ln -s rec/frames "$W/sim"
+for f in groundtruth.txt:traj.tum groundtruth.csv:groundtruth.csv rgb:rgb cam0:cam0 rig.yaml:rig_ros.yaml; do
+  ln -s "rec/${f%%:*}" "$W/${f##*:}"
+done
 
 blocks() { awk -F, 'NR > 1 { printf "%s %s %s %.9f\n", $1, $2, $3, $4 }' "$1/blocks.csv"; }
 same_blocks() { # two report folders: every block, lengths within 0.1 mm

@@ -1,6 +1,8 @@
 // Tests of the public file formats (docs/formats.md): readers, writers, atomic writes.
 #include <catch2/catch.hpp>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -759,6 +761,16 @@ TEST_CASE("rig file: camera_pose, a fixed 6-DoF mount (an arm's eMc)", "[io][rig
   requireRigError(dir, "camera_pose: [0, 0, 0, 0, 0]\n", ":1: ", "'camera_pose' must be a sequence of 6 numbers (it has 5)");
   requireRigError(dir, "camera_offset: [0, 0, 0]\ncamera_pose_sigma: [0, 0, 0, 0, 0, 0]\n", ":2: ", "'camera_pose_sigma' without 'camera_pose'");
   requireRigError(dir, "camera_pose: [0, 0, 0, 4, 0, 0]\n", ":1: ", "norm of at most pi");
+  // The quaternion form, as tf_echo prints base_link -> optical frame: the same mount.
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(1.2, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()));
+  char text[256];
+  std::snprintf(text, sizeof text, "camera_pose: [0.1, -0.02, 0.3, %.17g, %.17g, %.17g, %.17g]\n", q.x(), q.y(), q.z(), q.w());
+  const RigFile rq = readRigFile(dir.write("q.yaml", text));
+  REQUIRE(rq.camera_pose.has_value());
+  const Eigen::Vector3d tu((*rq.camera_pose)[3], (*rq.camera_pose)[4], (*rq.camera_pose)[5]);
+  CHECK(tu.isApprox(1.2 * Eigen::Vector3d(0.3, -0.5, 0.8).normalized(), 1e-12));
+  CHECK((*rq.camera_pose)[2] == 0.3);
+  requireRigError(dir, "camera_pose: [0, 0, 0, 0, 0, 0, 0]\n", ":1: ", "'camera_pose': the quaternion (qx, qy, qz, qw) has norm 0");
 }
 
 TEST_CASE("motion log: the 6-DoF form (tx, ty, tz, tux, tuy, tuz) reads, round-trips and refuses mixtures", "[io][motion]")

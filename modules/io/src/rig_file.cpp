@@ -92,7 +92,20 @@ void readMount(const std::string &path, const YAML::Node &root, RigFile &rig)
     const std::vector<double> v = finiteNumbers(path, offset, "camera_offset", 3);
     rig.camera_offset = Eigen::Vector3d(v[0], v[1], v[2]);
   } else {
-    const std::vector<double> v = finiteNumbers(path, pose, "camera_pose", 6);
+    std::vector<double> v;
+    if (pose.IsSequence() && pose.size() == 7) {
+      // [tx, ty, tz, qx, qy, qz, qw]: the translation and the quaternion as tf_echo prints them (ROS order).
+      v = finiteNumbers(path, pose, "camera_pose", 7);
+      const Eigen::Vector3d tu = io_detail::thetaUOfQuaternion(
+          v[3], v[4], v[5], v[6], [&](const std::string &why) { throwError(where(path, pose.Mark()) + "'camera_pose': " + why); });
+      v = {v[0], v[1], v[2], tu.x(), tu.y(), tu.z()};
+    } else {
+      if (pose.IsSequence() && pose.size() != 6)
+        throwError(where(path, pose.Mark()) + "'camera_pose' must be a sequence of 6 numbers (it has " +
+                   std::to_string(pose.size()) + "): [tx, ty, tz, tux, tuy, tuz], or 7 with a quaternion [tx, ty, tz, "
+                                                 "qx, qy, qz, qw]");
+      v = finiteNumbers(path, pose, "camera_pose", 6);
+    }
     // theta-u beyond pi is the same rotation as a smaller one, but a file with it is more likely wrong.
     if (!(Eigen::Vector3d(v[3], v[4], v[5]).norm() <= M_PI + 1e-6)) // printed digits of a half turn
       throwError(where(path, pose.Mark()) + "'camera_pose' rotation (tux, tuy, tuz) must have a norm of at most pi");
