@@ -99,6 +99,11 @@ bad "a quaternion of norm 0" "zero.tum:2: the quaternion (qx, qy, qz, qw) has no
 mkdir -p "$W/named" && ln -s "$W/sim/frame_0000.png" "$W/named/frame_0000.png"
 bad "an image name that is not a timestamp" "frame_0000.png: the image name is not a timestamp" "${m[@]}" --motion "$W/traj.tum" --images "$W/named"
 bad "--images with a frame-based log" "is frame-based" "${m[@]}" --motion "$W/sim/motion.csv" --images "$W/rgb"
+bad "calibrate-rig --estimate-time-offset on a frame-based log" "needs a timestamped motion log" \
+  calibrate-rig --camera "$cam" --motion "$W/sim/motion.csv" --pattern "$pattern" --estimate-time-offset --out "$W/bad.csv"
+bad "calibrate-rig --estimate-time-offset: a fit at no offset" "time offset: the calibration failed at every offset" \
+  calibrate-rig --camera "$cam" --motion "$W/traj.tum" --images "$W/rgb" --pattern "$pattern" --estimate-time-offset \
+  --quiet --out "$W/bad.csv"
 bad "import: nothing written on error" "needs --images" import --motion "$W/traj.tum" --out-dir "$W/bad.csv"
 
 echo "$PASSED passed, $FAILED failed"

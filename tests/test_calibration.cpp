@@ -17,10 +17,13 @@
 #include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/calibration/hand_eye.h>
 #include <yawdepth/calibration/rig_calibration.h>
+#include <yawdepth/calibration/time_offset.h>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/io/files.h>
+#include <yawdepth/io/recording.h>
+#include <functional>
 #include <opencv2/imgcodecs.hpp>
 #include <yawdepth/render/renderer.h>
 
@@ -570,6 +573,118 @@ TEST_CASE_METHOD(RigScene, "calibrate-rig: the robot's translation gives the yaw
   CHECK(rig.yaw_zero == YawZeroSource::RobotMotion);
   checkRigGeometry(rig, truth);
   CHECK(std::abs(rig.yaw_offset - truth.yaw_offset) < kRigYawZeroTol);
+}
+
+namespace {
+
+constexpr double kTimeOffsetTol = 0.002; // s: the issue's target for a 30 ms latency
+
+/* A pan sweeping on a static robot, seen at 30 Hz on the camera's clock, the yaw read at 200 Hz on the
+   motion clock with a latency: the image stamped t was taken at motion time t + latency. The readings
+   carry white noise of 2 % of a 200 Hz step at the sweep's top speed. */
+struct PanRecording {
+  MotionLog motion;
+  std::vector<double> image_times;
+  std::vector<std::vector<FeatureObservation>> features;
+};
+
+PanRecording panRecording(const RigScene &scene, const std::function<double(double)> &true_yaw, double duration,
+                          double latency, std::uint64_t seed)
+{
+  PanRecording rec;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const double noise = 0.02 * 0.4 * 2 * M_PI * 22 * kDeg / 200.0;
+  rec.motion.timestamped = true;
+  rec.motion.yaw_column = true;
+  for (int i = 0; i * 0.005 <= duration + 0.4; ++i) {
+    const double t = -0.2 + i * 0.005;
+    MotionSample s;
+    s.frame = i;
+    s.yaw = true_yaw(t) - scene.truth.yaw_offset + noise * unit(rng);
+    rec.motion.samples.push_back(s);
+    rec.motion.times.push_back(t);
+  }
+  PatternDetector detector(scene.board.pattern);
+  detector.setCamera(scene.camera);
+  const Eigen::Isometry3d wMb = boardAhead(scene.board, 0.75, 12 * kDeg);
+  for (int k = 0; k / 30.0 <= duration; ++k) {
+    const double t = k / 30.0;
+    Eigen::Isometry3d vMc = Eigen::Isometry3d::Identity();
+    vMc.linear() = Eigen::AngleAxisd(true_yaw(t + latency), scene.truth.axis).toRotationMatrix();
+    vMc.translation() = vMc.linear() * scene.truth.t0;
+    const Eigen::Isometry3d cMb = vMc.inverse() * wMb;
+    const FrameDetection d = detector.detect(renderAt(scene.camera, scene.board, cMb, 900 + static_cast<std::uint64_t>(k)), k);
+    REQUIRE(d.found);
+    rec.image_times.push_back(t);
+    rec.features.push_back(d.features);
+  }
+  return rec;
+}
+
+} // namespace
+
+TEST_CASE_METHOD(RigScene, "calibrate-rig with the time offset: a 30 ms latency within 2 ms, a flat profile refused",
+                 "[calibration][rig][slow]")
+{
+  const double latency = 0.030;
+  TimeOffsetSearch search; // -100 .. 100 ms
+  SECTION("a pan sweeping back and forth at up to 55 deg/s")
+  {
+    const PanRecording rec =
+        panRecording(*this, [](double t) { return 22 * kDeg * std::sin(2 * M_PI * 0.4 * t); }, 2.5, latency, 7);
+    const TimedRigCalibration cal =
+        calibrateRigWithTimeOffset(camera, board, rec.motion, rec.image_times, rec.features, RigCalibrationOptions(), search);
+    INFO("offset " << cal.time_offset.offset * 1e3 << " +- " << cal.time_offset.sigma * 1e3 << " ms, "
+                   << cal.time_offset.evaluations << " fits, " << cal.images_used << " images, rms " << cal.rig.rms_px);
+    CHECK(std::abs(cal.time_offset.offset - latency) < kTimeOffsetTol);
+    CHECK(std::abs(cal.time_offset.offset - latency) < 4 * cal.time_offset.sigma + 1e-4);
+    CHECK(cal.time_offset.sigma > 0);
+    CHECK(cal.time_offset.sigma < kTimeOffsetTol);
+    CHECK(cal.images_used >= 70);
+    // The rig, at the board angle of this scene (not the calibration scenes' tolerances: the pan sweeps here).
+    constexpr double kSweepOffsetTol = 0.5e-3;
+    CHECK(std::abs(cal.rig.camera_offset.x() - truth.t0.x()) < kSweepOffsetTol);
+    CHECK(std::abs(cal.rig.camera_offset.z() - truth.t0.z()) < kSweepOffsetTol);
+    CHECK(cal.rig.rms_px < kRigRmsTolPx);
+    // Without the offset the same recording fits worse.
+    TimeAlignmentOptions none;
+    ImageList images;
+    images.times = rec.image_times;
+    images.paths.assign(rec.image_times.size(), std::string());
+    const TimeAlignment a = alignMotionToImages(rec.motion, images, none, "motion", "images");
+    std::vector<RigView> views;
+    for (std::size_t k = 0; k < a.log.samples.size(); ++k)
+      views.push_back({a.log.samples[k], rec.features[static_cast<std::size_t>(a.log.samples[k].frame)]});
+    RigCalibrationOptions loose;
+    loose.max_rms_px = 1e9;
+    CHECK(calibrateRig(camera, board, views, loose).rms_px > 3 * cal.rig.rms_px);
+  }
+  SECTION("a constant yaw rate cannot tell the offset from the yaw zero")
+  {
+    const PanRecording rec = panRecording(*this, [](double t) { return -20 * kDeg + 16 * kDeg * t; }, 2.5, latency, 8);
+    CHECK_THROWS_WITH(
+        calibrateRigWithTimeOffset(camera, board, rec.motion, rec.image_times, rec.features, RigCalibrationOptions(), search),
+        Catch::Contains("the motion must change speed"));
+  }
+  SECTION("the search range must hold the offset")
+  {
+    TimeOffsetSearch narrow;
+    narrow.min = -0.05;
+    narrow.max = 0.01;
+    const auto parabola = [](double x) {
+      ProfileCost c;
+      c.sum_squares = 100 + 1e6 * (x - 0.03) * (x - 0.03);
+      c.residuals = 1000;
+      c.parameters = 10;
+      return c;
+    };
+    CHECK_THROWS_WITH(estimateTimeOffset(parabola, narrow), Catch::Contains("end of the search range"));
+    const TimeOffsetEstimate e = estimateTimeOffset(parabola, search);
+    CHECK(std::abs(e.offset - 0.03) < 2 * search.tolerance);
+    // S'' = 2e6, residual variance 100 / 989: sigma = sqrt(2 * 0.1011 / 2e6).
+    CHECK(e.sigma == Approx(std::sqrt(2.0 * (100.0 / 989.0) / 2e6)).epsilon(1e-3));
+  }
 }
 
 TEST_CASE_METHOD(RigScene, "calibrate-rig rejects too small a yaw spread and too few views", "[calibration][rig]")

@@ -16,6 +16,8 @@
 #include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/calibration/hand_eye.h>
 #include <yawdepth/calibration/rig_calibration.h>
+#include <yawdepth/calibration/time_offset.h>
+#include <yawdepth/io/recording.h>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
 #include <yawdepth/features/detector.h>
@@ -81,6 +83,8 @@ struct RigArgs {
   double initial_yaw_offset = 0, min_yaw_span_deg = 20, tag_gap = -1, max_rms_px = RigCalibrationOptions().max_rms_px;
   int first_tag_id = 0;
   bool board_square = false, fixed_axis = false, quiet = false;
+  bool estimate_time_offset = false;
+  std::vector<double> time_offset_range = {-0.1, 0.1};
   InputOptions input;
 };
 
@@ -409,10 +413,64 @@ void printRigCalibration(const RigArgs &a, const RigCalibration &rig)
   std::cout << "wrote " << a.out << "\n";
 }
 
+/* A number with 17 significant digits (the rig file's precision). */
+std::string formatSeconds(double v)
+{
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+/* --estimate-time-offset: the yaw rig and the time offset from a timestamped log and timed images. */
+int runCalibrateRigWithTimeOffset(const RigArgs &a, const CameraModel &camera, const BoardLayout &board)
+{
+  const MotionInput in = a.motion.input();
+  const MotionLog motion = readMotionFile(in.motion, in.format, std::nullopt, a.input.limits());
+  if (!motion.timestamped)
+    throw Error(a.motion.name() + ": --estimate-time-offset needs a timestamped motion log (t, TUM or EuRoC) and --images");
+  if (in.images.empty())
+    throw Error("--estimate-time-offset needs --images: the images and their times");
+  const ImageList images = readImageList(in.images, true, a.input.limits());
+  {
+    std::vector<NamedPath> inputs = a.motion.inputs();
+    inputs.push_back({"--camera", a.camera});
+    for (const std::string &image : images.paths)
+      inputs.push_back({"--images' image", image});
+    checkOutputs(inputs, {{"--out", a.out}});
+  }
+  PatternDetector detector(board.pattern);
+  detector.setCamera(camera);
+  std::vector<std::vector<FeatureObservation>> features(images.paths.size());
+  for (std::size_t i = 0; i < images.paths.size(); ++i) {
+    const FrameDetection d = detector.detect(readGrayImage(images.paths[i], camera), static_cast<long>(i));
+    if (d.found)
+      features[i] = d.features;
+    else if (!a.quiet)
+      std::cerr << "calibrate-rig: " << images.paths[i] << ": " << d.reason << " (image skipped)\n";
+  }
+  TimeOffsetSearch search;
+  search.min = a.time_offset_range[0];
+  search.max = a.time_offset_range[1];
+  const TimedRigCalibration cal = calibrateRigWithTimeOffset(camera, board, motion, images.times, features,
+                                                             rigCalibrationOptions(a), search, in.max_pose_gap);
+  std::ostringstream yaml;
+  yaml << rigCalibrationYaml(cal.rig) << "# the image at camera time t was taken at motion time t + time_offset (s)\n"
+       << "time_offset: " << formatSeconds(cal.time_offset.offset) << "\ntime_offset_sigma: "
+       << formatSeconds(cal.time_offset.sigma) << "\n";
+  writeFileAtomically(a.out, yaml.str());
+  std::cout << "time offset: " << fixed(1e3 * cal.time_offset.offset, 3) << " +- " << fixed(1e3 * cal.time_offset.sigma, 3)
+            << " ms (" << cal.images_used << " images with a pose over the range searched, " << cal.time_offset.evaluations
+            << " fits)\n";
+  printRigCalibration(a, cal.rig);
+  return 0;
+}
+
 int runCalibrateRig(const RigArgs &a)
 {
   const BoardLayout board = makeBoard(a.pattern, a.tags, a.tag_gap, a.first_tag_id);
   const CameraModel camera = loadCameraFile(a.camera, a.camera_name);
+  if (a.estimate_time_offset)
+    return runCalibrateRigWithTimeOffset(a, camera, board);
   const MotionLog motion = loadCommandMotion("calibrate-rig", a.motion, nullptr, a.input.limits(), a.quiet).log;
   if (motion.images.empty())
     throw Error(a.motion.name() + ": no 'image' column: calibrate-rig needs the image of each frame");
@@ -483,8 +541,20 @@ Runner addCalibrateRig(CLI::App &app)
                            ->check(CLI::PositiveNumber & Finite)
                            ->capture_default_str();
   sub->add_flag("--quiet", a->quiet, "No per-frame detection messages");
+  sub->add_flag("--estimate-time-offset", a->estimate_time_offset,
+                "Estimate the time offset between the camera's clock and the motion log's with the rig (a timestamped "
+                "log and --images; the pan must sweep back and forth while the board is seen); written as the rig "
+                "file's time_offset and time_offset_sigma");
+  sub->add_option("--time-offset-range", a->time_offset_range, "The offsets searched by --estimate-time-offset: MIN,MAX (s)")
+      ->expected(2)
+      ->delimiter(',')
+      ->check(Finite)
+      ->capture_default_str();
   addInputOptions(sub, a->input);
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
+  hand_eye->excludes("--estimate-time-offset");
+  sub->get_option("--time-offset-range")->needs("--estimate-time-offset");
+  sub->get_option("--estimate-time-offset")->excludes("--time-offset");
   for (const char *rig_only : {"--initial-offset", "--initial-yaw-offset", "--board-square", "--fixed-axis", "--min-yaw-span"})
     hand_eye->excludes(rig_only);
   return [a]() { return runCalibrateRig(*a); };
