@@ -189,7 +189,7 @@ TimedRigCalibration calibrateRigWithTimeOffset(const CameraModel &camera, const 
     }
     if (covered) {
       images.times.push_back(image_times[i]);
-      images.paths.push_back(std::string());
+      images.paths.emplace_back();
       index.push_back(i);
     }
   }

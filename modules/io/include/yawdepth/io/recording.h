@@ -84,6 +84,7 @@ struct ImageList {
     layout, to the `data/` folder beside it).
   Two images with one time, or a list whose times go back, are errors naming the line or file.
   \param path The folder or list. \param timed Whether times are required.
+  \param limits The bounds on a list file (as for a motion log).
 */
 ImageList readImageList(const std::string &path, bool timed = true, const InputLimits &limits = InputLimits());
 
@@ -107,8 +108,10 @@ struct TimeAlignment {
   std::size_t before = 0;        //!< skipped: taken before the log's first pose
   std::size_t after = 0;         //!< skipped: taken after the log's last pose
   std::size_t in_gap = 0;        //!< skipped: between two poses more than max_pose_gap apart
-  double image_first = 0, image_last = 0;   //!< the images' span, motion clock (s)
-  double motion_first = 0, motion_last = 0; //!< the log's span (s)
+  double image_first = 0;        //!< the first image's time, motion clock (s)
+  double image_last = 0;         //!< the last image's time, motion clock (s)
+  double motion_first = 0;       //!< the log's first time (s)
+  double motion_last = 0;        //!< the log's last time (s)
   double motion_rate_hz = 0;     //!< the log's median rate (Hz)
   double image_rate_hz = 0;      //!< the images' median rate (Hz)
   /*! \brief One line: "N images (R Hz), M matched, ... skipped; poses at R Hz over [a, b] s". */
