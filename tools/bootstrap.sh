@@ -19,7 +19,8 @@ what=${1:-demo}
 
 packages=(g++ make cmake pkg-config libvisp-dev libopencv-dev libeigen3-dev libapriltag-dev libceres-dev
           catch2 libbenchmark-dev libcli11-dev libyaml-cpp-dev
-          clang-14 libclang-rt-14-dev llvm-14 clang-tidy-14 doxygen visp-images-data)
+          clang-14 libclang-rt-14-dev llvm-14 clang-tidy-14 doxygen visp-images-data
+          python3-camera-calibration-parsers)
 
 install_missing() {
   local missing=()

@@ -172,6 +172,16 @@ void writeCameraFiles(const CameraArgs &a, const CameraOutputs &o, const BoardLa
 void printCameraModel(const CameraCalibration &cal, bool fixed_principal_point)
 {
   const CameraModel &c = cal.camera;
+  if (c.distortion() == CameraModel::Distortion::KannalaBrandt)
+  { // calibrateCamera() fits the Brown model; a fisheye camera has no Brown coefficients to show
+    const std::vector<double> &kb = c.kannalaBrandtCoefficients();
+    std::cout << "Camera (Kannala-Brandt fisheye):\n"
+              << "  fx = " << fixed(c.kx(), 2) << " px   fy = " << fixed(c.ky(), 2) << " px\n"
+              << "  u0 = " << fixed(c.u0(), 2) << " px   v0 = " << fixed(c.v0(), 2) << " px\n"
+              << "  k1 = " << fixed(kb[0], 5) << "   k2 = " << fixed(kb[1], 5) << "   k3 = " << fixed(kb[2], 5)
+              << "   k4 = " << fixed(kb[3], 5) << "\n";
+    return;
+  }
   const std::vector<double> &k = c.brownCoefficients();
   const std::vector<double> &sd = cal.std_devs;
   auto pm = [](double v, double s, int p) { return fixed(v, p) + " +- " + fixed(s, p); };
@@ -508,7 +518,7 @@ Runner addCalibrateRig(CLI::App &app)
       "--hand-eye: the camera's pose on a robot arm (eMc, or rMc for eye-to-hand) from a 6-DoF motion log of the "
       "hand's poses, written as the rig file's camera_pose.");
   sub->add_option("--camera", a->camera, "Calibrated camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
+  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
   addMotionOptions(sub, a->motion,
                    "Motion log with the yaw readings and an image column (frame,x,y,z,heading,yaw,image); with "
                    "--hand-eye, the hand's pose in the robot base per image (frame,tx,ty,tz,tux,tuy,tuz,image, or "

@@ -274,7 +274,7 @@ Runner addMeasure(CLI::App &app)
       "measure", "Detect a chessboard or AprilTags (or track natural corners) in the images of a motion log and "
                  "measure their 3D points.");
   sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
+  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
   sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset)")->required();
   addMotionOptions(sub, a->motion,
                    "Motion log with an image column (paths relative to the CSV's folder), a timestamped one with "

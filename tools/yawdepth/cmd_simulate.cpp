@@ -60,7 +60,7 @@ Eigen::Isometry3d boardPose(const YawRig &rig, const MotionSample &first, const 
 void addSimulateSceneOptions(CLI::App *sub, SimulateArgs &a)
 {
   sub->add_option("--camera", a.camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", a.camera_name, "Camera name in a ViSP XML file");
+  sub->add_option("--camera-name", a.camera_name, "Camera name in a ViSP XML file, or cam0, cam1, ... in a Kalibr camchain (default cam0)");
   sub->add_option("--rig", a.rig, "Rig file (YAML with camera_offset)")->required();
   sub->add_option("--out-dir", a.out_dir, "Output folder (created if missing)")->required();
   SceneOptions &s = a.scene;

@@ -140,7 +140,7 @@ Runner addTrack(CLI::App &app)
   CLI::App *sub = app.add_subcommand(
       "track", "Track natural corners (KLT) through the images of a motion log, gated by the known motion.");
   sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML (with the image size)")->required();
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one)");
+  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
   sub->add_option("--rig", a->rig,
                   "Rig file (YAML): where the camera sits; without it the camera is at the vision frame's origin");
   addMotionOptions(sub, a->motion,

@@ -944,6 +944,11 @@ void saveVispCameraXml(const std::string &path, const CameraCalibration &calibra
 double projectionUncertainty(const CameraCalibration &calibration, double u, double v)
 {
   const CameraModel &cam = calibration.camera;
+  // The covariance is of the Brown model's intrinsics (the model calibrateCamera() fits): a
+  // fisheye camera has other parameters, and its Brown coefficients are not its distortion.
+  if (cam.distortion() == CameraModel::Distortion::KannalaBrandt)
+    throw Error("projectionUncertainty: the camera is a Kannala-Brandt (fisheye) model; the covariance "
+                "is of the Brown model's intrinsics");
   const double w = cam.width(), h = cam.height();
   const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.kx(), 0, cam.u0(), 0, cam.ky(), cam.v0(), 0, 0, 1);
   cv::Mat dist(1, 8, CV_64F);

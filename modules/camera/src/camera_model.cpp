@@ -1,6 +1,7 @@
 /*!
   \file camera_model.cpp
-  \brief CameraModel: Brown/OpenCV and ViSP kud distortion, exact undistortion by Newton's method.
+  \brief CameraModel: Brown/OpenCV, ViSP kud and Kannala-Brandt distortion, exact undistortion by
+  Newton's method.
 */
 #include <yawdepth/camera/camera_model.h>
 
@@ -73,6 +74,75 @@ bool distortBrown(const double *k, double x, double y, double &xd, double &yd, E
          (!J || J->allFinite());
 }
 
+/*!
+  \brief Kannala-Brandt \f$ \theta_d(\theta) = \theta (1 + k_1 \theta^2 + k_2 \theta^4 + k_3 \theta^6 +
+  k_4 \theta^8) \f$, and its derivative in `dtd` when not null.
+*/
+double kbThetaD(const double *k, double t, double *dtd = nullptr) {
+  const double t2 = t * t, t4 = t2 * t2, t6 = t4 * t2, t8 = t4 * t4;
+  if (dtd)
+    *dtd = 1 + 3 * k[0] * t2 + 5 * k[1] * t4 + 7 * k[2] * t6 + 9 * k[3] * t8;
+  return t * (1 + k[0] * t2 + k[1] * t4 + k[2] * t6 + k[3] * t8);
+}
+
+/*! \brief Below this radius (normalised) the Kannala-Brandt scale uses its Taylor series. */
+constexpr double kKbSeriesRadius = 1e-6;
+
+/*!
+  \brief Kannala-Brandt distortion of a normalised point, \f$ (x_d, y_d) = s(r) (x, y) \f$ with
+  \f$ s = \theta_d(\arctan r) / r \f$, with its Jacobian \f$ s I + (s'(r)/r)\, m m^T \f$.
+  Near the centre \f$ s = 1 + (k_1 - 1/3) r^2 + O(r^4) \f$ (no 0/0).
+  \return false when the result is not finite.
+*/
+bool distortKannalaBrandt(const double *k, double x, double y, double &xd, double &yd, Eigen::Matrix2d *J) {
+  const double r = std::hypot(x, y), r2 = r * r;
+  double s = 1, g = 0; // s = theta_d / r, g = (ds/dr) / r
+  if (r < kKbSeriesRadius) {
+    const double c1 = k[0] - 1.0 / 3.0;
+    s = 1 + c1 * r2;
+    g = 2 * c1;
+  } else {
+    double dtd = 0;
+    s = kbThetaD(k, std::atan(r), &dtd) / r;
+    g = std::isinf(r2) ? 0.0 : (dtd / (1 + r2) - s) / r2; // ds/dr = (theta_d' dtheta/dr - s) / r
+  }
+  xd = s * x;
+  yd = s * y;
+  if (J) {
+    (*J)(0, 0) = s + g * x * x;
+    (*J)(0, 1) = g * x * y;
+    (*J)(1, 0) = g * x * y;
+    (*J)(1, 1) = s + g * y * y;
+  }
+  return std::isfinite(xd) && std::isfinite(yd) && (!J || J->allFinite());
+}
+
+/*!
+  \brief The angle in (0, pi/2] up to which \f$ \theta_d(\theta) \f$ increases: pi/2, or the first
+  zero of \f$ \theta_d'(\theta) \f$ below it (sampled every pi/8192, then bisected).
+*/
+double kbMonotonicLimit(const double *k) {
+  const double half_pi = 2 * std::atan(1.0);
+  constexpr int kSamples = 4096;
+  double prev = 0;
+  for (int i = 1; i <= kSamples; ++i) {
+    const double t = half_pi * i / kSamples;
+    double d = 0;
+    kbThetaD(k, t, &d);
+    if (!(d > 0)) {
+      double lo = prev, hi = t; // theta_d' > 0 at lo, <= 0 at hi
+      for (int it = 0; it < 80 && hi - lo > 1e-16; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        kbThetaD(k, mid, &d);
+        (d > 0 ? lo : hi) = mid;
+      }
+      return lo;
+    }
+    prev = t;
+  }
+  return half_pi;
+}
+
 } // namespace
 
 CameraModel::CameraModel() : cam_(pinhole(1, 1, 0, 0)) {}
@@ -128,11 +198,41 @@ CameraModel CameraModel::brown(double fx, double fy, double u0, double v0, const
   return c;
 }
 
+CameraModel CameraModel::kannalaBrandt(double fx, double fy, double u0, double v0, const std::vector<double> &k,
+                                       unsigned width, unsigned height) {
+  checkIntrinsics(fx, fy, u0, v0);
+  if (k.size() != 4)
+    throw Error("camera: " + std::to_string(k.size()) +
+                " Kannala-Brandt (fisheye) coefficients given; expected 4 (k1 k2 k3 k4)");
+  for (std::size_t i = 0; i < k.size(); ++i)
+    if (!std::isfinite(k[i]))
+      throw Error("camera: Kannala-Brandt coefficient k" + std::to_string(i + 1) + " = " + num(k[i]) +
+                  " must be finite");
+  CameraModel c;
+  c.cam_ = pinhole(fx, fy, u0, v0);
+  c.kx_ = fx;
+  c.ky_ = fy;
+  c.u0_ = u0;
+  c.v0_ = v0;
+  c.width_ = width;
+  c.height_ = height;
+  c.model_ = Distortion::KannalaBrandt;
+  c.kb_ = k;
+  c.theta_max_ = kbMonotonicLimit(c.kb_.data());
+  c.theta_d_max_ = kbThetaD(c.kb_.data(), c.theta_max_);
+  return c;
+}
+
 Eigen::Vector2d CameraModel::distortNormalized(const Eigen::Vector2d &m, Eigen::Matrix2d *J) const {
   if (model_ == Distortion::None) {
     if (J)
       J->setIdentity();
     return m;
+  }
+  if (model_ == Distortion::KannalaBrandt) {
+    double xd = 0, yd = 0;
+    distortKannalaBrandt(kb_.data(), m.x(), m.y(), xd, yd, J);
+    return Eigen::Vector2d(xd, yd);
   }
   // ViSP's kud model is Brown with k1 = kud (coeffs_ holds that): x_d = x (1 + kud r^2).
   double xd = 0, yd = 0;
@@ -155,6 +255,8 @@ bool CameraModel::undistort(const Eigen::Vector2d &uv, Eigen::Vector2d &m, Eigen
       *J << 1.0 / kx_, 0.0, 0.0, 1.0 / ky_;
     return true;
   }
+  if (model_ == Distortion::KannalaBrandt)
+    return undistortKannalaBrandt(target, m, J);
 
   const double *k = coeffs_.data();
   const double eps = std::numeric_limits<double>::epsilon();
@@ -205,6 +307,76 @@ bool CameraModel::undistort(const Eigen::Vector2d &uv, Eigen::Vector2d &m, Eigen
   if (!distortBrown(k, x.x(), x.y(), xd, yd, &Jd))
     return false;
   // Final residual check (normalised units); far below 1e-9 px for any sensible focal length.
+  if (std::hypot(xd - target.x(), yd - target.y()) > 1e-12 * std::max(1.0, target.norm()))
+    return false;
+  m = x;
+  if (J) {
+    Eigen::Matrix2d A = Jd;
+    A.row(0) *= kx_;
+    A.row(1) *= ky_;
+    *J = A.inverse();
+    if (!J->allFinite())
+      return false;
+  }
+  return true;
+}
+
+bool CameraModel::undistortKannalaBrandt(const Eigen::Vector2d &target, Eigen::Vector2d &m,
+                                         Eigen::Matrix2d *J) const {
+  // The distorted radius is theta_d: solve theta_d(theta) = rd on [0, theta_max_), where theta_d
+  // increases (a unique root), by Newton's method kept inside a shrinking bracket (bisection when
+  // a step would leave it). rd >= theta_d(theta_max_): a ray at 90 degrees or more, or beyond the
+  // fold of theta_d, which no normalised point represents.
+  const double *k = kb_.data();
+  const double rd = target.norm();
+  if (!(rd < theta_d_max_))
+    return false;
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  if (rd > 0) {
+    const double eps = std::numeric_limits<double>::epsilon();
+    double lo = 0, hi = theta_max_;
+    double t = std::min(rd, 0.5 * theta_max_);
+    double prev_step = std::numeric_limits<double>::infinity();
+    bool converged = false;
+    for (int it = 0; it < 200; ++it) {
+      double d = 0;
+      const double f = kbThetaD(k, t, &d) - rd;
+      if (f == 0) {
+        converged = true;
+        break;
+      }
+      (f < 0 ? lo : hi) = t;
+      double next = t - f / d;
+      // A Newton step may land on the bracket's end (a root at rounding level); otherwise bisect.
+      const bool newton = d > 0 && next >= lo && next <= hi;
+      if (!newton)
+        next = 0.5 * (lo + hi);
+      const double step = std::abs(next - t);
+      t = next;
+      // Converged when a Newton step is below 1e-15 relative to theta, or has reached rounding
+      // level and stopped shrinking, or when the bracket is down to a few ulps.
+      if ((newton && (step <= 1e-15 * t || (step < 1e3 * eps * t && step >= 0.5 * prev_step))) ||
+          hi - lo <= 4 * eps * t) {
+        converged = true;
+        break;
+      }
+      prev_step = newton ? step : std::numeric_limits<double>::infinity();
+    }
+    if (!converged || !(t > 0 && t < theta_max_))
+      return false;
+    double d = 0;
+    kbThetaD(k, t, &d);
+    if (!(d > 0))
+      return false;
+    x = target * (std::tan(t) / rd);
+  }
+  if (!x.allFinite())
+    return false;
+  double xd = 0, yd = 0;
+  Eigen::Matrix2d Jd;
+  if (!distortKannalaBrandt(k, x.x(), x.y(), xd, yd, &Jd))
+    return false;
+  // Final residual check (normalised units), as for the Brown model.
   if (std::hypot(xd - target.x(), yd - target.y()) > 1e-12 * std::max(1.0, target.norm()))
     return false;
   m = x;

@@ -88,6 +88,7 @@ std::vector<double> cameraKey(const CameraModel &c) {
   std::vector<double> k = {static_cast<double>(c.distortion()), c.kx(), c.ky(), c.u0(), c.v0(),
                            static_cast<double>(c.width()), static_cast<double>(c.height())};
   k.insert(k.end(), c.brownCoefficients().begin(), c.brownCoefficients().end());
+  k.insert(k.end(), c.kannalaBrandtCoefficients().begin(), c.kannalaBrandtCoefficients().end());
   return k;
 }
 

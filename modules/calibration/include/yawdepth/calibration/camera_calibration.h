@@ -148,7 +148,8 @@ struct CameraCalibration {
   small rotation of the camera undoes (the principal point against the camera's orientation) moves
   no measurement, since every pose absorbs it: that rotation, fitted over a 16 x 12 grid of the
   image, is removed first (mrcal's compensation of the camera frame, for points far away). What
-  remains grows where the corners did not reach, at the image's edges and corners.
+  remains grows where the corners did not reach, at the image's edges and corners. Throws
+  yawdepth::Error for a Kannala-Brandt camera (the covariance is of the Brown model's parameters).
 */
 double projectionUncertainty(const CameraCalibration &calibration, double u, double v);
 
