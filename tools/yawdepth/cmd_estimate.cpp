@@ -53,7 +53,7 @@ Runner addEstimate(CLI::App &app)
       outputs.push_back({"--ply", args->ply});
     checkOutputs(inputs, outputs);
     const CameraModel camera = loadCameraFile(args->camera, args->camera_name);
-    const RigFile rig_file = readRigFile(args->rig);
+    const RigFile rig_file = readCommandRig("estimate", args->rig);
     const YawRig rig = rigOf(rig_file);
     MotionLog motion = loadCommandMotion("estimate", args->motion, &rig_file, args->input.limits(), false).log;
     checkMotionSteps(motion, args->motion.name());

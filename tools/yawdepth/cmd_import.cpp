@@ -29,7 +29,7 @@ int runImport(const ImportArgs &a)
   checkOutputs(inputs, {{"--out-dir", out}});
   RigFile rig_file;
   if (!a.rig.empty())
-    rig_file = readRigFile(a.rig);
+    rig_file = readCommandRig("import", a.rig);
   const LoadedMotion m =
       loadMotion(a.motion.input(), a.rig.empty() ? std::nullopt : rig_file.yaw,
                  a.rig.empty() ? std::nullopt : rig_file.time_offset, a.input.limits());

@@ -216,7 +216,7 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
     throw Error("--debug-dir draws pattern detections: it needs --pattern");
   const PatternSpec pattern = klt ? PatternSpec() : PatternSpec::parse(a.pattern);
   const CameraModel camera = loadCameraFile(a.camera, a.camera_name);
-  const RigFile rig_file = readRigFile(a.rig);
+  const RigFile rig_file = readCommandRig("measure", a.rig);
   const YawRig rig = rigOf(rig_file);
   MotionLog motion = loadCommandMotion("measure", a.motion, &rig_file, a.input.limits(), a.quiet).log;
   checkMotionSteps(motion, a.motion.name());

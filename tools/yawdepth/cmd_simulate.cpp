@@ -301,7 +301,7 @@ std::vector<PointRow> truthRows(const YawRig &rig, const Scene &scene, const std
 int runSimulate(SimulateArgs &a)
 {
   const CameraModel camera = loadCameraFile(a.camera, a.camera_name);
-  const RigFile rig_file = readRigFile(a.rig);
+  const RigFile rig_file = readCommandRig("simulate", a.rig);
   const YawRig rig = rigOf(rig_file);
   const bool board_mode = !a.pattern.empty();
   SceneOptions so = a.scene;

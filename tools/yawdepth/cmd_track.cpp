@@ -155,7 +155,7 @@ Runner addTrack(CLI::App &app)
     a->method.noise.validate();
     RigFile rig_file;
     if (!a->rig.empty())
-      rig_file = readRigFile(a->rig);
+      rig_file = readCommandRig("track", a->rig);
     const YawRig rig = rigOf(rig_file);
     MotionLog motion = loadCommandMotion("track", a->motion, &rig_file, a->input.limits(), a->quiet).log;
     checkMotionSteps(motion, a->motion.name());

@@ -67,6 +67,12 @@ void addMotionOptions(CLI::App *sub, MotionOptions &options, const std::string &
 LoadedMotion loadCommandMotion(const std::string &command, const MotionOptions &options, const RigFile *rig,
                                const InputLimits &limits, bool quiet);
 
+/*! \brief A warning for stderr, `yawdepth COMMAND: warning: TEXT`, printed when the command succeeds
+    (a failure prints its one error line only); never silenced by --quiet. */
+void warn(const std::string &command, const std::string &text);
+/*! \brief readRigFile() for a command, its rigWarnings() warned. */
+RigFile readCommandRig(const std::string &command, const std::string &path);
+
 /*! \brief The --debug-dir pictures of `images`: DIR/NNNN_STEM.png (NNNN the image's position);
     empty when `dir` is empty. Throws yawdepth::Error for an existing path that is not a folder. */
 std::vector<std::string> debugFiles(const std::string &dir, const std::vector<std::string> &images);

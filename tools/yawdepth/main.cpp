@@ -95,6 +95,8 @@ LoadedMotion loadCommandMotion(const std::string &command, const MotionOptions &
 {
   LoadedMotion m = loadMotion(options.input(), rig ? rig->yaw : std::nullopt,
                               rig ? rig->time_offset : std::nullopt, limits);
+  for (const std::string &w : motionWarnings(m.log, options.name()))
+    warn(command, w);
   if (m.alignment && !quiet) {
     const TimeAlignment &a = *m.alignment;
     std::cerr << "yawdepth " << command << ": " << options.name() << " (" << toString(m.format) << ") with "
@@ -104,6 +106,29 @@ LoadedMotion loadCommandMotion(const std::string &command, const MotionOptions &
                 << " images have a pose: check the clocks and --time-offset\n";
   }
   return m;
+}
+
+RigFile readCommandRig(const std::string &command, const std::string &path)
+{
+  RigFile rig = readRigFile(path);
+  for (const std::string &w : rigWarnings(rig, path))
+    warn(command, w);
+  return rig;
+}
+
+static std::string oneLine(std::string what);
+
+namespace {
+std::vector<std::string> &pendingWarnings()
+{
+  static std::vector<std::string> pending;
+  return pending;
+}
+} // namespace
+
+void warn(const std::string &command, const std::string &text)
+{
+  pendingWarnings().push_back("yawdepth " + command + ": warning: " + oneLine(text));
 }
 
 std::vector<std::string> debugFiles(const std::string &dir, const std::vector<std::string> &images)
@@ -203,6 +228,9 @@ static int runCommand(const CLI::App &sub, const Runner &run)
                 << (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) << "\n";
       return 1;
     }
+    if (status == 0)
+      for (const std::string &w : pendingWarnings())
+        std::cerr << w << "\n";
     return status;
   } catch (const yawdepth::Error &e) {
     std::cerr << "yawdepth " << sub.get_name() << ": error: " << oneLine(e.what()) << "\n";

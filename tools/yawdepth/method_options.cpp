@@ -53,6 +53,7 @@ void addMotionNoiseOptions(CLI::App *sub, MethodArgs &args)
 
 void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &default_method)
 {
+  args.command = sub->get_name();
   args.method = default_method;
   args.robust_px = RefineOptions().robust_threshold_px;
   args.outlier_px = RefineOptions().outlier_threshold_px;
@@ -201,6 +202,8 @@ MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const Mot
                  r.residuals.sigma_scale > 1 ? (", sigmas scaled by " + std::to_string(r.residuals.sigma_scale).substr(0, 5)).c_str() : "",
                  r.residuals.correlation, r.residuals.correlation_scaled, r.residuals.inconsistent,
                  r.residuals.tracks_used);
+  for (const std::string &w : r.warnings)
+    warn(args.command, w);
   MethodRun run;
   run.outliers = std::move(r.outliers);
   run.motion_estimate = std::move(r.motion);

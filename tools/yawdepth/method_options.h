@@ -14,6 +14,7 @@
 namespace yawdepth::cli {
 
 struct MethodArgs {
+  std::string command; // the subcommand's name, for warnings (set by addMethodOptions)
   std::string method;
   NoiseModel noise;
   const CLI::Option *sigma_yaw_option = nullptr; // to tell whether --sigma-yaw was given

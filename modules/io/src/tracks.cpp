@@ -146,4 +146,68 @@ void checkMotionSteps(const MotionLog &motion, const std::string &motion_path)
   }
 }
 
+namespace {
+constexpr double kFullTurn = 2 * M_PI;
+constexpr double kMaxPlausibleStep = 1.0; // rad between two rows
+constexpr double kMaxLeverArm = 2.0;      // m from the vision frame's origin to the camera
+
+std::string number(double v)
+{
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+} // namespace
+
+std::vector<std::string> motionWarnings(const MotionLog &motion, const std::string &motion_path)
+{
+  std::vector<std::string> out;
+  const std::vector<MotionSample> &m = motion.samples;
+  const auto angles = [&](const char *name, auto value, bool present, bool winds) {
+    if (!present || m.empty())
+      return;
+    double largest = 0, step = 0;
+    long at = m.front().frame;
+    for (std::size_t k = 0; k < m.size(); ++k) {
+      largest = std::max(largest, std::abs(value(m[k])));
+      const double d = k > 0 ? std::abs(wrapAngle(value(m[k]) - value(m[k - 1]))) : 0.0;
+      if (d > step) {
+        step = d;
+        at = m[k].frame;
+      }
+    }
+    if (!winds && largest > kFullTurn)
+      out.push_back(motion_path + ": the " + name + " column reaches " + number(largest) +
+                    " rad, beyond a full turn: degrees given as radians?");
+    else if (step > kMaxPlausibleStep)
+      out.push_back(motion_path + ": the " + name + " turns by " + number(step) + " rad at frame " +
+                    std::to_string(at) + ": degrees given as radians?");
+  };
+  const bool six = !m.empty() && m.front().six_dof;
+  // A heading winds up as the robot turns; a pan joint seldom passes a full turn.
+  angles("yaw", [](const MotionSample &s) { return s.yaw; }, motion.yaw_column, false);
+  angles("heading", [](const MotionSample &s) { return s.heading; }, !six, true);
+  if (six)
+    for (const MotionSample &s : m)
+      if (s.theta_u.norm() > M_PI + 1e-9) {
+        out.push_back(motion_path + ": the theta-u rotation of frame " + std::to_string(s.frame) + " is " +
+                      number(s.theta_u.norm()) + " rad, beyond half a turn: degrees given as radians?");
+        break;
+      }
+  return out;
+}
+
+std::vector<std::string> rigWarnings(const RigFile &rig, const std::string &rig_path)
+{
+  std::vector<std::string> out;
+  const Eigen::Vector3d t = rig.camera_pose ? Eigen::Vector3d((*rig.camera_pose)[0], (*rig.camera_pose)[1], (*rig.camera_pose)[2])
+                                            : rig.camera_offset;
+  if (t.norm() > kMaxLeverArm)
+    out.push_back(rig_path + ": the camera is " + number(t.norm()) + " m from the vision frame's origin (" +
+                  (rig.camera_pose ? "camera_pose" : "camera_offset") + "): millimetres given as metres?");
+  if (std::abs(rig.yaw_offset) > kFullTurn)
+    out.push_back(rig_path + ": yaw_offset is " + number(rig.yaw_offset) + " rad, beyond a full turn: degrees?");
+  return out;
+}
+
 } // namespace yawdepth

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 #include <yawdepth/error.h>
@@ -74,6 +75,53 @@ PipelineResult run(const CameraModel &camera, const YawRig &rig, const std::vect
   return r;
 }
 
+/* An ok point most of whose observations were flagged, or with fewer than kMinConfirming left after
+   any was: inconsistent (see estimatePoints()). */
+constexpr std::size_t kMinConfirming = 3;
+void markUnconfirmed(PipelineResult &r)
+{
+  for (std::size_t i = 0; i < r.points.size() && i < r.outliers.size(); ++i) {
+    const std::vector<bool> &flags = r.outliers[i];
+    const auto flagged = static_cast<std::size_t>(std::count(flags.begin(), flags.end(), true));
+    if (r.points[i].ok() && flagged > 0 && (2 * flagged > flags.size() || flags.size() - flagged < kMinConfirming))
+      r.points[i].status = Status::Inconsistent;
+  }
+}
+
+/* The whole log against the noise model given (see estimatePoints()). */
+constexpr double kMistakeS0 = 5;
+constexpr double kMistakeOutlierShare = 0.3;
+constexpr double kTooSmallS0 = 1.5;
+PipelineResult::Consistency wholeLog(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                                     const std::vector<Track> &tracks, const PipelineResult &r,
+                                     const PipelineOptions &options)
+{
+  PipelineResult::Consistency out;
+  std::size_t flagged = 0, total = 0;
+  for (const std::vector<bool> &flags : r.outliers) {
+    flagged += static_cast<std::size_t>(std::count(flags.begin(), flags.end(), true));
+    total += flags.size();
+  }
+  out.outlier_share = total > 0 ? static_cast<double>(flagged) / static_cast<double>(total) : 0.0;
+  ResidualCheckOptions probe = options.residual_check;
+  probe.scale_sigma = false;
+  probe.correlated = false;
+  std::vector<PointEstimate> points = r.points;
+  const ResidualCheckResult c = checkResiduals(camera, rig, motion, tracks, r.outliers, options.noise, probe, points);
+  out.tracks_used = c.tracks_used;
+  if (c.tracks_used >= options.residual_check.min_tracks)
+    out.s0 = std::sqrt(c.variance_factor);
+  out.mistake = out.s0 > kMistakeS0 || (total >= 20 && out.outlier_share > kMistakeOutlierShare);
+  return out;
+}
+
+std::string figure(double v)
+{
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
 } // namespace
 
 void PipelineOptions::validate() const
@@ -106,41 +154,61 @@ Method bestMethod() { return refineAvailable() ? Method::Refine : Method::Fused;
 
 namespace {
 
-/* The noise model scaled by s (the pixel noise at least kMinPixelNoise): every sigma when the motion
-   errs per pose (white: the residuals see all of it), only the pixels' when it errs per increment (its
-   drift mostly hides in the fit: the residuals do not say it was wrong). */
+/* The noise model the residuals say, and the factor on its pixel noise (1: the model given). The
+   residuals are compared with a stand-in for the modelled variance that overstates the motion's
+   part (see residual_check.h), so what they say is trusted in one direction more than the other:
+   - larger (s0 > kReestimate, the residuals seeing the whole model: per-pose motion noise, or the
+     pixels holding at least half of the variance): every sigma times s0 for per-pose motion noise
+     (white: the residuals see all of it), the pixels' alone for per-increment noise (its drift hides
+     in the fit);
+   - smaller: only the pixel noise, only when the pixels hold at least kPixelShareToTighten of the
+     modelled variance (so that the motion's stand-in cannot be what made the residuals small), the
+     tracks' errors are not correlated (persistent errors hide in the fit), and s0^2 is below 1 by
+     more than kEvidence of its standard errors and by more than kReestimate; the pixel variance then
+     the part of s0^2 the pixels explain, the motion's part taken as modelled.
+   The pixel noise never below kMinPixelNoise. */
 constexpr double kMinPixelNoise = 0.01; // px: no tracker is more precise than this
-NoiseModel scaledNoise(const NoiseModel &n, double s)
-{
-  NoiseModel out = n;
-  out.sigma_px = std::max(kMinPixelNoise, n.sigma_px * s);
-  if (n.motion_noise == MotionNoise::Absolute)
-    for (double *v : {&out.sigma_odom, &out.sigma_heading, &out.sigma_yaw, &out.sigma_rot})
-      *v *= s;
-  return out;
-}
-
-/* s0 when the residuals see the whole noise model and say it is off by more than kReestimate (see
-   ResidualCheckOptions::reestimate_noise), else 1. */
 constexpr double kReestimate = 1.1;
 constexpr double kMaxCorrelationToTighten = 0.5;
-double noiseScaleFromResiduals(const CameraModel &camera, const YawRig &rig, const std::vector<Track> &tracks,
-                               const PipelineResult &r, const PipelineOptions &options)
+constexpr double kPixelShareToTighten = 0.8;
+constexpr double kEvidence = 3;
+struct Reestimated {
+  NoiseModel noise;
+  double pixel_scale = 1; // sigma_px's factor
+  double gate_scale = 1;  // the gate at the model given, never tighter
+};
+Reestimated noiseFromResiduals(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                               const std::vector<Track> &tracks, const PipelineResult &r, const PipelineOptions &options)
 {
+  Reestimated out{options.noise};
   ResidualCheckOptions probe = options.residual_check;
   probe.scale_sigma = false;
   std::vector<PointEstimate> points = r.points; // the probe's gate must not change the result
-  const ResidualCheckResult c = checkResiduals(camera, rig, r.motion, tracks, r.outliers, options.noise, probe, points);
-  const bool sees_all = options.noise.motion_noise == MotionNoise::Absolute || c.pixel_share >= 0.5;
-  const double s0 = std::sqrt(c.variance_factor);
-  if (c.tracks_used < options.residual_check.min_tracks || !sees_all || !(s0 > 0) ||
-      std::abs(std::log(s0)) <= std::log(kReestimate))
-    return 1.0;
-  // Errors that persist from frame to frame hide in the fit: small residuals then do not say the
-  // tracker is precise, and the model is not made tighter.
-  if (s0 < 1 && c.correlation >= kMaxCorrelationToTighten)
-    return 1.0;
-  return s0;
+  const ResidualCheckResult c = checkResiduals(camera, rig, motion, tracks, r.outliers, options.noise, probe, points);
+  const double f2 = c.variance_factor;
+  if (c.tracks_used < options.residual_check.min_tracks || !(f2 > 0))
+    return out;
+  const NoiseModel &n = options.noise;
+  if (f2 > kReestimate * kReestimate) {
+    if (n.motion_noise != MotionNoise::Absolute && c.pixel_share < 0.5)
+      return out;
+    const double s0 = std::sqrt(f2);
+    out.pixel_scale = s0;
+    out.noise.sigma_px = std::max(kMinPixelNoise, n.sigma_px * s0);
+    if (n.motion_noise == MotionNoise::Absolute)
+      for (double *v : {&out.noise.sigma_odom, &out.noise.sigma_heading, &out.noise.sigma_yaw, &out.noise.sigma_rot})
+        *v *= s0;
+    return out;
+  }
+  const bool strong = f2 < 1 / (kReestimate * kReestimate) && f2 + kEvidence * c.variance_factor_sigma < 1;
+  if (!strong || c.pixel_share < kPixelShareToTighten || c.correlation >= kMaxCorrelationToTighten)
+    return out;
+  const double px2 = (f2 - (1 - c.pixel_share)) / c.pixel_share;
+  const double k = std::sqrt(std::max(px2, 0.0));
+  out.noise.sigma_px = std::max(kMinPixelNoise, n.sigma_px * k);
+  out.pixel_scale = out.noise.sigma_px / n.sigma_px;
+  out.gate_scale = 1 / (out.pixel_scale * out.pixel_scale);
+  return out;
 }
 
 /* The method with the observations no method can use taken out first (see the file). */
@@ -200,19 +268,41 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
   PipelineResult r = runUsable(camera, rig, motion, tracks, options);
   const bool whole_track = options.method == Method::Fused || options.method == Method::Window ||
                            options.method == Method::Refine;
-  if (options.residual_check.enabled && whole_track) {
-    NoiseModel noise = options.noise;
-    const double s0 = options.residual_check.reestimate_noise ? noiseScaleFromResiduals(camera, rig, tracks, r, options) : 1.0;
-    if (s0 != 1.0) {
+  if (whole_track) {
+    markUnconfirmed(r);
+    r.consistency = wholeLog(camera, rig, motion, tracks, r, options);
+  }
+  const PipelineResult::Consistency &log = r.consistency;
+  if (log.mistake) {
+    ResidualCheckOptions gate = options.residual_check;
+    gate.scale_sigma = false;
+    gate.correlated = false;
+    gate.gate_at_model = true;
+    r.residuals = checkResiduals(camera, rig, motion, tracks, r.outliers, options.noise, gate, r.points);
+    const std::string residuals = log.s0 > kMistakeS0 ? "their residuals are " + figure(log.s0) + " times the noise model's and " : "";
+    r.warnings.push_back("the tracks do not fit the motion log: " + residuals + figure(100 * log.outlier_share) +
+                         " % of the observations were rejected (likely: tracks and motion a frame apart, angles in "
+                         "degrees, a wrong rig (camera_offset or camera_pose, a sign, the yaw's sign or zero) or camera); " +
+                         std::to_string(r.residuals.inconsistent) + " points that do not fit made inconsistent");
+  } else if (options.residual_check.enabled && whole_track) {
+    Reestimated model{options.noise};
+    if (options.residual_check.reestimate_noise)
+      model = noiseFromResiduals(camera, rig, motion, tracks, r, options);
+    if (model.pixel_scale != 1.0) {
       PipelineOptions again = options;
-      again.noise = scaledNoise(options.noise, s0);
-      noise = again.noise;
+      again.noise = model.noise;
       r = runUsable(camera, rig, motion, tracks, again);
+      markUnconfirmed(r);
+      r.consistency = log;
     }
     ResidualCheckOptions check = options.residual_check;
-    check.gate_scale = s0 < 1 ? 1 / (s0 * s0) : 1.0; // the gate at the model given, never tighter
-    r.residuals = checkResiduals(camera, rig, r.motion, tracks, r.outliers, noise, check, r.points);
-    r.residuals.noise_scale = s0;
+    check.gate_scale = model.gate_scale;
+    r.residuals = checkResiduals(camera, rig, motion, tracks, r.outliers, model.noise, check, r.points);
+    r.residuals.noise_scale = model.pixel_scale;
+  } else if (whole_track && log.s0 > kTooSmallS0) {
+    r.warnings.push_back("the residuals are " + figure(log.s0) +
+                         " times what the noise model allows: the sigmas are too small by about that (raise the "
+                         "pixel noise, or let the residual check scale them)");
   }
   if (options.max_depth_sigma > 0)
     for (PointEstimate &p : r.points)

@@ -53,6 +53,24 @@ double incrementAngle(const MotionSample &a, const MotionSample &b)
   return logSO3(a.rotation().transpose() * b.rotation()).norm();
 }
 
+/* The noise one increment of the log adds (MotionNoise::Increment): rotation and translation
+   variance per axis (rad^2, m^2), and the step's length d (m), over which the rotation error so far
+   turns the translation. */
+struct StepNoise {
+  double var_rot = 0, var_t = 0, d = 0;
+};
+StepNoise stepNoise(const NoiseModel &noise, const MotionSample &p, const MotionSample &c)
+{
+  const double r = c.six_dof ? noise.sigma_rot : noise.sigma_heading;
+  StepNoise s;
+  s.d = (c.position() - p.position()).norm();
+  const double theta = incrementAngle(p, c), odom = noise.odom_per_metre * s.d;
+  const double per_rad = noise.rot_per_radian * theta, per_m = noise.rot_per_metre * s.d;
+  s.var_t = noise.sigma_odom * noise.sigma_odom + odom * odom;
+  s.var_rot = r * r + per_rad * per_rad + per_m * per_m;
+  return s;
+}
+
 /* Walks the log from row `from` towards row `to` (either direction), composing the increments'
    noise as relativePoseSigma() says; `at(row, var_rot, var_t)` is called on every row reached,
    `from` included (with zero variance before the yaw readings). */
@@ -79,17 +97,84 @@ void walkPoseNoise(const NoiseModel &noise, const std::vector<MotionSample> &mot
   double var_rot = 0, var_t = 0;
   const long step = to > from ? 1 : -1;
   for (long i = static_cast<long>(from) + step;; i += step) {
-    const MotionSample &p = motion[static_cast<std::size_t>(i - step)], &c = motion[static_cast<std::size_t>(i)];
-    const double d = (c.position() - p.position()).norm(), theta = incrementAngle(p, c);
-    const double odom = noise.odom_per_metre * d;
-    var_t += noise.sigma_odom * noise.sigma_odom + odom * odom + var_rot * d * d; // the rotation error so far turns this step
-    const double per_rad = noise.rot_per_radian * theta, per_m = noise.rot_per_metre * d;
-    var_rot += r * r + per_rad * per_rad + per_m * per_m;
+    const StepNoise q = stepNoise(noise, motion[static_cast<std::size_t>(i - step)], motion[static_cast<std::size_t>(i)]);
+    var_t += q.var_t + var_rot * q.d * q.d; // the rotation error so far turns this step
+    var_rot += q.var_rot;
     at(static_cast<std::size_t>(i), var_rot + yaw2, var_t);
     if (static_cast<std::size_t>(i) == to)
       break;
   }
 }
+
+/* The chi-square of a track's residuals along one walk from the point's row, with the pose errors'
+   correlation along the walk (a per-increment drift is shared by every later observation, a per-pose
+   error by none but the reference's): a Kalman filter per pixel axis on the state (rotation error,
+   translation error) of the walk's pose relative to the point's, each residual r = f theta +
+   (f / Z) tau + pixel noise (the isotropic stand-in of the file); the sum of the normalised
+   innovations. Feed rows in walk order with start(), step() between rows, observe() per residual. */
+class WalkChi2 {
+public:
+  WalkChi2(const NoiseModel &noise, double f) : noise_(noise), f_(f)
+  {
+    const double y2 = noise.sigma_yaw * noise.sigma_yaw;
+    if (noise.motion_noise == MotionNoise::Absolute) { // the reference pose's own error, shared
+      const double r = noise.sigma_rot > 0 ? noise.sigma_rot : noise.sigma_heading;
+      rot_ = r * r;
+      P_ << rot_ + y2, 0, 0, noise.sigma_odom * noise.sigma_odom;
+    } else {
+      P_ << y2, 0, 0, 0; // the reference's yaw reading, shared
+    }
+  }
+  void setSixDof(bool six)
+  {
+    if (noise_.motion_noise == MotionNoise::Absolute) {
+      const double r = six ? noise_.sigma_rot : noise_.sigma_heading;
+      const double y2 = noise_.sigma_yaw * noise_.sigma_yaw;
+      rot_ = r * r;
+      if (!started_)
+        P_(0, 0) = rot_ + y2;
+    }
+  }
+  void step(const StepNoise &q)
+  {
+    if (noise_.motion_noise == MotionNoise::Absolute)
+      return;
+    Eigen::Matrix2d F;
+    F << 1, 0, q.d, 1;
+    P_ = F * P_ * F.transpose();
+    P_(0, 0) += q.var_rot;
+    P_(1, 1) += q.var_t;
+    xu_ = F * xu_;
+    xv_ = F * xv_;
+  }
+  /* One residual (px) at depth z; returns the modelled motion variance of it (px^2). */
+  double observe(const Eigen::Vector2d &r, double z)
+  {
+    started_ = true;
+    const double var_px = noise_.sigma_px * noise_.sigma_px, y2 = noise_.sigma_yaw * noise_.sigma_yaw;
+    double own = f_ * f_ * y2; // this reading's own yaw error
+    if (noise_.motion_noise == MotionNoise::Absolute)
+      own += f_ * f_ * (rot_ + noise_.sigma_odom * noise_.sigma_odom / (z * z)); // this pose's own error
+    const Eigen::RowVector2d H(f_, f_ / z);
+    const double S = H * P_ * H.transpose() + own + var_px;
+    const double var_motion = S - var_px;
+    const Eigen::Vector2d K = P_ * H.transpose() / S;
+    const double nu = r.x() - H * xu_, nv = r.y() - H * xv_;
+    chi2_ += (nu * nu + nv * nv) / S;
+    xu_ += K * nu;
+    xv_ += K * nv;
+    P_ -= K * H * P_;
+    return var_motion;
+  }
+  double chi2() const { return chi2_; }
+
+private:
+  const NoiseModel &noise_;
+  double f_, rot_ = 0, chi2_ = 0;
+  bool started_ = false;
+  Eigen::Matrix2d P_;
+  Eigen::Vector2d xu_ = Eigen::Vector2d::Zero(), xv_ = Eigen::Vector2d::Zero();
+};
 
 /* cMw of every row (the world's pose in each row's camera). */
 struct CameraPoses {
@@ -191,33 +276,39 @@ TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motio
   fit.pixel_dominated.assign(used.size(), false);
   const double f = std::max(camera.kx(), camera.ky()), var_px = noise.sigma_px * noise.sigma_px;
   double chi2 = 0, sum2 = 0;
-  const auto visit = [&](std::size_t row, double var_rot, double var_t) {
-    for (std::size_t u = 0; u < used.size(); ++u) {
-      if (used[u].first != row)
-        continue;
-      const Eigen::Vector3d c_P = poses.cMw[row] * w_P;
-      Eigen::Vector2d uv;
-      Eigen::Matrix<double, 2, 3> J;
-      if (!projectPoint(camera, c_P, uv, J)) {
-        chi2 = std::numeric_limits<double>::infinity();
-        continue;
-      }
-      const double r2 = (uv - Eigen::Vector2d(used[u].second->u, used[u].second->v)).squaredNorm();
-      const double var_motion = f * f * (var_rot + var_t / (c_P.z() * c_P.z()));
-      chi2 += r2 / (var_px + var_motion);
-      sum2 += r2;
-      // Pose errors per pose are white; per increment they drift, and would look like the tracker's.
-      fit.pixel_dominated[u] = noise.motion_noise == MotionNoise::Absolute || var_motion < kPixelDominated * var_px;
-      fit.pixel_share_sum += var_px / (var_px + var_motion);
-      fit.J[u] = J * poses.cMw[row].linear() * poses.cMw[kr].linear().transpose(); // d(pixel) / d(point in the point's camera)
-    }
-  };
-  walkPoseNoise(noise, motion, kr, std::min(kr, used.front().first), visit);
-  if (used.back().first > kr) // observations after the point's frame (not for the methods here, but allowed)
-    walkPoseNoise(noise, motion, kr, used.back().first, [&](std::size_t row, double vr, double vt) {
+  // Two walks from the point's row: back to the first observation, on to the last (if any after it).
+  for (const long dir : {-1L, 1L}) {
+    const std::size_t end = dir < 0 ? std::min(kr, used.front().first) : std::max(kr, used.back().first);
+    if (dir > 0 && end == kr)
+      break;
+    WalkChi2 walk(noise, f);
+    walk.setSixDof(motion[kr].six_dof);
+    for (std::size_t row = kr;; row = static_cast<std::size_t>(static_cast<long>(row) + dir)) {
       if (row != kr)
-        visit(row, vr, vt);
-    });
+        walk.step(stepNoise(noise, motion[static_cast<std::size_t>(static_cast<long>(row) - dir)], motion[row]));
+      for (std::size_t u = 0; u < used.size(); ++u) {
+        if (used[u].first != row || (dir > 0 && row == kr))
+          continue;
+        const Eigen::Vector3d c_P = poses.cMw[row] * w_P;
+        Eigen::Vector2d uv;
+        Eigen::Matrix<double, 2, 3> J;
+        if (!projectPoint(camera, c_P, uv, J)) {
+          chi2 = std::numeric_limits<double>::infinity();
+          continue;
+        }
+        const Eigen::Vector2d res = uv - Eigen::Vector2d(used[u].second->u, used[u].second->v);
+        const double var_motion = walk.observe(res, c_P.z());
+        sum2 += res.squaredNorm();
+        // Pose errors per pose are white; per increment they drift, and would look like the tracker's.
+        fit.pixel_dominated[u] = noise.motion_noise == MotionNoise::Absolute || var_motion < kPixelDominated * var_px;
+        fit.pixel_share_sum += var_px / (var_px + var_motion);
+        fit.J[u] = J * poses.cMw[row].linear() * poses.cMw[kr].linear().transpose(); // d(pixel) / d(point in the point's camera)
+      }
+      if (row == end)
+        break;
+    }
+    chi2 += walk.chi2();
+  }
   if (std::isfinite(chi2))
     fit.r = leastSquaresResiduals(camera, poses, used, w_P);
   fit.summary.chi2 = chi2;
@@ -331,7 +422,7 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
   const std::vector<bool> none;
   std::vector<TrackFit> fits(tracks.size());
   std::vector<double> ratios;
-  double share_sum = 0;
+  double share_sum = 0, inv_dof_sum = 0;
   std::size_t observations = 0;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     if (!points[i].ok())
@@ -340,6 +431,7 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     out.tracks[i] = fits[i].summary;
     if (out.tracks[i].dof >= 1) {
       ratios.push_back(out.tracks[i].chi2 / chiSquareMedian(out.tracks[i].dof));
+      inv_dof_sum += 1.0 / out.tracks[i].dof;
       ++out.tracks_used;
       share_sum += fits[i].pixel_share_sum;
       observations += fits[i].J.size();
@@ -351,6 +443,10 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     const auto mid = ratios.begin() + static_cast<long>(ratios.size() / 2);
     std::nth_element(ratios.begin(), mid, ratios.end());
     out.variance_factor = *mid;
+    // chi2 / nu has the relative variance 2 / nu; the median of n such ratios sqrt(pi / 2) times
+    // their spread over sqrt(n).
+    const double n = static_cast<double>(ratios.size());
+    out.variance_factor_sigma = out.variance_factor * std::sqrt(M_PI / 2 * 2 * inv_dof_sum / n / n);
   }
   const double factor = std::max(1.0, out.variance_factor);
   if (options.scale_sigma)
@@ -362,7 +458,8 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     const TrackResidual &t = out.tracks[i];
     if (!points[i].ok())
       continue;
-    if (t.dof >= 1 && !(t.chi2 <= options.gate_scale * factor * chiSquareQuantile(t.dof, options.gate_probability))) {
+    const double gate_factor = options.gate_at_model ? 1.0 : factor;
+    if (t.dof >= 1 && !(t.chi2 <= options.gate_scale * gate_factor * chiSquareQuantile(t.dof, options.gate_probability))) {
       points[i].status = Status::Inconsistent;
       ++out.inconsistent;
       continue;

@@ -119,6 +119,23 @@ void checkTracksAgainstMotion(const std::vector<Track> &tracks, const MotionLog 
 */
 void checkMotionSteps(const MotionLog &motion, const std::string &motion_path);
 
+/*!
+  \brief Mistakes of units a motion log's numbers suggest, one line each (empty: none): a yaw or
+  heading column beyond a full turn (2 pi) or turning more than 1 rad between two rows (degrees
+  given as radians?), a theta-u rotation beyond pi (theta-u angles are at most half a turn).
+  Warnings, not errors: a continuous pan joint may wind past a turn.
+  \param motion The log. \param motion_path Its name, for the message.
+*/
+std::vector<std::string> motionWarnings(const MotionLog &motion, const std::string &motion_path);
+
+/*!
+  \brief Mistakes a rig file's numbers suggest, one line each (empty: none): the camera more than
+  2 m from the vision frame's origin (millimetres given as metres?), a yaw_offset beyond a full turn
+  (degrees?).
+  \param rig The rig file. \param rig_path Its name, for the message.
+*/
+std::vector<std::string> rigWarnings(const RigFile &rig, const std::string &rig_path);
+
 /*! \brief One output row: a feature id and its estimate. */
 struct PointRow {
   long id = 0;             //!< Feature id, as in the tracks file.

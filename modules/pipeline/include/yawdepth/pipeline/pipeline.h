@@ -17,6 +17,8 @@
 */
 #include <functional>
 #include <vector>
+#include <string>
+#include <vector>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
@@ -64,6 +66,15 @@ struct PipelineResult {
   std::vector<std::vector<bool>> outliers; //!< Per track and observation: rejected (or unusable).
   std::vector<MotionSample> motion;        //!< The motion as estimated (refine) or as given (the others).
   ResidualCheckResult residuals;           //!< The residual check's findings (defaults when it did not run).
+  /*! fused, window, refine: the whole log against the noise model given (see estimatePoints()). */
+  struct Consistency {
+    double s0 = 1;            //!< sqrt of the median chi-square ratio of the tracks at the model given (1: not measured)
+    double outlier_share = 0; //!< share of the observations flagged as outliers or unusable
+    int tracks_used = 0;      //!< tracks in s0
+    bool mistake = false;     //!< the tracks do not fit the motion: points gated at the model given (see estimatePoints())
+  } consistency;
+  /*! One line each, for the user: what the data say is wrong (empty: nothing). */
+  std::vector<std::string> warnings;
 };
 
 /*! \brief Whether this build has the method (every one but refine always; refine with Ceres). */
@@ -79,6 +90,18 @@ Method bestMethod();
   \param tracks The features; a track with fewer than two observations gets `too_few_frames`.
   \param options The method and its options (validated first).
   \throws yawdepth::Error for bad options or inconsistent input (an observed frame not in the log).
+
+  After fused, window and refine, whatever the residual check's option, two rules:
+  - **Unconfirmed points**: an ok point most of whose observations were flagged as outliers (or
+    unusable), or with fewer than three left after any was flagged, is `inconsistent`: what is left
+    cannot confirm it.
+  - **The whole log against the noise model** (the residual check's s0 at the model given, on the
+    motion as given): when s0 exceeds 5, or more than 30 % of the observations were flagged, the
+    tracks do not fit the motion (a frame offset between tracks and motion, angles in degrees, a
+    wrong rig or camera: no tracker is that far off its model): a warning, the noise model is not
+    re-estimated from such residuals, and every ok point whose track fails the residual check's gate
+    at the model given is `inconsistent` (Consistency::mistake). When s0 exceeds 1.5 without the
+    residual check, a warning that the sigmas are too small by about s0.
 */
 PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                               const std::vector<Track> &tracks, const PipelineOptions &options);

@@ -8,12 +8,18 @@
   For point \f$ {}^wP \f$ (the estimate, moved to the world through its frame's pose) and each
   observation j of its track that the method did not flag as an outlier, the reprojection residual
   \f$ r_j = \pi({}^{c_j}M_w\,{}^wP) - (u_j, v_j) \f$ with the log's poses, and
-  \f[ \chi^2 = \sum_j \frac{\lVert r_j \rVert^2}{\sigma_{px}^2 + f^2 \left(\sigma_{\theta,j}^2 + \sigma_{t,j}^2 / Z_j^2\right)},
-      \qquad \nu = 2N - 3 \f]
-  where \f$ \sigma_{\theta,j}, \sigma_{t,j} \f$ are the rotation and translation uncertainty (per
-  axis) of the pose between frame j and the point's frame under the noise model (relativePoseSigma()),
-  f the focal length and \f$ Z_j \f$ the point's depth in frame j. The variance is per pixel axis,
-  isotropic: a conservative stand-in for the full covariance that keeps the check O(observations).
+  \f[ \chi^2 = \sum_j \frac{\nu_j^{\top} \nu_j}{S_j}, \qquad \nu = 2N - 3 \f]
+  the normalised innovations of a Kalman filter along the track (per pixel axis, from the point's
+  frame outward) whose state is the error of each frame's pose relative to the point's: rotation
+  \f$ \theta \f$ and translation \f$ \tau \f$ per axis, each residual
+  \f$ r_j = f\,\theta_j + (f / Z_j)\,\tau_j + \text{pixel noise} \f$ (f the focal length, \f$ Z_j \f$
+  the point's depth in frame j). Per-increment motion noise is a random walk shared by every later
+  observation of the walk (the rotation error turning each later step), per-pose noise is the
+  reference pose's error shared and each pose's own; the yaw readings' noise is each reading's own
+  plus the reference's. The variance is per pixel axis, isotropic: a stand-in for the full
+  covariance that keeps the check O(observations) and overstates the motion's part somewhat (a
+  residual check on a correct model gives s0 below 1, never far above; relativePoseSigma() gives
+  the marginal per-axis sigmas the walk uses).
 
   - **Noise from residuals** (the a-posteriori variance factor of adjustment theory): with at least
     `min_tracks` tracks, \f$ s_0^2 = \mathrm{median}_i\, \chi^2_i / m(\nu_i) \f$, where \f$ m(\nu) \f$
@@ -45,14 +51,15 @@
   - **The noise model from the residuals** (estimatePoints(), `reestimate_noise`): when the residuals
     see all of the modelled noise (per-pose motion noise is white and shows in them; per-increment
     drift mostly does not, so then only when the pixels hold at least half of the variance), an
-    s0 outside [1/1.1, 1.1] means the model was s0 times too small or too large: the method runs
-    again with the model scaled by s0 (every sigma for per-pose motion noise; the pixels' alone for
-    per-increment noise, whose drift the residuals do not show), so that a tracker better than the
-    model gets sigmas that say so, not only one worse than it, and the check runs on that result. The model is
-    never made tighter when the residuals' correlation is 0.5 or more: errors that persist from
-    frame to frame hide in the fit, and small residuals then do not say the tracker is precise. A
-    tighter model does not tighten the gate: what counts as a track that is not one point stays what
-    the model given says.
+    s0 above 1.1 means the model was s0 times too small: the method runs again with the model scaled
+    by s0 (every sigma for per-pose motion noise; the pixels' alone for per-increment noise, whose
+    drift the residuals do not show). Since the stand-in overstates the motion's part, a smaller s0
+    is trusted only for the pixels and only when they hold at least 80 % of the modelled variance,
+    s0^2 is below 1/1.1^2 by more than three of its standard errors, and the residuals' correlation is
+    under 0.5 (errors that persist from frame to frame hide in the fit): the pixel noise is then made
+    the part of s0^2 the pixels explain, so that a tracker better than the model gets sigmas that say
+    so, and a correct model is never made overconfident. A tighter model does not tighten the gate:
+    what counts as a track that is not one point stays what the model given says.
 
   `paper` and `exact` use only the last two observations, so the rest of their track says nothing
   about their estimate: they are not checked.
@@ -72,16 +79,17 @@ struct ResidualCheckOptions {
   bool scale_sigma = true;         //!< multiply the ok points' covariance by s0^2 when s0 > 1
   int min_tracks = 20;             //!< fewest checked tracks for s0 (else s0 = 1)
   bool correlated = true;          //!< the tracker's correlated errors: each ok depth's variance at least the AR(1) one
-  /*! estimatePoints(): when the residuals see the whole noise model (per-pose motion noise, or the
-      pixels at least half of the variance) and s0 is outside [1/1.1, 1.1], run the method again with
-      the noise model times s0 (every sigma for per-pose motion noise, the pixels' for per-increment;
-      the pixel noise at least 0.01 px; never tighter when the residuals' correlation is 0.5 or more),
-      then check. */
+  /*! estimatePoints(): when the residuals say the noise model was wrong (see the file: larger, or
+      smaller with strong evidence and the pixels dominating), run the method again with the model
+      they say (the pixel noise at least 0.01 px), then check. */
   bool reestimate_noise = true;
   /*! Multiplies the gate's threshold (estimatePoints() sets it to 1 / s0^2 when it made the model
       tighter: the gate is never tighter than the model given, which says what counts as a track that
       is not one point). */
   double gate_scale = 1;
+  /*! The gate at the noise model given whatever s0 says (estimatePoints() when the tracks do not fit
+      the motion: s0 then measures the mistake, not the noise). */
+  bool gate_at_model = false;
   /*! \brief Throws yawdepth::Error for a probability outside (0.5, 1), min_tracks < 1 or a gate_scale that
       is not finite and at least 1. */
   void validate() const;
@@ -97,6 +105,7 @@ struct TrackResidual {
 /*! \brief What checkResiduals() found. */
 struct ResidualCheckResult {
   double variance_factor = 1.0; //!< s0^2 (1 with fewer than min_tracks tracks)
+  double variance_factor_sigma = 0; //!< standard error of s0^2 from the tracks' spread (0 with fewer than min_tracks tracks)
   double sigma_scale = 1.0;     //!< factor applied to every ok point's sigma (1 or s0)
   int tracks_used = 0;          //!< ok tracks with dof >= 1
   int inconsistent = 0;         //!< ok points the gate turned `inconsistent`
