@@ -134,9 +134,9 @@ def main():
     ours = math.sqrt(sums["ours"][0] / sums["ours"][1])
     print("Held-out reprojection RMS (px), leave-one-out over %d photos of %s, board %dx%d, %g m:"
           % (len(paths), a.data, cols, rows, square))
-    print("%-20s %-22s %-30s" % ("view left out", "ROS camera_calibration", "yawdepth calibrate-camera"))
+    print("%-20s %-22s %s" % ("view left out", "ROS camera_calibration", "yawdepth calibrate-camera"))
     for name, rm, rr, om, orr in rows_out:
-        print("%-20s %8.4f %-13s %8.4f %-21s" % (name, rr, rm, orr, om))
+        print("%-20s %8.4f %-13s %8.4f %s" % (name, rr, rm, orr, om))
     print("%-20s %8.4f %-13s %8.4f" % ("all views left out", ros, "", ours))
     verdict = "yawdepth better" if ours < ros else "ROS better" if ours > ros else "equal"
     print("%s: %.1f %% of ROS's held-out RMS" % (verdict, 100.0 * ours / ros))

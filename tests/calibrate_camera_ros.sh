@@ -74,6 +74,20 @@ for spec in k4:plumb_bob k8:rational_polynomial fisheye:equidistant; do
   cmp -s "$P.yaml.rig" "${P}_ros.yaml.rig" && pass ||
     fail "--distortion $d: our reader reads PREFIX.yaml and PREFIX_ros.yaml as different cameras"
 done
+# The auto rule on a narrow real lens: auto never tries fisheye; auto+fisheye scores it and keeps Brown.
+"$YAWDEPTH" calibrate-camera --pattern chessboard:9x6:0.0236 --out "$W/auto" "$FR"/franka_image-[1-8].png >"$W/auto.out" 2>&1
+! grep -q "Kannala-Brandt" "$W/auto.out" && grep -q "^Distortion model: k1 k2 p1 p2" "$W/auto.out" && pass ||
+  fail "--distortion auto tried fisheye or did not keep k1 k2 p1 p2: $(grep '^Distortion model' "$W/auto.out")"
+"$YAWDEPTH" calibrate-camera --pattern chessboard:9x6:0.0236 --distortion auto+fisheye --out "$W/autof" \
+  "$FR"/franka_image-[1-8].png >"$W/autof.out" 2>&1
+grep -q "^    Kannala-Brandt k1..k4 (fisheye): RMS .* on views left out" "$W/autof.out" &&
+  grep -q "^Distortion model: k1 k2 p1 p2" "$W/autof.out" && grep -q "distortion_model: plumb_bob" "$W/autof_ros.yaml" && pass ||
+  fail "--distortion auto+fisheye: fisheye not scored, or chosen for a narrow lens: $(grep '^Distortion model' "$W/autof.out")"
+# cv::fisheye cannot keep fx = fy: refused in one line, nothing written.
+"$YAWDEPTH" calibrate-camera --quiet --pattern chessboard:9x6:0.0236 --distortion fisheye --fix-aspect-ratio \
+  --out "$W/fa" "$FR"/franka_image-[1-8].png >/dev/null 2>"$W/fa.err"
+[ $? -eq 1 ] && [ "$(wc -l <"$W/fa.err")" -eq 1 ] && grep -q "fix-aspect-ratio" "$W/fa.err" && [ ! -e "$W/fa.yaml" ] && pass ||
+  fail "--distortion fisheye --fix-aspect-ratio: not refused in one line: $(head -n 2 "$W/fa.err")"
 # All or none: an unwritable PREFIX_ros.yaml (a folder) leaves no other file behind.
 mkdir -p "$W/clash_ros.yaml"
 "$YAWDEPTH" calibrate-camera --quiet --pattern chessboard:9x6:0.0236 --out "$W/clash" "$FR"/franka_image-[1-8].png \

@@ -146,8 +146,6 @@ CameraCalibrationOptions cameraCalibrationOptions(const CameraArgs &a)
   using D = CameraCalibrationOptions::Distortion;
   if (a.k3 && a.distortion != "auto" && a.distortion != "k5")
     throw Error("--k3 and --distortion " + a.distortion + " contradict each other");
-  if (a.fix_aspect && (a.distortion == "fisheye"))
-    throw Error("--fix-aspect-ratio and --distortion fisheye: cv::fisheye cannot keep fx = fy");
   opt.distortion = a.k3 || a.distortion == "k5" ? D::K5
                    : a.distortion == "k4"      ? D::K4
                    : a.distortion == "k8"      ? D::K8

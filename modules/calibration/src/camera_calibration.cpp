@@ -335,6 +335,8 @@ struct CameraFit {
 
 OpenCvSolution CameraFit::solve(const std::vector<std::size_t> &idx, Distortion d) const
 {
+  if (d == Distortion::Fisheye && options.fix_aspect_ratio)
+    throw Error("the fisheye model (cv::fisheye) cannot keep fx = fy: drop --fix-aspect-ratio (fix_aspect_ratio)");
   const int flags = modelFlags(d, options);
   std::vector<std::vector<cv::Point3f>> obj;
   std::vector<std::vector<cv::Point2f>> img;
@@ -627,24 +629,15 @@ Distortion chooseModel(const CameraFit &fit, const std::vector<std::size_t> &usa
   for (Distortion d : {Distortion::K4, Distortion::K5, Distortion::K8})
     result.models.push_back(scoreModel(fit, usable, d));
   if (fit.options.try_fisheye) {
-    if (fit.options.fix_aspect_ratio) { // cv::fisheye cannot keep fx = fy
+    try {
+      result.models.push_back(scoreModel(fit, usable, Distortion::Fisheye));
+    } catch (const Error &e) { // cv::fisheye failed (or cannot keep the aspect ratio): not usable
       DistortionModelScore m;
       m.name = modelName(Distortion::Fisheye);
       m.coefficients = 4;
       m.fisheye = true;
-      m.inadmissible = m.name + ": cv::fisheye cannot keep fx = fy (fix_aspect_ratio)";
+      m.inadmissible = m.name + ": " + e.what();
       result.models.push_back(m);
-    } else {
-      try {
-        result.models.push_back(scoreModel(fit, usable, Distortion::Fisheye));
-      } catch (const Error &e) { // cv::fisheye fails where a narrow lens gives it no start
-        DistortionModelScore m;
-        m.name = modelName(Distortion::Fisheye);
-        m.coefficients = 4;
-        m.fisheye = true;
-        m.inadmissible = m.name + ": " + e.what();
-        result.models.push_back(m);
-      }
     }
   }
   return pickModel(result.models, fit.options.simpler_within, result.model_reason);
@@ -953,8 +946,6 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
 {
   if (width <= 0 || height <= 0)
     throw Error("calibrateCamera: unknown image size");
-  if (options.distortion == Distortion::Fisheye && options.fix_aspect_ratio)
-    throw Error("calibrateCamera: the fisheye model (cv::fisheye) cannot keep fx = fy (fix_aspect_ratio)");
   CameraFit fit{calibration_detail::boardPoints(board), views, width, height, options, {}, {}};
   CameraCalibration result;
   const std::vector<std::size_t> usable = collectCorrespondences(fit, result);
