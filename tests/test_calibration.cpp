@@ -431,7 +431,7 @@ TEST_CASE("calibrate-camera --distortion fisheye and auto+fisheye recover a Kann
   CHECK_THROWS_AS(calibrateCamera(board, views, 640, 480, aspect), Error);
 }
 
-TEST_CASE("calibrate-camera auto+fisheye keeps a Brown model for a narrow lens; auto never tries fisheye", "[calibration][fisheye]")
+TEST_CASE("calibrate-camera auto+fisheye keeps a Brown model for a narrow lens, auto never tries fisheye", "[calibration][fisheye]")
 {
   const CameraModel truth = wideCamera(); // 74 degrees across, barrel distortion: not a fisheye
   const BoardLayout board = chessboard(9, 6, 0.03);
