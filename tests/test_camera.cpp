@@ -217,6 +217,24 @@ TEST_CASE("camera: distortNormalized Jacobian matches central differences", "[ca
   }
 }
 
+/* The largest difference, relative to the Jacobian's largest entry, between undistort()'s
+   Jacobian at pixel uv and central differences of step `step` (px); every undistortion must succeed. */
+static double undistortJacobianError(const CameraModel &cam, const Eigen::Vector2d &uv, double step) {
+  Eigen::Vector2d m;
+  Eigen::Matrix2d J;
+  REQUIRE(cam.undistort(uv, m, &J));
+  Eigen::Matrix2d Jfd;
+  for (int k = 0; k < 2; ++k) {
+    Eigen::Vector2d h = Eigen::Vector2d::Zero();
+    h[k] = step;
+    Eigen::Vector2d mp, mm;
+    REQUIRE(cam.undistort(uv + h, mp));
+    REQUIRE(cam.undistort(uv - h, mm));
+    Jfd.col(k) = (mp - mm) / (2 * step);
+  }
+  return (J - Jfd).cwiseAbs().maxCoeff() / J.cwiseAbs().maxCoeff();
+}
+
 TEST_CASE("camera: undistort Jacobian matches central differences", "[camera]") {
   std::mt19937 rng(kSeed + 2);
   for (const auto &nc : distortedCameras()) {
@@ -224,20 +242,7 @@ TEST_CASE("camera: undistort Jacobian matches central differences", "[camera]") 
     const CameraModel &cam = nc.cam;
     double worst = 0;
     for (int i = 0; i < kRandomPoints; ++i) {
-      const Eigen::Vector2d uv = cam.project(randomNormalised(cam, rng));
-      Eigen::Vector2d m;
-      Eigen::Matrix2d J;
-      REQUIRE(cam.undistort(uv, m, &J));
-      Eigen::Matrix2d Jfd;
-      for (int k = 0; k < 2; ++k) {
-        Eigen::Vector2d h = Eigen::Vector2d::Zero();
-        h[k] = kFdStepPixel;
-        Eigen::Vector2d mp, mm;
-        REQUIRE(cam.undistort(uv + h, mp));
-        REQUIRE(cam.undistort(uv - h, mm));
-        Jfd.col(k) = (mp - mm) / (2 * kFdStepPixel);
-      }
-      worst = std::max(worst, (J - Jfd).cwiseAbs().maxCoeff() / J.cwiseAbs().maxCoeff());
+      worst = std::max(worst, undistortJacobianError(cam, cam.project(randomNormalised(cam, rng)), kFdStepPixel));
     }
     CHECK(worst < kUndistortJacobianTol);
   }
@@ -745,20 +750,7 @@ TEST_CASE("camera: Kannala-Brandt Jacobians match central differences", "[camera
       }
       worst_d = std::max(worst_d, (J - Jfd).cwiseAbs().maxCoeff() / std::max(1.0, J.cwiseAbs().maxCoeff()));
 
-      const Eigen::Vector2d uv = cam.project(m);
-      Eigen::Vector2d mu;
-      Eigen::Matrix2d Ju;
-      REQUIRE(cam.undistort(uv, mu, &Ju));
-      Eigen::Matrix2d Jufd;
-      for (int k = 0; k < 2; ++k) {
-        Eigen::Vector2d h = Eigen::Vector2d::Zero();
-        h[k] = kFdStepPixelFisheye;
-        Eigen::Vector2d mp, mm;
-        REQUIRE(cam.undistort(uv + h, mp));
-        REQUIRE(cam.undistort(uv - h, mm));
-        Jufd.col(k) = (mp - mm) / (2 * kFdStepPixelFisheye);
-      }
-      worst_u = std::max(worst_u, (Ju - Jufd).cwiseAbs().maxCoeff() / Ju.cwiseAbs().maxCoeff());
+      worst_u = std::max(worst_u, undistortJacobianError(cam, cam.project(m), kFdStepPixelFisheye));
     }
     CHECK(worst_d < kDistortJacobianTol);
     CHECK(worst_u < kUndistortJacobianTol);

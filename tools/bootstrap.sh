@@ -20,7 +20,7 @@ what=${1:-demo}
 packages=(g++ make cmake pkg-config libvisp-dev libopencv-dev libeigen3-dev libapriltag-dev libceres-dev
           catch2 libbenchmark-dev libcli11-dev libyaml-cpp-dev
           clang-14 libclang-rt-14-dev llvm-14 clang-tidy-14 doxygen visp-images-data
-          python3-camera-calibration-parsers)
+          python3-camera-calibration-parsers python3-camera-calibration python3-opencv python3-cv-bridge python3-image-geometry)
 
 install_missing() {
   local missing=()

@@ -88,9 +88,9 @@ struct RigArgs {
   InputOptions input;
 };
 
-/* calibrate-camera's three outputs. */
+/* calibrate-camera's four outputs. */
 struct CameraOutputs {
-  std::string yaml, xml, coverage;
+  std::string yaml, ros, xml, coverage;
 };
 
 /* The outputs, checked before anything is read or written: none may be an input (an image) or
@@ -99,15 +99,17 @@ CameraOutputs cameraOutputs(const CameraArgs &a, const CLI::App &sub)
 {
   const std::filesystem::path prefix(a.out);
   if (a.out.empty() || !prefix.has_filename() || prefix.filename() == "." || prefix.filename() == "..")
-    throw Error("--out '" + a.out + "': not a file prefix (e.g. --out calib/mycam writes calib/mycam.yaml and .xml)");
+    throw Error("--out '" + a.out + "': not a file prefix (e.g. --out calib/mycam writes calib/mycam.yaml, "
+                "calib/mycam_ros.yaml and calib/mycam.xml)");
   CameraOutputs o;
   o.yaml = a.out + ".yaml";
+  o.ros = a.out + "_ros.yaml";
   o.xml = a.out + ".xml";
   o.coverage = sub.count("--coverage") > 0 ? a.coverage : a.out + "_coverage.png";
   std::vector<NamedPath> inputs;
   for (const std::string &path : a.images)
     inputs.push_back({"image", path});
-  std::vector<NamedPath> outputs = {{"--out (.yaml)", o.yaml}, {"--out (.xml)", o.xml}, {"--coverage", o.coverage}};
+  std::vector<NamedPath> outputs = {{"--out (.yaml)", o.yaml}, {"--out (_ros.yaml)", o.ros}, {"--out (.xml)", o.xml}, {"--coverage", o.coverage}};
   for (const std::string &f : debugFiles(a.debug_dir, a.images))
     outputs.push_back({"--debug-dir", f});
   checkOutputs(inputs, outputs);
@@ -144,12 +146,17 @@ CameraCalibrationOptions cameraCalibrationOptions(const CameraArgs &a)
   using D = CameraCalibrationOptions::Distortion;
   if (a.k3 && a.distortion != "auto" && a.distortion != "k5")
     throw Error("--k3 and --distortion " + a.distortion + " contradict each other");
-  opt.distortion = a.k3 || a.distortion == "k5" ? D::K5 : a.distortion == "k4" ? D::K4 : a.distortion == "k8" ? D::K8 : D::Auto;
+  opt.distortion = a.k3 || a.distortion == "k5" ? D::K5
+                   : a.distortion == "k4"      ? D::K4
+                   : a.distortion == "k8"      ? D::K8
+                   : a.distortion == "fisheye" ? D::Fisheye
+                                               : D::Auto;
+  opt.try_fisheye = a.distortion == "auto+fisheye";
   opt.zero_tangential = a.zero_tangent;
   return opt;
 }
 
-/* PREFIX.yaml, PREFIX.xml and the coverage picture: all three files or none. */
+/* PREFIX.yaml, PREFIX_ros.yaml, PREFIX.xml and the coverage picture: all four files or none. */
 void writeCameraFiles(const CameraArgs &a, const CameraOutputs &o, const BoardLayout &board,
                       const CameraCalibration &cal, const CalibrationDetections &det)
 {
@@ -160,41 +167,22 @@ void writeCameraFiles(const CameraArgs &a, const CameraOutputs &o, const BoardLa
        << "<global_reprojection_error><without_distortion>" << cal.visp_rms_without
        << "</without_distortion><with_distortion>" << cal.visp_rms_with
        << "</with_distortion></global_reprojection_error>";
+  if (cal.camera.distortion() == CameraModel::Distortion::KannalaBrandt) // ViSP 3.5 has no fisheye model
+    info << "<lens_model>Kannala-Brandt fisheye: ViSP cannot represent it; these are ViSP's own pinhole and "
+            "kud/kdu models fitted to the same corners, an approximation (see their errors above); the fisheye "
+            "model is in the OpenCV and ROS YAML files</lens_model>";
   AtomicFiles files;
   files.add(o.yaml, cameraYamlText(cal.camera));
+  files.add(o.ros, rosCameraInfoYamlText(cal.camera, a.camera_name));
   files.add(o.xml, vispCameraXmlText(cal, a.camera_name, info.str()));
   const std::string ext = std::filesystem::path(o.coverage).extension().string();
   files.add(o.coverage, coverageImageBytes(cal, det.views, ext.empty() ? std::string(".png") : ext));
   files.commit();
 }
 
-/* The OpenCV model with its 1-sigma uncertainties, then the distortion models compared. */
-void printCameraModel(const CameraCalibration &cal, bool fixed_principal_point)
+/* The distortion model's reason, then the models compared. */
+void printDistortionModels(const CameraCalibration &cal)
 {
-  const CameraModel &c = cal.camera;
-  if (c.distortion() == CameraModel::Distortion::KannalaBrandt)
-  { // calibrateCamera() fits the Brown model; a fisheye camera has no Brown coefficients to show
-    const std::vector<double> &kb = c.kannalaBrandtCoefficients();
-    std::cout << "Camera (Kannala-Brandt fisheye):\n"
-              << "  fx = " << fixed(c.kx(), 2) << " px   fy = " << fixed(c.ky(), 2) << " px\n"
-              << "  u0 = " << fixed(c.u0(), 2) << " px   v0 = " << fixed(c.v0(), 2) << " px\n"
-              << "  k1 = " << fixed(kb[0], 5) << "   k2 = " << fixed(kb[1], 5) << "   k3 = " << fixed(kb[2], 5)
-              << "   k4 = " << fixed(kb[3], 5) << "\n";
-    return;
-  }
-  const std::vector<double> &k = c.brownCoefficients();
-  const std::vector<double> &sd = cal.std_devs;
-  auto pm = [](double v, double s, int p) { return fixed(v, p) + " +- " + fixed(s, p); };
-  std::cout << "Camera (OpenCV, Brown model), 1-sigma:\n"
-            << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
-            << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
-            << (fixed_principal_point ? " (fixed)" : "") << "\n"
-            << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
-            << "  p1 = " << pm(k[2], sd[6], 6) << "   p2 = " << pm(k[3], sd[7], 6) << "\n"
-            << "  k3 = " << pm(k[4], sd[8], 5) << (k[4] != 0 ? "" : " (fixed)");
-  if (k[5] != 0 || k[6] != 0 || k[7] != 0)
-    std::cout << "   k4 = " << pm(k[5], sd[9], 5) << "   k5 = " << pm(k[6], sd[10], 5) << "   k6 = " << pm(k[7], sd[11], 5);
-  std::cout << "\n";
   std::cout << "Distortion model: " << cal.model_reason << "\n";
   if (cal.models.size() > 1)
     for (const auto &m : cal.models)
@@ -207,6 +195,38 @@ void printCameraModel(const CameraCalibration &cal, bool fixed_principal_point)
       else
         std::cout << "; not usable: " << m.inadmissible << "\n";
     }
+}
+
+/* The OpenCV model with its 1-sigma uncertainties, then the distortion models compared. */
+void printCameraModel(const CameraCalibration &cal, bool fixed_principal_point)
+{
+  const CameraModel &c = cal.camera;
+  const std::vector<double> &sd = cal.std_devs;
+  auto pm = [](double v, double s, int p) { return fixed(v, p) + " +- " + fixed(s, p); };
+  if (c.distortion() == CameraModel::Distortion::KannalaBrandt)
+  { // std_devs holds fx fy u0 v0 k1..k4 in its first eight places
+    const std::vector<double> &kb = c.kannalaBrandtCoefficients();
+    std::cout << "Camera (OpenCV, Kannala-Brandt fisheye model), 1-sigma:\n"
+              << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
+              << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
+              << (fixed_principal_point ? " (fixed)" : "") << "\n"
+              << "  k1 = " << pm(kb[0], sd[4], 5) << "   k2 = " << pm(kb[1], sd[5], 5) << "\n"
+              << "  k3 = " << pm(kb[2], sd[6], 5) << "   k4 = " << pm(kb[3], sd[7], 5) << "\n";
+    printDistortionModels(cal);
+    return;
+  }
+  const std::vector<double> &k = c.brownCoefficients();
+  std::cout << "Camera (OpenCV, Brown model), 1-sigma:\n"
+            << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
+            << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
+            << (fixed_principal_point ? " (fixed)" : "") << "\n"
+            << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
+            << "  p1 = " << pm(k[2], sd[6], 6) << "   p2 = " << pm(k[3], sd[7], 6) << "\n"
+            << "  k3 = " << pm(k[4], sd[8], 5) << (k[4] != 0 ? "" : " (fixed)");
+  if (k[5] != 0 || k[6] != 0 || k[7] != 0)
+    std::cout << "   k4 = " << pm(k[5], sd[9], 5) << "   k5 = " << pm(k[6], sd[10], 5) << "   k6 = " << pm(k[7], sd[11], 5);
+  std::cout << "\n";
+  printDistortionModels(cal);
 }
 
 /* After the RMS line (unless --quiet): the model, the projection uncertainty, each view, ViSP's
@@ -244,7 +264,7 @@ void printCameraCalibration(const CameraArgs &a, const CameraOutputs &o, const C
             << " deg; corners cover " << fixed(100 * cal.coverage, 0) << " % of the image (" << o.coverage << ")\n";
   for (const std::string &n : cal.notes)
     std::cout << "note: " << n << "\n";
-  std::cout << "wrote " << o.yaml << ", " << o.xml << "\n";
+  std::cout << "wrote " << o.yaml << ", " << o.ros << ", " << o.xml << "\n";
 }
 
 int runCalibrateCamera(const CameraArgs &a, const CLI::App &sub)
@@ -280,25 +300,28 @@ Runner addCalibrateCamera(CLI::App &app)
   auto a = std::make_shared<CameraArgs>();
   CLI::App *sub = app.add_subcommand(
       "calibrate-camera",
-      "Calibrate a camera from images of a chessboard (or an AprilTag grid): writes PREFIX.yaml (OpenCV, Brown "
-      "model) and PREFIX.xml (ViSP, without and with kud/kdu distortion) and prints the RMS reprojection error.");
+      "Calibrate a camera from images of a chessboard (or an AprilTag grid): writes PREFIX.yaml (OpenCV, Brown or "
+      "fisheye model), PREFIX_ros.yaml (ROS camera_info) and PREFIX.xml (ViSP, without and with kud/kdu distortion) and prints the RMS reprojection error.");
   sub->add_option("--pattern", a->pattern, "chessboard:COLSxROWS:SQUARE (inner corners, metres) or apriltag:FAMILY:SIZE")
       ->required();
   sub->add_flag("--fix-aspect-ratio", a->fix_aspect, "Keep fx = fy");
   sub->add_flag("--fix-principal-point", a->fix_pp,
                 "Keep the principal point at the image centre (OpenCV model; ViSP's models fit it)");
-  sub->add_option("--out", a->out, "Output prefix: writes PREFIX.yaml and PREFIX.xml")->required();
+  sub->add_option("--out", a->out, "Output prefix: writes PREFIX.yaml (OpenCV), PREFIX_ros.yaml (ROS camera_info) and "
+                  "PREFIX.xml (ViSP), all or none")->required();
   sub->add_option("images", a->images, "Calibration images")->required();
   sub->add_flag("--drop-outliers", a->drop_outliers,
                 "Recalibrate without the outlier views (RMS above 3x the median and above 0.5 px)");
   sub->add_option("--coverage", a->coverage, "Coverage picture (default PREFIX_coverage.png)");
   sub->add_option("--debug-dir", a->debug_dir,
                   "Write each image with its detected features and ids drawn (DIR/NNNN_NAME.png, NNNN its position)");
-  sub->add_option("--camera-name", a->camera_name, "Camera name in the ViSP XML")->capture_default_str();
+  sub->add_option("--camera-name", a->camera_name, "Camera name in the ViSP XML and the ROS camera_info YAML")->capture_default_str();
   sub->add_option("--distortion", a->distortion,
-                  "Distortion model: k4 (k1 k2 p1 p2), k5 (+ k3), k8 (rational, k1..k6 p1 p2), or auto: the one "
-                  "with the least error on views left out")
-      ->check(CLI::IsMember({"auto", "k4", "k5", "k8"}))
+                  "Distortion model: k4 (k1 k2 p1 p2), k5 (+ k3), k8 (rational, k1..k6 p1 p2), fisheye "
+                  "(Kannala-Brandt k1..k4, cv::fisheye), auto: the Brown model (k4, k5 or k8) with the least "
+                  "expected error on views left out, never fisheye, or auto+fisheye: the same with fisheye among "
+                  "them")
+      ->check(CLI::IsMember({"auto", "auto+fisheye", "k4", "k5", "k8", "fisheye"}))
       ->capture_default_str();
   sub->add_flag("--k3", a->k3, "The same as --distortion k5");
   sub->add_flag("--zero-tangent", a->zero_tangent, "Fix the tangential distortion p1 = p2 = 0");

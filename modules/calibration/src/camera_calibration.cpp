@@ -156,7 +156,28 @@ using Distortion = CameraCalibrationOptions::Distortion;
 int coefficientsOf(Distortion d) { return d == Distortion::K8 ? 8 : d == Distortion::K5 ? 5 : 4; }
 
 std::string modelName(Distortion d) {
+  if (d == Distortion::Fisheye)
+    return "Kannala-Brandt k1..k4 (fisheye)";
   return d == Distortion::K8 ? "k1..k6 p1 p2 (rational)" : d == Distortion::K5 ? "k1 k2 p1 p2 k3" : "k1 k2 p1 p2";
+}
+
+/*! cv::fisheye's flags under the options (it has no aspect-ratio constraint and no tangential terms). */
+int fisheyeFlags(const CameraCalibrationOptions &o) {
+  int flags = cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW;
+  if (o.fix_principal_point)
+    flags |= cv::fisheye::CALIB_FIX_PRINCIPAL_POINT;
+  return flags;
+}
+
+/*! The projection of a view's board points through a fit's K and distortion (`d`: its model). */
+std::vector<cv::Point2f> projectView(const std::vector<cv::Point3f> &obj, const cv::Mat &rvec, const cv::Mat &tvec,
+                                     const cv::Mat &K, const cv::Mat &dist, Distortion d) {
+  std::vector<cv::Point2f> proj;
+  if (d == Distortion::Fisheye)
+    cv::fisheye::projectPoints(obj, proj, rvec, tvec, K, dist);
+  else
+    cv::projectPoints(obj, rvec, tvec, K, dist, proj);
+  return proj;
 }
 
 /*! OpenCV flags of a model under the options' other constraints. */
@@ -186,7 +207,11 @@ Eigen::MatrixXd freeParameterMap(Distortion d, const CameraCalibrationOptions &o
     e[i] = 1;
     return e;
   };
-  if (o.fix_aspect_ratio) {
+  if (d == Distortion::Fisheye) { // fx fy u0 v0 k1..k4 in the first eight places
+    for (int i = 0; i < 8; ++i)
+      if (!(o.fix_principal_point && (i == 2 || i == 3)))
+        cols.push_back(unit(i));
+  } else if (o.fix_aspect_ratio) {
     Eigen::VectorXd e = unit(1);
     e[0] = aspect;
     cols.push_back(e);
@@ -194,47 +219,55 @@ Eigen::MatrixXd freeParameterMap(Distortion d, const CameraCalibrationOptions &o
     cols.push_back(unit(0));
     cols.push_back(unit(1));
   }
-  if (!o.fix_principal_point) {
-    cols.push_back(unit(2));
-    cols.push_back(unit(3));
+  if (d != Distortion::Fisheye) {
+    if (!o.fix_principal_point) {
+      cols.push_back(unit(2));
+      cols.push_back(unit(3));
+    }
+    cols.push_back(unit(4));
+    cols.push_back(unit(5));
+    if (!o.zero_tangential) {
+      cols.push_back(unit(6));
+      cols.push_back(unit(7));
+    }
+    if (d != Distortion::K4)
+      cols.push_back(unit(8));
+    if (d == Distortion::K8)
+      for (int i = 9; i < 12; ++i)
+        cols.push_back(unit(i));
   }
-  cols.push_back(unit(4));
-  cols.push_back(unit(5));
-  if (!o.zero_tangential) {
-    cols.push_back(unit(6));
-    cols.push_back(unit(7));
-  }
-  if (d != Distortion::K4)
-    cols.push_back(unit(8));
-  if (d == Distortion::K8)
-    for (int i = 9; i < 12; ++i)
-      cols.push_back(unit(i));
   Eigen::MatrixXd S(12, static_cast<Eigen::Index>(cols.size()));
   for (std::size_t j = 0; j < cols.size(); ++j)
     S.col(static_cast<Eigen::Index>(j)) = cols[j];
   return S;
 }
 
-/*! d(pixel)/d(fx fy u0 v0 k1..k6) (2N x 12) and d(pixel)/d(rvec tvec) (2N x 6) of OpenCV's projection. */
+/*! d(pixel)/d(fx fy u0 v0 k1..k6) (2N x 12) and d(pixel)/d(rvec tvec) (2N x 6) of OpenCV's projection;
+    for the fisheye model (`fisheye`, cv::fisheye's projection) d(pixel)/d(fx fy u0 v0 k1..k4) in the
+    first eight columns. */
 void projectionJacobians(const std::vector<cv::Point3f> &obj, const cv::Mat &rvec, const cv::Mat &tvec, const cv::Mat &K,
-                         const cv::Mat &dist, Eigen::MatrixXd &Jint, Eigen::MatrixXd &Jpose,
+                         const cv::Mat &dist, bool fisheye, Eigen::MatrixXd &Jint, Eigen::MatrixXd &Jpose,
                          std::vector<cv::Point2d> *proj = nullptr) {
   std::vector<cv::Point3d> o(obj.begin(), obj.end());
   std::vector<cv::Point2d> p;
   cv::Mat J;
-  cv::projectPoints(o, rvec, tvec, K, dist, p, J);
+  if (fisheye) // columns: f (2), c (2), k (4), rvec (3), tvec (3), skew (1)
+    cv::fisheye::projectPoints(o, p, rvec, tvec, K, dist, 0.0, J);
+  else // columns: rvec (3), tvec (3), f (2), c (2), distortion
+    cv::projectPoints(o, rvec, tvec, K, dist, p, J);
   const int n = static_cast<int>(o.size());
   const int nd = static_cast<int>(dist.total());
   Jint = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(n), 12);
   Jpose = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(n), 6);
   for (int r = 0; r < 2 * n; ++r) {
     const double *row = J.ptr<double>(r);
+    const int pose0 = fisheye ? 8 : 0, int0 = fisheye ? 0 : 6;
     for (int c = 0; c < 6; ++c)
-      Jpose(r, c) = row[c];
+      Jpose(r, c) = row[pose0 + c];
     for (int c = 0; c < 4; ++c)
-      Jint(r, c) = row[6 + c];
+      Jint(r, c) = row[int0 + c];
     for (int c = 0; c < std::min(nd, 8); ++c)
-      Jint(r, 4 + c) = row[10 + c];
+      Jint(r, 4 + c) = row[fisheye ? 4 + c : 10 + c];
   }
   if (proj)
     *proj = p;
@@ -259,12 +292,16 @@ void addSquaredErrors(const std::vector<Point> &proj, const std::vector<cv::Poin
   }
 }
 
-/* The Brown camera of a fit (5 coefficients, 8 for the rational model). */
-CameraModel brownCamera(const OpenCvSolution &s, Distortion d, int width, int height)
+/* The camera of a fit: Brown (5 coefficients, 8 for the rational model) or Kannala-Brandt (4). */
+CameraModel cameraOf(const OpenCvSolution &s, Distortion d, int width, int height)
 {
-  std::vector<double> c(static_cast<std::size_t>(d == Distortion::K8 ? 8 : 5));
+  std::vector<double> c(static_cast<std::size_t>(d == Distortion::K8 ? 8 : d == Distortion::Fisheye ? 4 : 5));
   for (std::size_t i = 0; i < c.size(); ++i)
     c[i] = s.dist.at<double>(static_cast<int>(i));
+  if (d == Distortion::Fisheye)
+    return CameraModel::kannalaBrandt(s.K.at<double>(0, 0), s.K.at<double>(1, 1), s.K.at<double>(0, 2),
+                                      s.K.at<double>(1, 2), c, static_cast<unsigned>(width),
+                                      static_cast<unsigned>(height));
   return CameraModel::brown(s.K.at<double>(0, 0), s.K.at<double>(1, 1), s.K.at<double>(0, 2), s.K.at<double>(1, 2), c,
                             static_cast<unsigned>(width), static_cast<unsigned>(height));
 }
@@ -298,6 +335,8 @@ struct CameraFit {
 
 OpenCvSolution CameraFit::solve(const std::vector<std::size_t> &idx, Distortion d) const
 {
+  if (d == Distortion::Fisheye && options.fix_aspect_ratio)
+    throw Error("the fisheye model (cv::fisheye) cannot keep fx = fy: drop --fix-aspect-ratio (fix_aspect_ratio)");
   const int flags = modelFlags(d, options);
   std::vector<std::vector<cv::Point3f>> obj;
   std::vector<std::vector<cv::Point2f>> img;
@@ -314,11 +353,15 @@ OpenCvSolution CameraFit::solve(const std::vector<std::size_t> &idx, Distortion 
     throw Error(degenerateMessage(pre, idx.size()));
   OpenCvSolution s;
   s.K = cv::Mat::eye(3, 3, CV_64F);
-  s.dist = cv::Mat::zeros(1, d == Distortion::K8 ? 8 : 5, CV_64F);
+  s.dist = cv::Mat::zeros(1, d == Distortion::K8 ? 8 : d == Distortion::Fisheye ? 4 : 5, CV_64F);
   cv::Mat std_ext, per_view;
   try {
-    cv::calibrateCamera(obj, img, cv::Size(width, height), s.K, s.dist, s.rvecs, s.tvecs, s.std_intrinsics, std_ext,
-                        per_view, flags, cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
+    if (d == Distortion::Fisheye)
+      cv::fisheye::calibrate(obj, img, cv::Size(width, height), s.K, s.dist, s.rvecs, s.tvecs, fisheyeFlags(options),
+                             cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
+    else
+      cv::calibrateCamera(obj, img, cv::Size(width, height), s.K, s.dist, s.rvecs, s.tvecs, s.std_intrinsics, std_ext,
+                          per_view, flags, cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-15));
   } catch (const cv::Exception &e) {
     if (pre < options.min_orientation_spread)
       throw Error(degenerateMessage(pre, idx.size()));
@@ -352,17 +395,29 @@ double CameraFit::heldOut(const std::vector<std::size_t> &idx, Distortion d, con
     cv::Mat K = all.K.clone(), dist = all.dist.clone();
     std::vector<cv::Mat> rv, tv;
     try {
-      cv::calibrateCamera(obj, img, cv::Size(width, height), K, dist, rv, tv,
-                          modelFlags(d, options) | cv::CALIB_USE_INTRINSIC_GUESS,
-                          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
+      const cv::TermCriteria stop(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12);
+      if (d == Distortion::Fisheye)
+        cv::fisheye::calibrate(obj, img, cv::Size(width, height), K, dist, rv, tv,
+                               fisheyeFlags(options) | cv::fisheye::CALIB_USE_INTRINSIC_GUESS, stop);
+      else
+        cv::calibrateCamera(obj, img, cv::Size(width, height), K, dist, rv, tv,
+                            modelFlags(d, options) | cv::CALIB_USE_INTRINSIC_GUESS, stop);
       if (!cv::checkRange(K) || !cv::checkRange(dist))
         return std::numeric_limits<double>::infinity();
       for (std::size_t k = f; k < idx.size(); k += folds) {
         cv::Mat r, t;
-        if (!cv::solvePnP(object[idx[k]], image[idx[k]], K, dist, r, t, false, cv::SOLVEPNP_ITERATIVE))
+        bool posed = false;
+        if (d == Distortion::Fisheye) { // the pose from the undistorted (normalised) corners
+          std::vector<cv::Point2f> normalised;
+          cv::fisheye::undistortPoints(image[idx[k]], normalised, K, dist);
+          posed = cv::solvePnP(object[idx[k]], normalised, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), r, t, false,
+                               cv::SOLVEPNP_ITERATIVE);
+        } else {
+          posed = cv::solvePnP(object[idx[k]], image[idx[k]], K, dist, r, t, false, cv::SOLVEPNP_ITERATIVE);
+        }
+        if (!posed)
           return std::numeric_limits<double>::infinity();
-        std::vector<cv::Point2f> proj;
-        cv::projectPoints(object[idx[k]], r, t, K, dist, proj);
+        const std::vector<cv::Point2f> proj = projectView(object[idx[k]], r, t, K, dist, d);
         addSquaredErrors(proj, image[idx[k]], sse);
         n += proj.size();
       }
@@ -389,7 +444,8 @@ bool CameraFit::intrinsicsCovariance(const std::vector<std::size_t> &idx, const 
   for (std::size_t k = 0; k < idx.size(); ++k) {
     Eigen::MatrixXd Jint, Jpose;
     std::vector<cv::Point2d> proj;
-    projectionJacobians(object[idx[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, Jint, Jpose, &proj);
+    projectionJacobians(object[idx[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, d == Distortion::Fisheye, Jint, Jpose,
+                        &proj);
     const Eigen::MatrixXd B = Jint * S;
     const Eigen::Matrix<double, 6, 6> V = Jpose.transpose() * Jpose;
     const Eigen::MatrixXd W = B.transpose() * Jpose;
@@ -423,7 +479,7 @@ std::string CameraFit::admissibility(const OpenCvSolution &s, Distortion d, cons
   if (!intrinsicsCovariance(idx, s, d, cov))
     return modelName(d) + ": the views do not determine its parameters (singular covariance)";
   try {
-    checkCameraPlausible(brownCamera(s, d, width, height), modelName(d));
+    checkCameraPlausible(cameraOf(s, d, width, height), modelName(d));
   } catch (const Error &e) {
     return e.what();
   }
@@ -467,12 +523,12 @@ DistortionModelScore scoreModel(const CameraFit &fit, const std::vector<std::siz
   DistortionModelScore m;
   m.name = modelName(d);
   m.coefficients = coefficientsOf(d);
+  m.fisheye = d == Distortion::Fisheye;
   const OpenCvSolution s = fit.solve(usable, d);
   double sse = 0;
   std::size_t n = 0;
   for (std::size_t k = 0; k < usable.size(); ++k) {
-    std::vector<cv::Point2f> proj;
-    cv::projectPoints(fit.object[usable[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, proj);
+    const std::vector<cv::Point2f> proj = projectView(fit.object[usable[k]], s.rvecs[k], s.tvecs[k], s.K, s.dist, d);
     addSquaredErrors(proj, fit.image[usable[k]], sse);
     n += proj.size();
   }
@@ -481,7 +537,7 @@ DistortionModelScore scoreModel(const CameraFit &fit, const std::vector<std::siz
   m.inadmissible = fit.admissibility(s, d, usable);
   if (m.inadmissible.empty()) {
     CameraCalibration tmp;
-    tmp.camera = brownCamera(s, d, fit.width, fit.height);
+    tmp.camera = cameraOf(s, d, fit.width, fit.height);
     fit.intrinsicsCovariance(usable, s, d, tmp.intrinsics_covariance);
     double u2 = 0;
     for (double u : uncertaintyGrid(tmp, fit.width, fit.height))
@@ -505,7 +561,8 @@ std::string modelReason(const std::vector<DistortionModelScore> &models, std::si
     if (i != pick) {
       why << (first ? " against " : ", ")
           << (models[i].inadmissible.empty() ? fixed(models[i].score_px, 4) : std::string("not usable")) << " ("
-          << models[i].coefficients << " coefficients)";
+          << (models[i].fisheye ? std::string("fisheye") : std::to_string(models[i].coefficients) + " coefficients")
+          << ")";
       first = false;
     }
   if (pick != best)
@@ -513,8 +570,9 @@ std::string modelReason(const std::vector<DistortionModelScore> &models, std::si
   return why.str();
 }
 
-/* Among the scored K4, K5, K8 (in this order): the simplest usable one within `simpler_within`
-   of the best score, marked chosen; the reason into `reason`. Throws when none is usable. */
+/* Among the scored K4, K5, K8 and (when tried) the fisheye model, in this order: the simplest
+   usable one within `simpler_within` of the best score, marked chosen; the reason into `reason`.
+   Throws when none is usable. */
 Distortion pickModel(std::vector<DistortionModelScore> &models, double simpler_within, std::string &reason)
 {
   std::size_t best = models.size();
@@ -538,7 +596,7 @@ Distortion pickModel(std::vector<DistortionModelScore> &models, double simpler_w
     }
   models[pick].chosen = true;
   reason = modelReason(models, pick, best, simpler_within);
-  return pick == 0 ? Distortion::K4 : pick == 1 ? Distortion::K5 : Distortion::K8;
+  return pick == 0 ? Distortion::K4 : pick == 1 ? Distortion::K5 : pick == 2 ? Distortion::K8 : Distortion::Fisheye;
 }
 
 /* The distortion model: given, or chosen by the held-out error (result.models, model_reason). */
@@ -551,6 +609,7 @@ Distortion chooseModel(const CameraFit &fit, const std::vector<std::size_t> &usa
     DistortionModelScore m;
     m.name = modelName(model);
     m.coefficients = coefficientsOf(model);
+    m.fisheye = model == Distortion::Fisheye;
     m.chosen = true;
     result.models.push_back(m);
     result.model_reason = modelName(model) + ": as asked";
@@ -569,6 +628,18 @@ Distortion chooseModel(const CameraFit &fit, const std::vector<std::size_t> &usa
   }
   for (Distortion d : {Distortion::K4, Distortion::K5, Distortion::K8})
     result.models.push_back(scoreModel(fit, usable, d));
+  if (fit.options.try_fisheye) {
+    try {
+      result.models.push_back(scoreModel(fit, usable, Distortion::Fisheye));
+    } catch (const Error &e) { // cv::fisheye failed (or cannot keep the aspect ratio): not usable
+      DistortionModelScore m;
+      m.name = modelName(Distortion::Fisheye);
+      m.coefficients = 4;
+      m.fisheye = true;
+      m.inadmissible = m.name + ": " + e.what();
+      result.models.push_back(m);
+    }
+  }
   return pickModel(result.models, fit.options.simpler_within, result.model_reason);
 }
 
@@ -590,15 +661,15 @@ double storeBoardPoses(const OpenCvSolution &sol, const std::vector<std::size_t>
 
 /* A fit's reprojection RMS of each used view (into its result, and returned in used's order) and
    over all (result.rms_px), in double precision. */
-std::vector<double> storeViewErrors(const CameraFit &fit, const OpenCvSolution &sol, const std::vector<std::size_t> &used,
-                                    CameraCalibration &result)
+std::vector<double> storeViewErrors(const CameraFit &fit, const OpenCvSolution &sol, Distortion model,
+                                    const std::vector<std::size_t> &used, CameraCalibration &result)
 {
   double sum2 = 0;
   std::size_t n_all = 0;
   std::vector<double> rms;
   for (std::size_t k = 0; k < used.size(); ++k) {
-    std::vector<cv::Point2f> proj;
-    cv::projectPoints(fit.object[used[k]], sol.rvecs[k], sol.tvecs[k], sol.K, sol.dist, proj);
+    const std::vector<cv::Point2f> proj =
+        projectView(fit.object[used[k]], sol.rvecs[k], sol.tvecs[k], sol.K, sol.dist, model);
     double s2 = 0;
     addSquaredErrors(proj, fit.image[used[k]], s2);
     sum2 += s2;
@@ -640,7 +711,7 @@ OpenCvSolution fitDroppingOutliers(const CameraFit &fit, Distortion model, int m
     result.orientation_spread = storeBoardPoses(sol, used, result);
     if (result.orientation_spread < options.min_orientation_spread)
       throw Error(degenerateMessage(result.orientation_spread, used.size()));
-    const std::vector<double> rms = storeViewErrors(fit, sol, used, result);
+    const std::vector<double> rms = storeViewErrors(fit, sol, model, used, result);
     double median = 0;
     const std::vector<std::size_t> kept = flagOutliers(rms, used, pass, options, result, median);
     if (pass == 1 || !options.drop_outliers || kept.size() == used.size())
@@ -666,7 +737,7 @@ OpenCvSolution fitDroppingOutliers(const CameraFit &fit, Distortion model, int m
 void storeCamera(const CameraFit &fit, const OpenCvSolution &sol, Distortion model, const std::vector<std::size_t> &used,
                  CameraCalibration &result)
 {
-  result.camera = brownCamera(sol, model, fit.width, fit.height);
+  result.camera = cameraOf(sol, model, fit.width, fit.height);
   const std::string bad = fit.admissibility(sol, model, used);
   if (!bad.empty())
     throw Error("the calibrated camera is not usable: " + bad +
@@ -944,16 +1015,15 @@ void saveVispCameraXml(const std::string &path, const CameraCalibration &calibra
 double projectionUncertainty(const CameraCalibration &calibration, double u, double v)
 {
   const CameraModel &cam = calibration.camera;
-  // The covariance is of the Brown model's intrinsics (the model calibrateCamera() fits): a
-  // fisheye camera has other parameters, and its Brown coefficients are not its distortion.
-  if (cam.distortion() == CameraModel::Distortion::KannalaBrandt)
-    throw Error("projectionUncertainty: the camera is a Kannala-Brandt (fisheye) model; the covariance "
-                "is of the Brown model's intrinsics");
+  // The covariance is of the camera's own parameters: Brown's, or Kannala-Brandt's k1..k4 in the
+  // places of k1 k2 p1 p2 (calibrateCamera() fits both).
+  const bool fisheye = cam.distortion() == CameraModel::Distortion::KannalaBrandt;
   const double w = cam.width(), h = cam.height();
   const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.kx(), 0, cam.u0(), 0, cam.ky(), cam.v0(), 0, 0, 1);
-  cv::Mat dist(1, 8, CV_64F);
-  for (int i = 0; i < 8; ++i)
-    dist.at<double>(i) = cam.brownCoefficients()[static_cast<std::size_t>(i)];
+  const std::vector<double> &coefficients = fisheye ? cam.kannalaBrandtCoefficients() : cam.brownCoefficients();
+  cv::Mat dist(1, static_cast<int>(coefficients.size()), CV_64F);
+  for (int i = 0; i < dist.cols; ++i)
+    dist.at<double>(i) = coefficients[static_cast<std::size_t>(i)];
   // Rays of (u, v) (first) and of a 16 x 12 grid over the image (the rotation is fitted on them).
   std::vector<cv::Point3f> rays;
   Eigen::Vector2d m;
@@ -966,7 +1036,7 @@ double projectionUncertainty(const CameraCalibration &calibration, double u, dou
         if (cam.undistort(Eigen::Vector2d((gx + 0.5) * w / 16 - 0.5, (gy + 0.5) * h / 12 - 0.5), m))
           rays.emplace_back(static_cast<float>(m.x()), static_cast<float>(m.y()), 1.f);
   Eigen::MatrixXd Jint, Jrot; // Jrot: d(pixel)/d(rvec) at rvec = 0, i.e. a small rotation of the camera
-  projectionJacobians(rays, cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), K, dist, Jint, Jrot);
+  projectionJacobians(rays, cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), K, dist, fisheye, Jint, Jrot);
   const Eigen::Index n = Jint.rows();
   Eigen::MatrixXd Jq = Jint.topRows(2);
   if (n > 8) {

@@ -303,22 +303,7 @@ bool CameraModel::undistort(const Eigen::Vector2d &uv, Eigen::Vector2d &m, Eigen
       return false;
   }
 
-  double xd = 0, yd = 0;
-  if (!distortBrown(k, x.x(), x.y(), xd, yd, &Jd))
-    return false;
-  // Final residual check (normalised units); far below 1e-9 px for any sensible focal length.
-  if (std::hypot(xd - target.x(), yd - target.y()) > 1e-12 * std::max(1.0, target.norm()))
-    return false;
-  m = x;
-  if (J) {
-    Eigen::Matrix2d A = Jd;
-    A.row(0) *= kx_;
-    A.row(1) *= ky_;
-    *J = A.inverse();
-    if (!J->allFinite())
-      return false;
-  }
-  return true;
+  return acceptRoot(x, target, m, J);
 }
 
 bool CameraModel::undistortKannalaBrandt(const Eigen::Vector2d &target, Eigen::Vector2d &m,
@@ -372,11 +357,18 @@ bool CameraModel::undistortKannalaBrandt(const Eigen::Vector2d &target, Eigen::V
   }
   if (!x.allFinite())
     return false;
+  return acceptRoot(x, target, m, J);
+}
+
+bool CameraModel::acceptRoot(const Eigen::Vector2d &x, const Eigen::Vector2d &target, Eigen::Vector2d &m,
+                             Eigen::Matrix2d *J) const {
   double xd = 0, yd = 0;
   Eigen::Matrix2d Jd;
-  if (!distortKannalaBrandt(k, x.x(), x.y(), xd, yd, &Jd))
+  const bool ok = model_ == Distortion::KannalaBrandt ? distortKannalaBrandt(kb_.data(), x.x(), x.y(), xd, yd, &Jd)
+                                                      : distortBrown(coeffs_.data(), x.x(), x.y(), xd, yd, &Jd);
+  if (!ok)
     return false;
-  // Final residual check (normalised units), as for the Brown model.
+  // Final residual check (normalised units); far below 1e-9 px for any sensible focal length.
   if (std::hypot(xd - target.x(), yd - target.y()) > 1e-12 * std::max(1.0, target.norm()))
     return false;
   m = x;

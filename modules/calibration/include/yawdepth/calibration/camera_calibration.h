@@ -49,12 +49,13 @@ CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std
 struct CameraCalibrationOptions {
   bool fix_aspect_ratio = false;    //!< fx = fy (cv::CALIB_FIX_ASPECT_RATIO, vpCalibration aspect ratio 1)
   bool fix_principal_point = false; //!< principal point at the image centre (OpenCV model only)
-  /*! \brief The Brown distortion model (OpenCV's coefficients). */
+  /*! \brief The distortion model: Brown (OpenCV's coefficients) or Kannala-Brandt (cv::fisheye). */
   enum class Distortion {
-    Auto, //!< fit K4, K5 and K8; keep the one with the least error on views left out (see below)
-    K4,   //!< k1 k2 p1 p2
-    K5,   //!< k1 k2 p1 p2 k3
-    K8    //!< k1 k2 p1 p2 k3 k4 k5 k6 (OpenCV's rational model)
+    Auto,   //!< fit K4, K5 and K8 (and Fisheye when `try_fisheye`); keep the one with the least error on views left out (see below)
+    K4,     //!< k1 k2 p1 p2
+    K5,     //!< k1 k2 p1 p2 k3
+    K8,     //!< k1 k2 p1 p2 k3 k4 k5 k6 (OpenCV's rational model)
+    Fisheye //!< Kannala-Brandt k1 k2 k3 k4 (cv::fisheye::calibrate, no skew); not with fix_aspect_ratio
   };
   /*!
     Auto: each model is fitted with whole views left out (at most `cv_folds` folds, view k in fold
@@ -68,6 +69,10 @@ struct CameraCalibrationOptions {
     error, as is Auto when none is.
   */
   Distortion distortion = Distortion::Auto;
+  /*! Auto: also fit and score the Kannala-Brandt fisheye model (last in the order of simplicity: it
+      is chosen only when its score is better than every Brown model's by more than `simpler_within`);
+      false: Auto never tries it. With fix_aspect_ratio it is scored as not usable. */
+  bool try_fisheye = false;
   int cv_folds = 5;                 //!< Auto: at most this many folds of left-out views
   double simpler_within = 0.01;     //!< Auto: relative margin by which a simpler model is preferred
   bool estimate_k3 = false;         //!< with distortion Auto: the same as K5 (kept for older callers)
@@ -94,8 +99,9 @@ struct CalibrationViewResult {
 
 /*! \brief One distortion model as fitted and cross-validated by calibrateCamera(). */
 struct DistortionModelScore {
-  std::string name;          //!< "k1 k2 p1 p2", "k1 k2 p1 p2 k3" or "k1..k6 p1 p2 (rational)"
-  int coefficients = 0;      //!< 4, 5 or 8
+  std::string name;          //!< "k1 k2 p1 p2", "k1 k2 p1 p2 k3", "k1..k6 p1 p2 (rational)" or "Kannala-Brandt k1..k4 (fisheye)"
+  int coefficients = 0;      //!< 4, 5 or 8 (the fisheye model: 4)
+  bool fisheye = false;      //!< the Kannala-Brandt model
   double rms_px = 0;         //!< RMS reprojection error over every view (px per point, as OpenCV's)
   double heldout_rms_px = 0; //!< RMS error on views left out (px per point); 0 when not computed
   /*! RMS over an 8 x 6 grid of the whole image of projectionUncertainty() (px): what the views
@@ -112,10 +118,11 @@ struct DistortionModelScore {
 
 /*! \brief Result of calibrateCamera(). */
 struct CameraCalibration {
-  CameraModel camera;              //!< Brown model with the image size
+  CameraModel camera;              //!< Brown or (Distortion::Fisheye) Kannala-Brandt model with the image size
   double rms_px = 0;               //!< RMS reprojection error over the views used (px)
   /*! standard deviations of fx, fy, u0, v0, k1, k2, p1, p2, k3, k4, k5, k6 (0 for fixed parameters),
-      the square roots of intrinsics_covariance's diagonal */
+      the square roots of intrinsics_covariance's diagonal; for a Kannala-Brandt camera of fx, fy,
+      u0, v0, k1, k2, k3, k4 in the first eight places (the last four 0) */
   std::vector<double> std_devs;
   std::vector<CalibrationViewResult> views; //!< every input view, in input order
   int views_used = 0;              //!< number of views in the final calibration
@@ -131,8 +138,8 @@ struct CameraCalibration {
   std::vector<DistortionModelScore> models; //!< the models compared (one when the model was given)
   std::string model_reason;        //!< why the model was chosen, one line
   /*!
-    Covariance of fx fy u0 v0 k1 k2 p1 p2 k3 k4 k5 k6 (12 x 12; rows and columns of fixed parameters
-    are zero): the Gauss-Newton covariance of the final fit, poses marginalised (Schur complement),
+    Covariance of fx fy u0 v0 k1 k2 p1 p2 k3 k4 k5 k6 (a Kannala-Brandt camera: fx fy u0 v0 k1 k2 k3
+    k4, then zeros) (12 x 12; rows and columns of fixed parameters are zero): the Gauss-Newton covariance of the final fit, poses marginalised (Schur complement),
     scaled by the residual variance SSE / (2N - parameters). Its diagonal is std_devs^2. (OpenCV's
     own deviations are larger by sqrt((2N - p) / (N - p)): it divides by N points, not 2N residuals.)
   */
@@ -148,8 +155,8 @@ struct CameraCalibration {
   small rotation of the camera undoes (the principal point against the camera's orientation) moves
   no measurement, since every pose absorbs it: that rotation, fitted over a 16 x 12 grid of the
   image, is removed first (mrcal's compensation of the camera frame, for points far away). What
-  remains grows where the corners did not reach, at the image's edges and corners. Throws
-  yawdepth::Error for a Kannala-Brandt camera (the covariance is of the Brown model's parameters).
+  remains grows where the corners did not reach, at the image's edges and corners. For a
+  Kannala-Brandt camera the covariance is of its k1..k4 (cv::fisheye's projection).
 */
 double projectionUncertainty(const CameraCalibration &calibration, double u, double v);
 

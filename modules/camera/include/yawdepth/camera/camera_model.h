@@ -118,6 +118,10 @@ public:
 private:
   /*! \brief undistort() for KannalaBrandt, from the distorted normalised point `target`. */
   bool undistortKannalaBrandt(const Eigen::Vector2d &target, Eigen::Vector2d &m, Eigen::Matrix2d *J) const;
+  /*! \brief The tail of both undistortions: accepts the root `x` of distorted point `target` when
+      distorting it gives `target` back (residual check), writes it to `m` and, if `J` is not null,
+      \f$ \partial (x,y) / \partial (u,v) \f$. */
+  bool acceptRoot(const Eigen::Vector2d &x, const Eigen::Vector2d &target, Eigen::Vector2d &m, Eigen::Matrix2d *J) const;
 
   Distortion model_ = Distortion::None;
   vpCameraParameters cam_;
