@@ -21,10 +21,15 @@ import subprocess
 import sys
 import tempfile
 
-import cv2
-import numpy
-import camera_calibration_parsers
-from camera_calibration.calibrator import ChessboardInfo, MonoCalibrator
+try:
+    import cv2
+    import numpy
+    import camera_calibration_parsers
+    from camera_calibration.calibrator import ChessboardInfo, MonoCalibrator
+except ImportError as e:  # Debian's python3-camera-calibration does not depend on what it imports
+    print("ros_calibration_compare: %s: apt-get install python3-opencv python3-cv-bridge python3-image-geometry "
+          "python3-camera-calibration python3-camera-calibration-parsers" % e, file=sys.stderr)
+    sys.exit(2)
 
 
 def read_camera(path):
@@ -82,7 +87,9 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--yawdepth", default=os.path.join(here, "..", "build", "tools", "yawdepth"))
-    ap.add_argument("--data", default="/work/shared/data/franka-eye-in-hand")
+    shared = "/work/shared/data/franka-eye-in-hand"  # the same 8 photos as tests/data's copy
+    ap.add_argument("--data", default=shared if os.path.isdir(shared) else
+                    os.path.join(here, "..", "tests", "data", "franka-eye-in-hand"))
     ap.add_argument("--images", default="franka_image-*.png", help="glob in --data")
     ap.add_argument("--pattern", default="9x6:0.0236", help="COLSxROWS:SQUARE, inner corners, metres")
     ap.add_argument("--distortion", default="auto", help="calibrate-camera's --distortion")

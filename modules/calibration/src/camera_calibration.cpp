@@ -1,6 +1,7 @@
 /*!
   \file camera_calibration.cpp
-  \brief Camera calibration: OpenCV's Brown model, ViSP's two models, diagnostics.
+  \brief Camera calibration: OpenCV's Brown and Kannala-Brandt (cv::fisheye) models, ViSP's two
+  models, diagnostics.
 */
 #include "board_pose.h"
 #include "text.h"
@@ -409,7 +410,8 @@ double CameraFit::heldOut(const std::vector<std::size_t> &idx, Distortion d, con
         bool posed = false;
         if (d == Distortion::Fisheye) { // the pose from the undistorted (normalised) corners
           std::vector<cv::Point2f> normalised;
-          cv::fisheye::undistortPoints(image[idx[k]], normalised, K, dist);
+          cv::fisheye::undistortPoints(image[idx[k]], normalised, K, dist, cv::noArray(), cv::noArray(),
+                                       cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-14));
           posed = cv::solvePnP(object[idx[k]], normalised, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), r, t, false,
                                cv::SOLVEPNP_ITERATIVE);
         } else {

@@ -2,7 +2,8 @@
 /*!
   \file camera_calibration.h
   \brief Camera calibration from images of a chessboard or an AprilTag grid: intrinsics and Brown
-  distortion (OpenCV's cv::calibrateCamera), ViSP's two models (without distortion, and kud/kdu,
+  distortion (OpenCV's cv::calibrateCamera) or Kannala-Brandt fisheye distortion
+  (cv::fisheye::calibrate), ViSP's two models (without distortion, and kud/kdu,
   each fitted by vpCalibration as ViSP's own calibration tool does), per-view errors, outlier
   views, parameter standard deviations, degeneracy checks and a coverage picture.
 */
