@@ -574,6 +574,7 @@ HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout
   const std::vector<BoardView> board_views =
       boardViews(camera, board, features, names, options.min_points_per_view, skipped);
   std::vector<vpHomogeneousMatrix> robot;
+  robot.reserve(board_views.size());
   for (const BoardView &v : board_views)
     robot.push_back(views[v.input].rMe);
   HandEyeCalibration out = solveHandEye(camera, board, board_views, robot, options, true).cal;
@@ -596,6 +597,7 @@ TimedHandEyeCalibration calibrateHandEyeWithTimeOffset(const CameraModel &camera
     throw Error("time offset: --hand-eye needs the hand's 6-DoF poses (a TUM, EuRoC or 6-DoF yawdepth log)");
   // Each image's board pose once: only the hand poses change with the offset.
   std::vector<const std::vector<FeatureObservation> *> feature_ptrs;
+  feature_ptrs.reserve(features.size());
   for (const auto &f : features)
     feature_ptrs.push_back(&f);
   std::vector<std::string> skipped;

@@ -247,6 +247,7 @@ TimedImagesOffset estimateTimeOffsetOverImages(const MotionLog &motion, const st
       const auto cost_without = [&](double offset) {
         const std::vector<MotionSample> all = imageSamplesAt(motion, image_times, images, offset, max_pose_gap);
         std::vector<MotionSample> kept;
+        kept.reserve(kept_positions.size());
         for (std::size_t k : kept_positions)
           kept.push_back(all[k]);
         try {
