@@ -1142,3 +1142,59 @@ TEST_CASE("hand-eye with the time offset: a 30 ms latency within 2 ms, a near-st
                       Catch::Contains("the motion must change speed"));
   }
 }
+
+// Not run by CTest: a timestamped arm recording for trying `calibrate-rig --hand-eye eye-in-hand
+// --estimate-time-offset` (the test above's continuous motion, rendered): $YAWDEPTH_CALIB_DUMP/arm
+// (default /tmp/yawdepth_calib_dump/arm) gets camera.yaml, poses.tum (the hand at 100 Hz) and
+// images/ (25 Hz, named by their camera-clock times; a 30 ms latency):
+//   build/tests/test_calibration "[.dump-arm]"
+TEST_CASE("write a rendered timestamped arm recording for the command line", "[.dump-arm]")
+{
+  const char *env = std::getenv("YAWDEPTH_CALIB_DUMP");
+  const std::string dir = std::string(env ? env : "/tmp/yawdepth_calib_dump") + "/arm";
+  std::filesystem::create_directories(dir + "/images");
+  const CameraModel camera =
+      CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
+  saveCameraYaml(dir + "/camera.yaml", camera);
+  const BoardLayout board = chessboard(9, 6, 0.0236);
+  const Eigen::Isometry3d X = isoOf(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818));
+  const Eigen::Isometry3d Y = isoOf(vpHomogeneousMatrix(0.536, 0.124, 0.0916, 2.226, -2.214, 0.0207));
+  const auto path = [](double t) {
+    return Eigen::Vector4d(0.45 * std::sin(2 * M_PI * 0.35 * t), 0.4 * std::sin(2 * M_PI * 0.5 * t + 1.0),
+                           0.5 + 0.08 * std::sin(2 * M_PI * 0.3 * t), 0.35 * std::sin(2 * M_PI * 0.4 * t + 0.5));
+  };
+  std::vector<double> times;
+  for (int k = 0; k / 25.0 <= 2.0; ++k)
+    times.push_back(k / 25.0);
+  const double latency = 0.030, t0 = 1000.0;
+  const ArmRecording rec = armRecording(camera, board, X, Y, path, times, 2.0, latency, 21);
+  std::ofstream tum(dir + "/poses.tum");
+  for (std::size_t k = 0; k < rec.motion.samples.size(); ++k) {
+    const Eigen::Isometry3d M = isoOf(wMv(rec.motion.samples[k]));
+    const Eigen::Quaterniond q(M.linear());
+    char line[256];
+    std::snprintf(line, sizeof line, "%.6f %.9f %.9f %.9f %.12f %.12f %.12f %.12f\n", t0 + rec.motion.times[k],
+                  M.translation().x(), M.translation().y(), M.translation().z(), q.x(), q.y(), q.z(), q.w());
+    tum << line;
+  }
+  // The images: the board rendered at the true pose of each image (motion time t + latency); the
+  // renderer's pose is the board in the camera, cMo = X^-1 eMr(t + latency) Y from the same path.
+  const Eigen::Vector3d o_centre(0.5 * (board.pattern.cols - 1) * board.pattern.square,
+                                 0.5 * (board.pattern.rows - 1) * board.pattern.square, 0.0);
+  for (double t : times) {
+    const Eigen::Vector4d q = path(t + latency);
+    const Eigen::Vector3d dirn = Eigen::Vector3d(q(0), q(1), -1.0).normalized();
+    const Eigen::Vector3d c = o_centre + q(2) * dirn;
+    const Eigen::Vector3d z = (o_centre - c).normalized();
+    const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+    const Eigen::Vector3d y = z.cross(x);
+    Eigen::Isometry3d oMc = Eigen::Isometry3d::Identity();
+    oMc.linear() << x, y, z;
+    oMc.linear() = oMc.linear() * Eigen::AngleAxisd(q(3), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    oMc.translation() = c;
+    char name[64];
+    std::snprintf(name, sizeof name, "/images/%.6f.png", t0 + t);
+    REQUIRE(cv::imwrite(dir + name, renderAt(camera, board, oMc.inverse(), 3000 + static_cast<std::uint64_t>(1000 * t))));
+  }
+  CHECK(std::filesystem::exists(dir + "/poses.tum"));
+}
