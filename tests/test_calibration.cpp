@@ -932,6 +932,16 @@ TEST_CASE("hand-eye on the real franka photos: ViSP's published eMc within milli
   // ViSP's published board pose rMo within a few millimetres too.
   const vpHomogeneousMatrix rMo(0.5364858483, 0.123945742, 0.09155742609, 2.22636085, -2.213916548, 0.02071766945);
   CHECK((isoOf(cal.target_pose).translation() - isoOf(rMo).translation()).norm() < 5e-3);
+  // The board scale check on these photos (README, "The board's size"): the hand's motion says the
+  // board is 1.137 +- 0.030 times the 23.6 mm printed on the data's sheet, a mismatch it warns about:
+  // not resolved (the print unmeasured, or the arm's errors growing with the distance). Pinned here
+  // so that a change of it is seen.
+  std::printf("  board scale %.4f +- %.4f (%s), distances spread by %.1f mm\n", cal.board_scale.scale,
+              cal.board_scale.sigma, toString(cal.board_scale.status), 1e3 * cal.board_scale.distance_spread);
+  CHECK(cal.board_scale.scale > 1.10);
+  CHECK(cal.board_scale.scale < 1.17);
+  CHECK(cal.board_scale.sigma > 0.02);
+  CHECK(cal.board_scale.sigma < 0.04);
 }
 
 namespace {
