@@ -104,6 +104,10 @@ bad "calibrate-rig --estimate-time-offset on a frame-based log" "needs a timesta
 bad "calibrate-rig --estimate-time-offset: a fit at no offset" "time offset: the calibration failed at every offset" \
   calibrate-rig --camera "$cam" --motion "$W/traj.tum" --images "$W/rgb" --pattern "$pattern" --estimate-time-offset \
   --quiet --out "$W/bad.csv"
+bad "calibrate-rig --hand-eye --estimate-time-offset: a planar robot's poses turn about one axis" \
+  "time offset: the calibration failed at every offset" \
+  calibrate-rig --hand-eye eye-in-hand --camera "$cam" --motion "$W/traj.tum" --images "$W/rgb" --pattern "$pattern" \
+  --estimate-time-offset --quiet --out "$W/bad.csv"
 bad "import: nothing written on error" "needs --images" import --motion "$W/traj.tum" --out-dir "$W/bad.csv"
 
 echo "$PASSED passed, $FAILED failed"

@@ -896,8 +896,11 @@ constexpr double kHandEyePx = 0.3; // corner noise of the synthetic views (px)
 /* Synthetic hand-eye views: the hand at poses around the board, corners projected with noise. */
 std::vector<HandEyeView> handEyeViews(const CameraModel &camera, const BoardLayout &board, HandEyeSetup setup,
                                       const Eigen::Isometry3d &X, const Eigen::Isometry3d &Y, int n,
-                                      std::uint64_t seed, bool single_axis = false)
+                                      std::uint64_t seed, bool single_axis = false, double distance_spread = 0.0,
+                                      const BoardLayout *printed = nullptr)
 {
+  // `printed`: the board as it really is (the corners projected from it), when not `board`.
+  const BoardLayout &real = printed != nullptr ? *printed : board;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
   std::normal_distribution<double> g(0.0, kHandEyePx);
@@ -909,7 +912,9 @@ std::vector<HandEyeView> handEyeViews(const CameraModel &camera, const BoardLayo
         (Eigen::Vector3d(0, 0, -1) + (single_axis ? Eigen::Vector3d(0.5 * U(rng), 0, 0)
                                                   : Eigen::Vector3d(0.5 * U(rng), 0.5 * U(rng), 0)))
             .normalized();
-    const Eigen::Vector3d c = o_centre + 0.5 * dir;
+    // The distance: 0.5 m, or from 0.5 - spread to 0.5 + spread in equal steps over the views.
+    const double distance = 0.5 + (n > 1 ? distance_spread * (-1.0 + 2.0 * i / (n - 1)) : 0.0);
+    const Eigen::Vector3d c = o_centre + distance * dir;
     const Eigen::Vector3d z = (o_centre - c).normalized();
     Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
     const Eigen::Vector3d y = z.cross(x);
@@ -930,7 +935,7 @@ std::vector<HandEyeView> handEyeViews(const CameraModel &camera, const BoardLayo
     HandEyeView v;
     v.rMe = toVisp(rMe_measured.linear(), rMe_measured.translation());
     v.name = "view " + std::to_string(i);
-    for (const auto &f : board.features()) {
+    for (const auto &f : real.features()) {
       const Eigen::Vector3d P = cMo * f.second;
       const Eigen::Vector2d uv = camera.project(P.head<2>() / P.z());
       v.features.push_back({f.first, uv.x() + g(rng), uv.y() + g(rng)});
@@ -1069,4 +1074,279 @@ TEST_CASE("hand-eye on the real franka photos: ViSP's published eMc within milli
   // ViSP's published board pose rMo within a few millimetres too.
   const vpHomogeneousMatrix rMo(0.5364858483, 0.123945742, 0.09155742609, 2.22636085, -2.213916548, 0.02071766945);
   CHECK((isoOf(cal.target_pose).translation() - isoOf(rMo).translation()).norm() < 5e-3);
+  // The board scale check on these photos (README, "The board's size"): the hand's motion says the
+  // board is 1.137 +- 0.030 times the 23.6 mm printed on the data's sheet, a mismatch it warns about:
+  // not resolved (the print unmeasured, or the arm's errors growing with the distance). Pinned here
+  // so that a change of it is seen.
+  std::printf("  board scale %.4f +- %.4f (%s), distances spread by %.1f mm\n", cal.board_scale.scale,
+              cal.board_scale.sigma, toString(cal.board_scale.status), 1e3 * cal.board_scale.distance_spread);
+  CHECK(cal.board_scale.scale > 1.10);
+  CHECK(cal.board_scale.scale < 1.17);
+  CHECK(cal.board_scale.sigma > 0.02);
+  CHECK(cal.board_scale.sigma < 0.04);
+}
+
+namespace {
+
+// The board scale check (board_scale.h): 25 mm typed for a 23.6 mm print (issue 38: s = 0.944) is
+// warned, the right size is not. Measured on the scenes below (10 views from 0.4 to 0.6 m, 0.3 px,
+// kinematics 1 mm and 0.1 deg): see the test's INFO.
+constexpr double kScaleTol = 0.01; // |s - s_true| allowed: the check's own min_relative
+constexpr double kDistanceSpread = 0.15; // the views' distances: 0.35 to 0.65 m (a spread of 96 mm)
+
+} // namespace
+
+TEST_CASE("hand-eye: a wrong square size is warned, the right one is not", "[calibration][handeye][scale]")
+{
+  const CameraModel camera =
+      CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
+  const BoardLayout printed = chessboard(9, 6, 0.0236), typed = chessboard(9, 6, 0.025);
+  const Eigen::Isometry3d X = isoOf(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818));
+  const Eigen::Isometry3d Y = isoOf(vpHomogeneousMatrix(0.536, 0.124, 0.0916, 2.226, -2.214, 0.0207));
+  for (std::uint64_t seed = 11; seed <= 14; ++seed) {
+    const std::vector<HandEyeView> views =
+        handEyeViews(camera, printed, HandEyeSetup::EyeInHand, X, Y, 10, seed, false, kDistanceSpread);
+    const HandEyeCalibration right = calibrateHandEye(camera, printed, views);
+    const HandEyeCalibration wrong = calibrateHandEye(camera, typed, views);
+    INFO("seed " << seed << ": right size s = " << right.board_scale.scale << " +- " << right.board_scale.sigma
+                 << ", wrong size s = " << wrong.board_scale.scale << " +- " << wrong.board_scale.sigma << " ("
+                 << wrong.board_scale.message << "); RMS " << right.rms_px << " / " << wrong.rms_px << " px");
+    CHECK(right.board_scale.status == BoardScaleStatus::Consistent);
+    CHECK(right.board_scale.message.empty());
+    CHECK(std::abs(right.board_scale.scale - 1.0) < kScaleTol);
+    CHECK(wrong.board_scale.status == BoardScaleStatus::Mismatch);
+    CHECK(std::abs(wrong.board_scale.scale - 0.0236 / 0.025) < kScaleTol);
+    CHECK(wrong.board_scale.message.find("the board looks 0.9") != std::string::npos);
+    CHECK(wrong.board_scale.message.find("check the square size") != std::string::npos);
+    // The result stays the fit with the size given: the scale is reported, not applied.
+    CHECK(wrong.camera_pose_sigma(2) > 0);
+    CHECK(handEyeRigYaml(wrong).find("(mismatch)") != std::string::npos);
+  }
+  // Views from 0.25 to 0.75 m: the hand poses cannot absorb the wrong size, and the fit's refusal says why.
+  const std::vector<HandEyeView> far_near = handEyeViews(camera, printed, HandEyeSetup::EyeInHand, X, Y, 10, 11, false, 0.22);
+  CHECK_NOTHROW(calibrateHandEye(camera, printed, far_near));
+  CHECK_THROWS_WITH(calibrateHandEye(camera, typed, far_near), Catch::Contains("check the square size"));
+  // A gross mismatch (the size of the board for its square) is refused.
+  BoardScaleOptions o;
+  CHECK_THROWS_WITH(checkBoardScale(0.5, 0.01, typed, o), Catch::Contains("refused"));
+  CHECK(checkBoardScale(1.004, 0.0005, typed, o).status == BoardScaleStatus::Consistent); // under 1 %: a printer's
+  CHECK(checkBoardScale(0.95, 0.02, typed, o).status == BoardScaleStatus::Consistent);    // 2.5 sigma: not shown
+  CHECK(checkBoardScale(0.95, 0.005, typed, o).status == BoardScaleStatus::Mismatch);
+  o.min_relative = 0;
+  CHECK_THROWS_AS(checkBoardScale(1.0, 0.01, typed, o), Error);
+}
+
+TEST_CASE_METHOD(RigScene, "calibrate-rig: a wrong square size is warned when the robot moved, not seen when static",
+                 "[calibration][rig][scale][slow]")
+{
+  const std::vector<Eigen::Vector3d> positions = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.0, 0, 0.12),
+                                                  Eigen::Vector3d(0.03, 0, 0.24)};
+  const std::vector<RigView> moving =
+      renderRig(camera, board, truth, boardAhead(board, 0.85, -10 * kDeg), positions, yawReadings(-20, 20, 5));
+  BoardLayout typed = board; // 30 mm printed, 32 mm typed
+  typed.pattern.square = 0.032;
+  const RigCalibration right = calibrateRig(camera, board, moving);
+  const RigCalibration wrong = calibrateRig(camera, typed, moving);
+  INFO("right: s = " << right.board_scale.scale << " +- " << right.board_scale.sigma << "; wrong: s = "
+                     << wrong.board_scale.scale << " +- " << wrong.board_scale.sigma << " (" << wrong.board_scale.message
+                     << "); RMS " << right.rms_px << " / " << wrong.rms_px);
+  CHECK(right.board_scale.status == BoardScaleStatus::Consistent);
+  CHECK(std::abs(right.board_scale.scale - 1.0) < kScaleTol);
+  CHECK(wrong.board_scale.status == BoardScaleStatus::Mismatch);
+  CHECK(std::abs(wrong.board_scale.scale - 0.030 / 0.032) < kScaleTol);
+  // A static robot cannot tell: the offset grows with the board, the fit is as good.
+  const std::vector<RigView> still = staticViews(12 * kDeg, -25, 25, 7);
+  const RigCalibration s_right = calibrateRig(camera, board, still), s_wrong = calibrateRig(camera, typed, still);
+  CHECK(s_wrong.board_scale.status == BoardScaleStatus::NotEstimated);
+  CHECK(std::abs(s_wrong.camera_offset.x() / s_right.camera_offset.x() - 0.032 / 0.030) < 1e-3);
+  CHECK(s_wrong.rms_px < s_right.rms_px + 0.01);
+}
+
+namespace {
+
+/* A camera on an arm moving continuously in front of a fixed board: the camera's direction from
+   the board's centre and its distance and roll follow `path(t)` (dir x, dir y, distance, roll);
+   the hand's poses logged at 100 Hz on the motion clock with white noise (0.3 mm, 0.03 deg per
+   axis), the images at 25 Hz on the camera's clock (at `image_times`), each taken at motion time
+   t + latency, its corners projected with 0.3 px noise. */
+struct ArmRecording {
+  MotionLog motion;
+  std::vector<double> image_times;
+  std::vector<std::vector<FeatureObservation>> features;
+  std::vector<std::string> names;
+};
+
+ArmRecording armRecording(const CameraModel &camera, const BoardLayout &board, const Eigen::Isometry3d &X,
+                          const Eigen::Isometry3d &Y, const std::function<Eigen::Vector4d(double)> &path,
+                          const std::vector<double> &image_times, double duration, double latency, std::uint64_t seed)
+{
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const Eigen::Vector3d o_centre(0.5 * (board.pattern.cols - 1) * board.pattern.square,
+                                 0.5 * (board.pattern.rows - 1) * board.pattern.square, 0.0);
+  const auto cMoAt = [&](double t) {
+    const Eigen::Vector4d q = path(t);
+    const Eigen::Vector3d dir = Eigen::Vector3d(q(0), q(1), -1.0).normalized();
+    const Eigen::Vector3d c = o_centre + q(2) * dir;
+    const Eigen::Vector3d z = (o_centre - c).normalized();
+    const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+    const Eigen::Vector3d y = z.cross(x);
+    Eigen::Isometry3d oMc = Eigen::Isometry3d::Identity();
+    oMc.linear() << x, y, z;
+    oMc.linear() = oMc.linear() * Eigen::AngleAxisd(q(3), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    oMc.translation() = c;
+    return Eigen::Isometry3d(oMc.inverse());
+  };
+  // Eye-in-hand: cMo = X^-1 eMr Y, so rMe = (X cMo Y^-1)^-1.
+  const auto rMeAt = [&](double t) { return Eigen::Isometry3d((X * cMoAt(t) * Y.inverse()).inverse()); };
+  ArmRecording rec;
+  rec.motion.timestamped = true;
+  for (int k = 0; k * 0.01 <= duration + 0.4; ++k) {
+    const double t = -0.2 + k * 0.01;
+    Eigen::Isometry3d err = Eigen::Isometry3d::Identity();
+    err.linear() = expSO3<double>(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * (0.03 * kDeg));
+    err.translation() = 0.3e-3 * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+    const Eigen::Isometry3d M = rMeAt(t) * err;
+    rec.motion.samples.push_back(MotionSample::fromPose(k, toVisp(M.linear(), M.translation())));
+    rec.motion.times.push_back(t);
+  }
+  std::normal_distribution<double> px(0.0, kHandEyePx);
+  for (double t : image_times) {
+    const Eigen::Isometry3d cMo = cMoAt(t + latency);
+    std::vector<FeatureObservation> f;
+    for (const auto &p : board.features()) {
+      const Eigen::Vector3d P = cMo * p.second;
+      const Eigen::Vector2d uv = camera.project(P.head<2>() / P.z());
+      f.push_back({p.first, uv.x() + px(rng), uv.y() + px(rng)});
+    }
+    rec.image_times.push_back(t);
+    rec.features.push_back(f);
+    rec.names.push_back("image at " + std::to_string(t) + " s");
+  }
+  return rec;
+}
+
+} // namespace
+
+TEST_CASE("hand-eye with the time offset: a 30 ms latency within 2 ms, a near-static arm refused",
+          "[calibration][handeye][slow]")
+{
+  const CameraModel camera =
+      CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
+  const BoardLayout board = chessboard(9, 6, 0.0236);
+  const Eigen::Isometry3d X = isoOf(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818));
+  const Eigen::Isometry3d Y = isoOf(vpHomogeneousMatrix(0.536, 0.124, 0.0916, 2.226, -2.214, 0.0207));
+  const double latency = 0.030;
+  const TimeOffsetSearch search; // -100 .. 100 ms
+  SECTION("an arm moving continuously, changing speed")
+  {
+    // Up to about 0.35 m/s and 40 deg/s: an arm's brisk calibration motion.
+    const auto path = [](double t) {
+      return Eigen::Vector4d(0.45 * std::sin(2 * M_PI * 0.35 * t), 0.4 * std::sin(2 * M_PI * 0.5 * t + 1.0),
+                             0.5 + 0.08 * std::sin(2 * M_PI * 0.3 * t), 0.35 * std::sin(2 * M_PI * 0.4 * t + 0.5));
+    };
+    const double duration = 2.0;
+    std::vector<double> times;
+    for (int k = 0; k / 25.0 <= duration; ++k)
+      times.push_back(k / 25.0);
+    const ArmRecording rec = armRecording(camera, board, X, Y, path, times, duration, latency, 21);
+    const TimedHandEyeCalibration cal = calibrateHandEyeWithTimeOffset(camera, board, rec.motion, rec.image_times,
+                                                                       rec.features, rec.names, HandEyeOptions(), search);
+    const double dt = (isoOf(cal.hand_eye.camera_pose).translation() - X.translation()).norm();
+    INFO("offset " << cal.time_offset.offset * 1e3 << " +- " << cal.time_offset.sigma * 1e3 << " ms, "
+                   << cal.time_offset.evaluations << " fits, " << cal.images_used << " images; eMc "
+                   << 1e3 * dt << " mm off, RMS " << cal.hand_eye.rms_px << " px");
+    CHECK(std::abs(cal.time_offset.offset - latency) < kTimeOffsetTol);
+    CHECK(std::abs(cal.time_offset.offset - latency) < 4 * cal.time_offset.sigma + 1e-4);
+    CHECK(cal.time_offset.sigma > 0);
+    CHECK(cal.time_offset.sigma < kTimeOffsetTol);
+    CHECK(cal.images_used == static_cast<int>(times.size()));
+    CHECK(dt < 4 * cal.hand_eye.camera_pose_sigma.head<3>().norm());
+    CHECK(cal.hand_eye.rms_px < 1.2 * kHandEyePx);
+    CHECK(cal.hand_eye.board_scale.status == BoardScaleStatus::Consistent);
+  }
+  SECTION("an arm that stops for each image cannot tell the offset")
+  {
+    // Eight stations held 0.6 s each, joined by 0.3 s moves; the images in the middle 0.2 s of each
+    // hold: at any offset in the range every image's pose is a still arm's.
+    const std::vector<Eigen::Vector4d> stations = {{0.3, 0.1, 0.5, 0.0},   {-0.3, 0.2, 0.55, 0.3},
+                                                   {0.1, -0.35, 0.45, -0.2}, {-0.2, -0.2, 0.5, 0.1},
+                                                   {0.35, 0.3, 0.6, -0.3}, {0.0, 0.4, 0.48, 0.25},
+                                                   {-0.4, 0.0, 0.52, -0.1}, {0.2, -0.1, 0.58, 0.35}};
+    const double hold = 0.6, move = 0.3, period = hold + move;
+    const auto path = [&](double t) {
+      const double u = std::max(0.0, t) / period;
+      const std::size_t i = std::min(stations.size() - 1, static_cast<std::size_t>(u));
+      const double into = (u - static_cast<double>(i)) * period;
+      if (into <= hold || i + 1 >= stations.size())
+        return stations[i];
+      const double w = 0.5 - 0.5 * std::cos(M_PI * (into - hold) / move);
+      return Eigen::Vector4d((1 - w) * stations[i] + w * stations[i + 1]);
+    };
+    std::vector<double> times;
+    for (std::size_t i = 0; i < stations.size(); ++i)
+      for (int k = 0; k < 5; ++k)
+        times.push_back(static_cast<double>(i) * period + 0.2 + 0.05 * k);
+    const ArmRecording rec =
+        armRecording(camera, board, X, Y, path, times, period * static_cast<double>(stations.size()), latency, 22);
+    CHECK_THROWS_WITH(calibrateHandEyeWithTimeOffset(camera, board, rec.motion, rec.image_times, rec.features, rec.names,
+                                                     HandEyeOptions(), search),
+                      Catch::Contains("the motion must change speed"));
+  }
+}
+
+// Not run by CTest: a timestamped arm recording for trying `calibrate-rig --hand-eye eye-in-hand
+// --estimate-time-offset` (the test above's continuous motion, rendered): $YAWDEPTH_CALIB_DUMP/arm
+// (default /tmp/yawdepth_calib_dump/arm) gets camera.yaml, poses.tum (the hand at 100 Hz) and
+// images/ (25 Hz, named by their camera-clock times; a 30 ms latency):
+//   build/tests/test_calibration "[.dump-arm]"
+TEST_CASE("write a rendered timestamped arm recording for the command line", "[.dump-arm]")
+{
+  const char *env = std::getenv("YAWDEPTH_CALIB_DUMP");
+  const std::string dir = std::string(env ? env : "/tmp/yawdepth_calib_dump") + "/arm";
+  std::filesystem::create_directories(dir + "/images");
+  const CameraModel camera =
+      CameraModel::brown(601.7, 602.1, 324.4, 239.6, {0.046, 0.11, -0.0039, 0.0003}, 640, 480);
+  saveCameraYaml(dir + "/camera.yaml", camera);
+  const BoardLayout board = chessboard(9, 6, 0.0236);
+  const Eigen::Isometry3d X = isoOf(vpHomogeneousMatrix(0.0577, -0.0339, -0.0423, 0.0018, 0.0092, 1.5818));
+  const Eigen::Isometry3d Y = isoOf(vpHomogeneousMatrix(0.536, 0.124, 0.0916, 2.226, -2.214, 0.0207));
+  const auto path = [](double t) {
+    return Eigen::Vector4d(0.45 * std::sin(2 * M_PI * 0.35 * t), 0.4 * std::sin(2 * M_PI * 0.5 * t + 1.0),
+                           0.5 + 0.08 * std::sin(2 * M_PI * 0.3 * t), 0.35 * std::sin(2 * M_PI * 0.4 * t + 0.5));
+  };
+  std::vector<double> times;
+  for (int k = 0; k / 25.0 <= 2.0; ++k)
+    times.push_back(k / 25.0);
+  const double latency = 0.030, t0 = 1000.0;
+  const ArmRecording rec = armRecording(camera, board, X, Y, path, times, 2.0, latency, 21);
+  std::ofstream tum(dir + "/poses.tum");
+  for (std::size_t k = 0; k < rec.motion.samples.size(); ++k) {
+    const Eigen::Isometry3d M = isoOf(wMv(rec.motion.samples[k]));
+    const Eigen::Quaterniond q(M.linear());
+    char line[256];
+    std::snprintf(line, sizeof line, "%.6f %.9f %.9f %.9f %.12f %.12f %.12f %.12f\n", t0 + rec.motion.times[k],
+                  M.translation().x(), M.translation().y(), M.translation().z(), q.x(), q.y(), q.z(), q.w());
+    tum << line;
+  }
+  // The images: the board rendered at the true pose of each image (motion time t + latency); the
+  // renderer's pose is the board in the camera, cMo = X^-1 eMr(t + latency) Y from the same path.
+  const Eigen::Vector3d o_centre(0.5 * (board.pattern.cols - 1) * board.pattern.square,
+                                 0.5 * (board.pattern.rows - 1) * board.pattern.square, 0.0);
+  for (double t : times) {
+    const Eigen::Vector4d q = path(t + latency);
+    const Eigen::Vector3d dirn = Eigen::Vector3d(q(0), q(1), -1.0).normalized();
+    const Eigen::Vector3d c = o_centre + q(2) * dirn;
+    const Eigen::Vector3d z = (o_centre - c).normalized();
+    const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+    const Eigen::Vector3d y = z.cross(x);
+    Eigen::Isometry3d oMc = Eigen::Isometry3d::Identity();
+    oMc.linear() << x, y, z;
+    oMc.linear() = oMc.linear() * Eigen::AngleAxisd(q(3), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    oMc.translation() = c;
+    char name[64];
+    std::snprintf(name, sizeof name, "/images/%.6f.png", t0 + t);
+    REQUIRE(cv::imwrite(dir + name, renderAt(camera, board, oMc.inverse(), 3000 + static_cast<std::uint64_t>(1000 * t))));
+  }
+  CHECK(std::filesystem::exists(dir + "/poses.tum"));
 }

@@ -332,17 +332,34 @@ Runner addCalibrateCamera(CLI::App &app)
 
 namespace {
 
-/* calibrate-rig --hand-eye: the fit, the rig file, the report. */
-int runHandEye(const RigArgs &a, const CameraModel &camera, const BoardLayout &board,
-               const std::vector<HandEyeView> &views)
+/* --hand-eye's options: the setup, --max-rms-px when given. */
+HandEyeOptions handEyeOptions(const RigArgs &a)
 {
   HandEyeOptions opt;
   opt.setup = handEyeSetupFromString(a.hand_eye);
   if (a.max_rms_option != nullptr && a.max_rms_option->count() > 0)
     opt.max_rms_px = a.max_rms_px;
-  const HandEyeCalibration cal = calibrateHandEye(camera, board, views, opt);
-  writeFileAtomically(a.out, handEyeRigYaml(cal));
-  const bool in_hand = opt.setup == HandEyeSetup::EyeInHand;
+  return opt;
+}
+
+/* The board scale check's line, and its warning on stderr for a mismatch. */
+void printBoardScale(const BoardScaleCheck &c, const char *source)
+{
+  if (c.status == BoardScaleStatus::NotEstimated)
+    return;
+  std::cout << "board scale (from " << source << "): " << fixed(c.scale, 4) << " +- " << fixed(c.sigma, 4)
+            << " times the size given (" << toString(c.status) << ")";
+  if (c.distance_spread > 0)
+    std::cout << "; the views' distances to the board spread by " << fixed(1000 * c.distance_spread, 1) << " mm";
+  std::cout << "\n";
+  if (c.status == BoardScaleStatus::Mismatch)
+    std::cerr << "calibrate-rig: warning: " << c.message << "\n";
+}
+
+/* The hand-eye result as fitted. */
+void printHandEye(const RigArgs &a, const HandEyeCalibration &cal)
+{
+  const bool in_hand = cal.setup == HandEyeSetup::EyeInHand;
   const vpPoseVector X(cal.camera_pose), X0(cal.initial_camera_pose), Y(cal.target_pose);
   const Eigen::Matrix<double, 6, 1> &sx = cal.camera_pose_sigma;
   auto pose = [](const vpPoseVector &p) {
@@ -365,7 +382,18 @@ int runHandEye(const RigArgs &a, const CameraModel &camera, const BoardLayout &b
             << " px at the start); per view:";
   for (double r : cal.view_rms_px)
     std::cout << " " << fixed(r, 2);
-  std::cout << "\nwrote " << a.out << "\n";
+  std::cout << "\n";
+  printBoardScale(cal.board_scale, "the hand's motion");
+  std::cout << "wrote " << a.out << "\n";
+}
+
+/* calibrate-rig --hand-eye: the fit, the rig file, the report. */
+int runHandEye(const RigArgs &a, const CameraModel &camera, const BoardLayout &board,
+               const std::vector<HandEyeView> &views)
+{
+  const HandEyeCalibration cal = calibrateHandEye(camera, board, views, handEyeOptions(a));
+  writeFileAtomically(a.out, handEyeRigYaml(cal));
+  printHandEye(a, cal);
   return 0;
 }
 
@@ -443,6 +471,7 @@ void printRigCalibration(const RigArgs &a, const RigCalibration &rig)
             << fixed(std::acos(std::min(1.0, ax.y())) / kDeg, 3) << " deg from +Y"
             << (a.fixed_axis ? " (fixed)" : "") << "\n";
   std::cout << "RMS reprojection error: " << fixed(rig.rms_px, 4) << " px\n";
+  printBoardScale(rig.board_scale, "the robot's translation");
   std::cout << "wrote " << a.out << "\n";
 }
 
@@ -454,7 +483,15 @@ std::string formatSeconds(double v)
   return b;
 }
 
-/* --estimate-time-offset: the yaw rig and the time offset from a timestamped log and timed images. */
+/* The rig file's time offset lines. */
+std::string timeOffsetYaml(const TimeOffsetEstimate &e)
+{
+  return "# the image at camera time t was taken at motion time t + time_offset (s)\ntime_offset: " +
+         formatSeconds(e.offset) + "\ntime_offset_sigma: " + formatSeconds(e.sigma) + "\n";
+}
+
+/* --estimate-time-offset: the yaw rig (or, with --hand-eye, the camera on the arm) and the time offset
+   from a timestamped log and timed images. */
 int runCalibrateRigWithTimeOffset(const RigArgs &a, const CameraModel &camera, const BoardLayout &board)
 {
   const MotionInput in = a.motion.input();
@@ -463,6 +500,9 @@ int runCalibrateRigWithTimeOffset(const RigArgs &a, const CameraModel &camera, c
     throw Error(a.motion.name() + ": --estimate-time-offset needs a timestamped motion log (t, TUM or EuRoC) and --images");
   if (in.images.empty())
     throw Error("--estimate-time-offset needs --images: the images and their times");
+  if (!a.hand_eye.empty() && !motion.samples.front().six_dof)
+    throw Error(a.motion.name() + ": --hand-eye needs the hand's 6-DoF poses (TUM, EuRoC, or t,tx,ty,tz,tux,tuy,tuz), "
+                "not a planar log");
   const ImageList images = readImageList(in.images, true, a.input.limits());
   {
     std::vector<NamedPath> inputs = a.motion.inputs();
@@ -484,16 +524,22 @@ int runCalibrateRigWithTimeOffset(const RigArgs &a, const CameraModel &camera, c
   TimeOffsetSearch search;
   search.min = a.time_offset_range[0];
   search.max = a.time_offset_range[1];
+  const auto printOffset = [&](const TimeOffsetEstimate &e, int used) {
+    std::cout << "time offset: " << fixed(1e3 * e.offset, 3) << " +- " << fixed(1e3 * e.sigma, 3) << " ms (" << used
+              << " images with a pose over the range searched, " << e.evaluations << " fits)\n";
+  };
+  if (!a.hand_eye.empty()) {
+    const TimedHandEyeCalibration cal = calibrateHandEyeWithTimeOffset(
+        camera, board, motion, images.times, features, images.paths, handEyeOptions(a), search, in.max_pose_gap);
+    writeFileAtomically(a.out, handEyeRigYaml(cal.hand_eye) + timeOffsetYaml(cal.time_offset));
+    printOffset(cal.time_offset, cal.images_used);
+    printHandEye(a, cal.hand_eye);
+    return 0;
+  }
   const TimedRigCalibration cal = calibrateRigWithTimeOffset(camera, board, motion, images.times, features,
                                                              rigCalibrationOptions(a), search, in.max_pose_gap);
-  std::ostringstream yaml;
-  yaml << rigCalibrationYaml(cal.rig) << "# the image at camera time t was taken at motion time t + time_offset (s)\n"
-       << "time_offset: " << formatSeconds(cal.time_offset.offset) << "\ntime_offset_sigma: "
-       << formatSeconds(cal.time_offset.sigma) << "\n";
-  writeFileAtomically(a.out, yaml.str());
-  std::cout << "time offset: " << fixed(1e3 * cal.time_offset.offset, 3) << " +- " << fixed(1e3 * cal.time_offset.sigma, 3)
-            << " ms (" << cal.images_used << " images with a pose over the range searched, " << cal.time_offset.evaluations
-            << " fits)\n";
+  writeFileAtomically(a.out, rigCalibrationYaml(cal.rig) + timeOffsetYaml(cal.time_offset));
+  printOffset(cal.time_offset, cal.images_used);
   printRigCalibration(a, cal.rig);
   return 0;
 }
@@ -575,9 +621,9 @@ Runner addCalibrateRig(CLI::App &app)
                            ->capture_default_str();
   sub->add_flag("--quiet", a->quiet, "No per-frame detection messages");
   sub->add_flag("--estimate-time-offset", a->estimate_time_offset,
-                "Estimate the time offset between the camera's clock and the motion log's with the rig (a timestamped "
-                "log and --images; the pan must sweep back and forth while the board is seen); written as the rig "
-                "file's time_offset and time_offset_sigma");
+                "Estimate the time offset between the camera's clock and the motion log's with the rig or, with "
+                "--hand-eye, the arm (a timestamped log and --images; the pan must sweep back and forth, the arm "
+                "change speed, while the board is seen); written as the rig file's time_offset and time_offset_sigma");
   sub->add_option("--time-offset-range", a->time_offset_range, "The offsets searched by --estimate-time-offset: MIN,MAX (s)")
       ->expected(2)
       ->delimiter(',')
@@ -585,7 +631,6 @@ Runner addCalibrateRig(CLI::App &app)
       ->capture_default_str();
   addInputOptions(sub, a->input);
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
-  hand_eye->excludes("--estimate-time-offset");
   sub->get_option("--time-offset-range")->needs("--estimate-time-offset");
   sub->get_option("--estimate-time-offset")->excludes("--time-offset");
   for (const char *rig_only : {"--initial-offset", "--initial-yaw-offset", "--board-square", "--fixed-axis", "--min-yaw-span"})

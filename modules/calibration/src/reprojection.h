@@ -30,13 +30,14 @@ struct BoardObservations {
     residuals += 2 * points.back().size();
   }
 
-  /* View i's pixel residuals (projected minus observed, times `scale`) with the board at cMb, into
-     r from index k on (k advanced); a point behind the camera gives a large, smooth-enough 1e4. */
+  /* View i's pixel residuals (projected minus observed, times `scale`) with the board at cMb and its
+     points times `board_scale`, into r from index k on (k advanced); a point behind the camera gives
+     a large, smooth-enough 1e4. */
   void pixelResiduals(const CameraModel &camera, const Eigen::Isometry3d &cMb, std::size_t i, double scale,
-                      Eigen::VectorXd &r, Eigen::Index &k) const
+                      Eigen::VectorXd &r, Eigen::Index &k, double board_scale = 1.0) const
   {
     for (std::size_t j = 0; j < points[i].size(); ++j) {
-      const Eigen::Vector3d P = cMb * points[i][j];
+      const Eigen::Vector3d P = cMb * (board_scale * points[i][j]);
       if (!(P.z() > 1e-9)) {
         r[k++] = 1e4;
         r[k++] = 1e4;

@@ -26,9 +26,10 @@ using calibration_detail::fixed;
 using calibration_detail::kDeg;
 using calibration_detail::num;
 
-constexpr int kParams = 11;
-// Parameter layout.
-enum { P_AX = 0, P_AZ, P_TX, P_TZ, P_DELTA, P_PSI, P_ALPHA, P_GAMMA, P_BX, P_BY, P_BZ };
+constexpr int kParams = 12;
+// Parameter layout; P_SCALE: the board's points are 1 + p[P_SCALE] times the given ones (free only
+// in the board scale check).
+enum { P_AX = 0, P_AZ, P_TX, P_TZ, P_DELTA, P_PSI, P_ALPHA, P_GAMMA, P_BX, P_BY, P_BZ, P_SCALE };
 
 
 
@@ -88,7 +89,7 @@ struct RigProblem : calibration_detail::BoardObservations {
     Eigen::VectorXd r(static_cast<Eigen::Index>(residuals));
     Eigen::Index k = 0;
     for (std::size_t i = 0; i < points.size(); ++i)
-      pixelResiduals(*camera, cMb(p, i), i, 1.0, r, k);
+      pixelResiduals(*camera, cMb(p, i), i, 1.0, r, k, 1.0 + p[P_SCALE]);
     return r;
   }
   Eigen::MatrixXd jacobian(const Eigen::VectorXd &p, const std::vector<int> &free) const
@@ -380,11 +381,31 @@ void checkRigFit(const RigCalibration &out, const RigCalibrationOptions &options
                 " (at most " + mm(options.max_offset_sigma) + "); take images over a wider span of yaws");
 }
 
+/* The board's scale as the robot's translation sees it: the fit again from the solution p with the
+   board's scale free, its 1-sigma from the covariance (the result keeps the size given). A static
+   robot cannot tell it: the camera offset and the board's distance grow with the board together. */
+BoardScaleCheck rigBoardScale(const RigProblem &pb, std::vector<int> free, Eigen::VectorXd p, const BoardLayout &board,
+                              const RigCalibrationOptions &options)
+{
+  free.push_back(P_SCALE);
+  Eigen::VectorXd r;
+  double cost = 0;
+  refineRig(pb, free, p, r, cost);
+  const Eigen::MatrixXd J = pb.jacobian(p, free);
+  const double sigma2 = cost / static_cast<double>(pb.residuals - free.size());
+  const Eigen::MatrixXd cov = sigma2 * (J.transpose() * J).inverse();
+  const double sigma = std::sqrt(std::max(0.0, cov(cov.rows() - 1, cov.cols() - 1)));
+  if (!std::isfinite(sigma) || !std::isfinite(p[P_SCALE]))
+    return BoardScaleCheck();
+  return checkBoardScale(1.0 + p[P_SCALE], sigma, board, options.board_scale);
+}
+
 } // namespace
 
 RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board, const std::vector<RigView> &views,
                             const RigCalibrationOptions &options)
 {
+  options.board_scale.validate();
   RigProblem pb;
   pb.camera = &camera;
   std::vector<Eigen::Isometry3d> cMb0; // per view, from its own pose estimate
@@ -428,6 +449,8 @@ RigCalibration calibrateRig(const CameraModel &camera, const BoardLayout &board,
   }
   storeRigEstimates(pb, free, p, cost, options, out);
   checkRigFit(out, options);
+  if (options.check_board_scale && motion)
+    out.board_scale = rigBoardScale(pb, free, p, board, options);
   return out;
 }
 
@@ -457,6 +480,9 @@ std::string rigCalibrationYaml(const RigCalibration &rig)
   s << "yaw_offset_estimated: " << (rig.yaw_zero == YawZeroSource::Fixed ? "false" : "true") << "\n";
   s << "yaw_axis_sigma: " << vec(rig.yaw_axis_sigma) << "\n";
   s << "reprojection_rms_px: " << num(rig.rms_px) << "\n";
+  if (rig.board_scale.status != BoardScaleStatus::NotEstimated)
+    s << "# the board's size as the robot's translation sees it: " << fixed(rig.board_scale.scale, 4) << " +- "
+      << fixed(rig.board_scale.sigma, 4) << " times the size given (" << toString(rig.board_scale.status) << ")\n";
   return s.str();
 }
 

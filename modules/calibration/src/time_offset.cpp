@@ -4,6 +4,8 @@
 */
 #include <yawdepth/calibration/time_offset.h>
 
+#include "text.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -144,7 +146,7 @@ TimeOffsetEstimate estimateTimeOffset(const std::function<ProfileCost(double)> &
   if (!(left > rise) || !(right > rise))
     throw Error("time offset: not determined by the images (the reprojection cost changes by only " +
                 std::to_string(std::min(left, right) / fx) + " times its minimum over the range searched): the "
-                "motion must change speed while the board is seen (a pan sweeping back and forth)");
+                "motion must change speed while the board is seen (a pan sweeping back and forth, an arm accelerating)");
   TimeOffsetEstimate e;
   e.offset = x;
   e.sigma = std::sqrt(2.0 * variance / curvature);
@@ -153,25 +155,22 @@ TimeOffsetEstimate estimateTimeOffset(const std::function<ProfileCost(double)> &
   // A flat profile: the offset's 1-sigma is as wide as the range searched.
   if (!(e.sigma < 0.5 * (search.max - search.min)))
     throw Error("time offset: not determined by the images (1-sigma " + ms(e.sigma) + " over a range of " +
-                ms(search.max - search.min) + "): the motion must change speed while the board is seen");
+                ms(search.max - search.min) + "): the motion must change speed while the board is seen (a pan "
+                "sweeping back and forth, an arm accelerating)");
   return e;
 }
 
-TimedRigCalibration calibrateRigWithTimeOffset(const CameraModel &camera, const BoardLayout &board,
-                                               const MotionLog &motion, const std::vector<double> &image_times,
-                                               const std::vector<std::vector<FeatureObservation>> &features,
-                                               const RigCalibrationOptions &options, const TimeOffsetSearch &search,
-                                               double max_pose_gap)
+std::vector<std::size_t> imagesPosedOverRange(const MotionLog &motion, const std::vector<double> &image_times,
+                                              const std::vector<bool> &usable, const TimeOffsetSearch &search,
+                                              double max_pose_gap)
 {
   search.validate();
-  if (image_times.size() != features.size())
+  if (image_times.size() != usable.size())
     throw Error("time offset: " + std::to_string(image_times.size()) + " image times for " +
-                std::to_string(features.size()) + " detections");
-  // The images with a pose whatever the offset in the range: the same views at every offset.
-  ImageList images;
+                std::to_string(usable.size()) + " detections");
   std::vector<std::size_t> index;
   for (std::size_t i = 0; i < image_times.size(); ++i) {
-    if (features[i].empty())
+    if (!usable[i])
       continue;
     bool covered = true;
     for (double offset : {search.min, search.max}) {
@@ -187,89 +186,130 @@ TimedRigCalibration calibrateRigWithTimeOffset(const CameraModel &camera, const 
         covered = false;
       }
     }
-    if (covered) {
-      images.times.push_back(image_times[i]);
-      images.paths.emplace_back();
+    if (covered)
       index.push_back(i);
-    }
   }
-  if (images.times.size() < 3)
-    throw Error("time offset: only " + std::to_string(images.times.size()) +
+  return index;
+}
+
+std::vector<MotionSample> imageSamplesAt(const MotionLog &motion, const std::vector<double> &image_times,
+                                         const std::vector<std::size_t> &images, double offset, double max_pose_gap)
+{
+  ImageList list;
+  for (std::size_t i : images) {
+    list.times.push_back(image_times.at(i));
+    list.paths.emplace_back();
+  }
+  TimeAlignmentOptions o;
+  o.time_offset = offset;
+  o.max_pose_gap = max_pose_gap;
+  const TimeAlignment a = alignMotionToImages(motion, list, o, "motion", "images");
+  if (a.matched != images.size())
+    throw Error("time offset: an image lost its pose");
+  std::vector<MotionSample> samples = a.log.samples;
+  for (std::size_t k = 0; k < samples.size(); ++k)
+    samples[k].frame = static_cast<long>(k);
+  return samples;
+}
+
+TimedImagesOffset estimateTimeOffsetOverImages(const MotionLog &motion, const std::vector<double> &image_times,
+                                               const std::vector<bool> &usable, const TimedImagesCost &cost,
+                                               const TimeOffsetSearch &search, double max_pose_gap)
+{
+  TimedImagesOffset out;
+  // The images with a pose whatever the offset in the range: the same views at every offset.
+  out.images = imagesPosedOverRange(motion, image_times, usable, search, max_pose_gap);
+  const std::vector<std::size_t> &images = out.images;
+  if (images.size() < 3)
+    throw Error("time offset: only " + std::to_string(images.size()) +
                 " images with the board have a pose over the whole search range [" + ms(search.min) + ", " +
                 ms(search.max) + "]");
-  const auto viewsAt = [&](double offset) {
-    TimeAlignmentOptions o;
-    o.time_offset = offset;
-    o.max_pose_gap = max_pose_gap;
-    const TimeAlignment a = alignMotionToImages(motion, images, o, "motion", "images");
-    if (a.matched != images.times.size())
-      throw Error("time offset: an image lost its pose");
-    std::vector<RigView> views(images.times.size());
+  out.estimate = estimateTimeOffset(
+      [&](double offset) { return cost(imageSamplesAt(motion, image_times, images, offset, max_pose_gap), images); },
+      search);
+  // The curvature's sigma takes every corner's residual as independent; the motion log's errors are
+  // shared by the corners of an image and by neighbouring images (the readings interpolated), so
+  // that sigma is too small when they dominate (measured on the yaw rig: 8 to 50 times,
+  // bench_time_offset). A delete-a-group jackknife over kGroups blocks of consecutive images
+  // measures the spread itself; the larger of the two is reported.
+  constexpr std::size_t kGroups = 10;
+  if (images.size() >= 2 * kGroups) {
+    const double h = search.step;
+    std::vector<double> estimates;
+    for (std::size_t g = 0; g < kGroups; ++g) {
+      const std::size_t from = g * images.size() / kGroups, to = (g + 1) * images.size() / kGroups;
+      std::vector<std::size_t> kept_images, kept_positions;
+      for (std::size_t k = 0; k < images.size(); ++k)
+        if (k < from || k >= to) {
+          kept_images.push_back(images[k]);
+          kept_positions.push_back(k);
+        }
+      const auto cost_without = [&](double offset) {
+        const std::vector<MotionSample> all = imageSamplesAt(motion, image_times, images, offset, max_pose_gap);
+        std::vector<MotionSample> kept;
+        kept.reserve(kept_positions.size());
+        for (std::size_t k : kept_positions)
+          kept.push_back(all[k]);
+        try {
+          return cost(kept, kept_images).sum_squares;
+        } catch (const Error &) {
+          return std::numeric_limits<double>::infinity();
+        }
+      };
+      double f = 0;
+      const double e = goldenMinimum(cost_without, out.estimate.offset - 2 * h, out.estimate.offset + 2 * h,
+                                     search.tolerance, f);
+      if (std::isfinite(f)) // without some images the calibration may not be solvable (the yaw span too small)
+        estimates.push_back(e);
+    }
+    constexpr std::size_t kMinGroups = 5;
+    if (estimates.size() < kMinGroups)
+      throw Error("time offset: the calibration cannot be solved without any tenth of the images in " +
+                  std::to_string(kGroups - estimates.size()) + " of " + std::to_string(kGroups) +
+                  " cases: too few views to tell the offset's uncertainty (move wider and longer)");
+    out.estimate.sigma = std::max(out.estimate.sigma, calibration_detail::jackknifeSigma(estimates));
+  }
+  out.samples = imageSamplesAt(motion, image_times, images, out.estimate.offset, max_pose_gap);
+  return out;
+}
+
+TimedRigCalibration calibrateRigWithTimeOffset(const CameraModel &camera, const BoardLayout &board,
+                                               const MotionLog &motion, const std::vector<double> &image_times,
+                                               const std::vector<std::vector<FeatureObservation>> &features,
+                                               const RigCalibrationOptions &options, const TimeOffsetSearch &search,
+                                               double max_pose_gap)
+{
+  if (image_times.size() != features.size())
+    throw Error("time offset: " + std::to_string(image_times.size()) + " image times for " +
+                std::to_string(features.size()) + " detections");
+  std::vector<bool> usable(features.size());
+  for (std::size_t i = 0; i < features.size(); ++i)
+    usable[i] = !features[i].empty();
+  const auto viewsOf = [&](const std::vector<MotionSample> &samples, const std::vector<std::size_t> &images) {
+    std::vector<RigView> views(samples.size());
     for (std::size_t k = 0; k < views.size(); ++k) {
-      views[k].sample = a.log.samples[k];
-      views[k].sample.frame = static_cast<long>(k);
-      views[k].features = features[index[k]];
+      views[k].sample = samples[k];
+      views[k].features = features[images[k]];
     }
     return views;
   };
   RigCalibrationOptions profile_options = options;
   profile_options.max_rms_px = std::numeric_limits<double>::max(); // a wrong offset fits badly: that is its cost
   profile_options.max_offset_sigma = std::numeric_limits<double>::max();
-  const auto cost = [&](double offset) {
-    const RigCalibration r = calibrateRig(camera, board, viewsAt(offset), profile_options);
+  profile_options.check_board_scale = false; // once, at the offset found
+  const auto cost = [&](const std::vector<MotionSample> &samples, const std::vector<std::size_t> &images) {
+    const RigCalibration r = calibrateRig(camera, board, viewsOf(samples, images), profile_options);
     ProfileCost c;
     c.sum_squares = r.rms_px * r.rms_px * r.points; // rms_px: per coordinate pair
     c.residuals = 2.0 * r.points;
     c.parameters = 6 + 2 + (options.estimate_axis ? 2 : 0) + (r.yaw_zero == YawZeroSource::Fixed ? 0 : 1); // the board pose, t0 (x, z), the axis, the yaw zero
     return c;
   };
+  const TimedImagesOffset found = estimateTimeOffsetOverImages(motion, image_times, usable, cost, search, max_pose_gap);
   TimedRigCalibration out;
-  out.time_offset = estimateTimeOffset(cost, search);
-  // The curvature's sigma takes every corner's residual as independent; the motion log's errors are
-  // shared by the corners of an image and by neighbouring images (the readings interpolated), so
-  // that sigma is too small when they dominate (measured: 8 to 50 times, bench_time_offset). A
-  // delete-a-group jackknife over kGroups blocks of consecutive images measures the spread itself;
-  // the larger of the two is reported.
-  constexpr std::size_t kGroups = 10;
-  if (images.times.size() >= 2 * kGroups) {
-    const double h = search.step;
-    std::vector<double> estimates;
-    for (std::size_t g = 0; g < kGroups; ++g) {
-      const std::size_t from = g * images.times.size() / kGroups, to = (g + 1) * images.times.size() / kGroups;
-      const auto cost_without = [&](double offset) {
-        std::vector<RigView> all = viewsAt(offset), kept;
-        for (std::size_t k = 0; k < all.size(); ++k)
-          if (k < from || k >= to)
-            kept.push_back(all[k]);
-        try {
-          const RigCalibration r = calibrateRig(camera, board, kept, profile_options);
-          return r.rms_px * r.rms_px * r.points;
-        } catch (const Error &) {
-          return std::numeric_limits<double>::infinity();
-        }
-      };
-      double f = 0;
-      const double e = goldenMinimum(cost_without, out.time_offset.offset - 2 * h, out.time_offset.offset + 2 * h,
-                                     search.tolerance, f);
-      if (std::isfinite(f)) // without some images the rig may not be solvable (the yaw span too small)
-        estimates.push_back(e);
-    }
-    constexpr std::size_t kMinGroups = 5;
-    if (estimates.size() < kMinGroups)
-      throw Error("time offset: the rig cannot be solved without any tenth of the images in " +
-                  std::to_string(kGroups - estimates.size()) + " of " + std::to_string(kGroups) +
-                  " cases: too few views to tell the offset's uncertainty (sweep the pan wider and longer)");
-    const double G = static_cast<double>(estimates.size());
-    double mean = 0, var = 0;
-    for (double e : estimates)
-      mean += e / G;
-    for (double e : estimates)
-      var += (e - mean) * (e - mean);
-    var *= (G - 1) / G;
-    out.time_offset.sigma = std::max(out.time_offset.sigma, std::sqrt(var));
-  }
-  out.rig = calibrateRig(camera, board, viewsAt(out.time_offset.offset), options);
-  out.images_used = static_cast<int>(images.times.size());
+  out.time_offset = found.estimate;
+  out.rig = calibrateRig(camera, board, viewsOf(found.samples, found.images), options);
+  out.images_used = static_cast<int>(found.images.size());
   return out;
 }
 

@@ -30,6 +30,8 @@
 #include <vector>
 #include <Eigen/Core>
 #include <visp3/core/vpHomogeneousMatrix.h>
+#include <yawdepth/calibration/board_scale.h>
+#include <yawdepth/calibration/time_offset.h>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/features/pattern.h>
@@ -63,6 +65,11 @@ struct HandEyeOptions {
   double sigma_pose_rotation = 0.1 * M_PI / 180; //!< the same for its rotation, per axis (rad)
   /*! A fit that moves a hand pose by more than this many of the sigmas above failed (refused). */
   double max_pose_correction_sigmas = 10.0;
+  /*! Check the board's size against the hand's motion (board_scale.h): the fit again with a scale
+      of the board's points free; a Mismatch is reported in HandEyeCalibration::board_scale, a gross
+      one refused. The camera pose stays the one estimated with the size given. */
+  bool check_board_scale = true;
+  BoardScaleOptions board_scale; //!< when the scale differs enough from 1 to say so
 };
 
 /*! \brief Result of calibrateHandEye(). Uncertainties are 1-sigma: (tx, ty, tz) in metres, the
@@ -83,6 +90,10 @@ struct HandEyeCalibration {
   std::vector<std::string> skipped;     //!< views left out, each with the reason
   double pose_correction_mm = 0;        //!< largest correction of a hand pose's translation (mm)
   double pose_correction_deg = 0;       //!< largest correction of a hand pose's rotation (deg)
+  /*! The board's size as the hand's motion sees it (NotEstimated when not checked). Eye-in-hand
+      views all at one distance from the board, looking at one point, cannot tell it (the camera
+      slides along its axis instead): its sigma is then large and the status Consistent. */
+  BoardScaleCheck board_scale;
 };
 
 /*!
@@ -96,6 +107,36 @@ struct HandEyeCalibration {
 */
 HandEyeCalibration calibrateHandEye(const CameraModel &camera, const BoardLayout &board,
                                     const std::vector<HandEyeView> &views, const HandEyeOptions &options = {});
+
+/*! \brief The hand-eye calibration with the time offset (calibrateHandEyeWithTimeOffset()). */
+struct TimedHandEyeCalibration {
+  HandEyeCalibration hand_eye;    //!< the calibration at the estimated offset
+  TimeOffsetEstimate time_offset; //!< the offset (time_offset.h)
+  int images_used = 0;            //!< images with the board and a pose over the whole search range
+};
+
+/*!
+  \brief Hand-eye calibration and the camera-to-motion time offset together, from a board seen
+  while the arm moves continuously: for each offset tried the hand poses are interpolated at the
+  images' times plus the offset and the calibration solved again (ViSP's start, the joint fit);
+  the cost is the joint fit's whitened sum of squares (the corners' reprojection over `sigma_px`
+  and the hand poses' departures from the interpolated ones over the kinematics' sigmas). The
+  search, the sigma and the refusals are estimateTimeOffsetOverImages()'s, as for the yaw rig: the
+  arm must change speed (at a constant velocity an offset is the same as another eMc or board pose),
+  and a near-static arm is refused.
+  \param camera, board As calibrateHandEye(). \param motion A timestamped log of the hand's 6-DoF
+  poses in the base (readMotionFile(): TUM, EuRoC, a yawdepth CSV with t). \param image_times Each
+  image's camera-clock time (s). \param features Each image's detected board features (empty when
+  not found). \param names Each image's name, for messages. \param options As calibrateHandEye()
+  (its refusals and board scale check apply to the final fit). \param search The offsets tried.
+  \param max_pose_gap As TimeAlignmentOptions.
+*/
+TimedHandEyeCalibration calibrateHandEyeWithTimeOffset(const CameraModel &camera, const BoardLayout &board,
+                                                       const MotionLog &motion, const std::vector<double> &image_times,
+                                                       const std::vector<std::vector<FeatureObservation>> &features,
+                                                       const std::vector<std::string> &names,
+                                                       const HandEyeOptions &options, const TimeOffsetSearch &search,
+                                                       double max_pose_gap = 0.2);
 
 /*! \brief The rig file text for a hand-eye result: `camera_pose` (vMc = X as a vpPoseVector) and
     `camera_pose_sigma`, with comments naming the frames and the fit. */

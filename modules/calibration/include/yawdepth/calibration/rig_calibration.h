@@ -27,6 +27,7 @@
 #include <vector>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <yawdepth/calibration/board_scale.h>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/features/pattern.h>
@@ -56,6 +57,11 @@ struct RigCalibrationOptions {
   double max_rms_px = 3.0;
   double max_offset = 2.0;         //!< a camera offset longer than this (m) is refused the same way
   double max_offset_sigma = 0.05;  //!< ... and one this uncertain (m, 1-sigma of x or z)
+  /*! Check the board's size against the robot's translation (board_scale.h) when it moved (the
+      yaw zero from RobotMotion): the fit again with a scale of the board's points free. A static
+      robot cannot tell the size: a wrong one scales the camera offset by the same factor, unseen. */
+  bool check_board_scale = true;
+  BoardScaleOptions board_scale; //!< when the scale differs enough from 1 to say so
 };
 
 /*! \brief How the yaw offset was obtained. */
@@ -83,6 +89,9 @@ struct RigCalibration {
   double yaw_span = 0;             //!< span of the yaw readings (rad)
   int distinct_yaws = 0;           //!< number of distinct yaw readings (0.2 deg apart)
   double baseline = 0;             //!< largest robot translation between views (m)
+  /*! The board's size as the robot's translation sees it; NotEstimated for a static robot (the
+      images cannot tell it, and a wrong size scales camera_offset by the same factor). */
+  BoardScaleCheck board_scale;
 };
 
 /*!

@@ -15,6 +15,7 @@
   robot accelerating). At a constant yaw rate an offset is the same as a yaw offset, and a constant
   velocity the same as a shifted start: the cost is then flat, and the estimate is refused.
 */
+#include <cstddef>
 #include <functional>
 #include <vector>
 #include <yawdepth/calibration/rig_calibration.h>
@@ -55,6 +56,51 @@ struct TimeOffsetEstimate {
   it), or when the cost is flat (the motion does not tell the offset).
 */
 TimeOffsetEstimate estimateTimeOffset(const std::function<ProfileCost(double)> &cost, const TimeOffsetSearch &search);
+
+/*!
+  \brief A calibration's cost from the images' poses at one offset: `samples[k]` is the motion log
+  interpolated at image `images[k]`'s time plus the offset (an index into the image list; frames
+  numbered 0, 1, ...). It may throw yawdepth::Error when the calibration cannot be solved.
+*/
+using TimedImagesCost =
+    std::function<ProfileCost(const std::vector<MotionSample> &samples, const std::vector<std::size_t> &images)>;
+
+/*! \brief The offset found over timed images (estimateTimeOffsetOverImages()). */
+struct TimedImagesOffset {
+  TimeOffsetEstimate estimate;       //!< the offset; its sigma the larger of the curvature's and the jackknife's
+  std::vector<std::size_t> images;   //!< the images used (indices into the list): a pose over the whole range
+  std::vector<MotionSample> samples; //!< their motion samples at the offset found
+};
+
+/*!
+  \brief The images, among the `usable` ones, that have a pose (alignMotionToImages()) at both ends
+  of the search range: the same views at every offset tried.
+*/
+std::vector<std::size_t> imagesPosedOverRange(const MotionLog &motion, const std::vector<double> &image_times,
+                                              const std::vector<bool> &usable, const TimeOffsetSearch &search,
+                                              double max_pose_gap);
+
+/*! \brief The motion samples of `images` (indices into `image_times`) at `offset`, frames 0, 1, ...;
+    throws yawdepth::Error when one has no pose. */
+std::vector<MotionSample> imageSamplesAt(const MotionLog &motion, const std::vector<double> &image_times,
+                                         const std::vector<std::size_t> &images, double offset, double max_pose_gap);
+
+/*!
+  \brief The time offset of any calibration from timed images and a timestamped log: the profile
+  (estimateTimeOffset()) of `cost` over the images with a pose over the whole range (at least 3),
+  and with 20 images or more a delete-a-group jackknife over ten blocks of consecutive images (each
+  block left out, the offset searched again within two grid steps): the motion log's errors are
+  shared by an image's residuals and by neighbouring images, which the curvature does not see; the
+  larger sigma is kept. Used by calibrateRigWithTimeOffset() and calibrateHandEyeWithTimeOffset().
+  \param motion A timestamped log. \param image_times Camera-clock times (s).
+  \param usable Per image, whether it has the board. \param cost The calibration at one offset.
+  \param search The offsets tried. \param max_pose_gap As TimeAlignmentOptions.
+  \throws yawdepth::Error as estimateTimeOffset(), with fewer than 3 images posed over the range, or
+  when the calibration cannot be solved without a tenth of the images in more than half the cases.
+*/
+TimedImagesOffset estimateTimeOffsetOverImages(const MotionLog &motion, const std::vector<double> &image_times,
+                                               const std::vector<bool> &usable, const TimedImagesCost &cost,
+                                               const TimeOffsetSearch &search, double max_pose_gap);
 
 /*! \brief The yaw rig's calibration with the time offset (calibrateRigWithTimeOffset()). */
 struct TimedRigCalibration {
