@@ -61,6 +61,15 @@ for seed in 11 12; do
     done
   done
 
+  # 5. Absurd motion sigmas (per pose, 1e4 and 1e150 m and rad): huge or degenerate, never a collapse.
+  d=$work/arm-random-$seed
+  for sig in 1e4 1e150; do
+    for m in fused window refine; do
+      judge "motion sigmas $sig seed $seed $m" handled "$d" "$d/motion.csv" "$d/tracks.csv" "$C/paper_rig.yaml" \
+        "$d/truth.csv" --method $m --motion-noise absolute --sigma-odom $sig --sigma-rot $sig
+    done
+  done
+
   # 4. Yaw in degrees; 6. a lever arm in millimetres.
   d=$work/planar-$seed
   python3 "$here/mistakes/perturb.py" yaw-degrees "$d/motion.csv" "$d/degrees.csv"

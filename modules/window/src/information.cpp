@@ -432,23 +432,41 @@ struct MotionCovariance {
   Eigen::MatrixXd dense;
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> sparse_llt;
   bool use_sparse = false;
+  /* The information is numerically singular: the motion's covariance (and every point's through
+     it) cannot be computed, e.g. motion sigmas so large that the data alone must fix the scale,
+     which one camera cannot. */
+  bool failed = false;
 
   void compute(MotionInformation &S, int nl)
   {
     if (S.banded()) {
       sparse_llt.compute(S.lowerSparse());
       use_sparse = sparse_llt.info() == Eigen::Success;
+      if (use_sparse) {
+        failed = !wellConditioned(sparse_llt.matrixL().toDense().diagonal());
+        return;
+      }
     }
-    if (use_sparse)
-      return;
     Eigen::MatrixXd Sd = S.takeDense();
     Sd = 0.5 * (Sd + Sd.transpose());
     Eigen::LLT<Eigen::MatrixXd> llt(Sd);
-    if (llt.info() == Eigen::Success) {
-      dense = Eigen::MatrixXd::Identity(nl, nl);
-      llt.solveInPlace(dense);
-    } else
-      dense = Sd.completeOrthogonalDecomposition().pseudoInverse();
+    failed = llt.info() != Eigen::Success || !wellConditioned(Eigen::MatrixXd(llt.matrixL()).diagonal());
+    if (failed)
+      return;
+    dense = Eigen::MatrixXd::Identity(nl, nl);
+    llt.solveInPlace(dense);
+  }
+
+  /* Cholesky pivots (L's diagonal squared) all finite and none below kMinPivotRatio of the largest:
+     below it, rounding (1e-16 of the largest) is a sizeable part of the smallest, and the inverse
+     in that direction is noise (the covariance would collapse where it should be huge). */
+  static constexpr double kMinPivotRatio = 1e-13;
+  static bool wellConditioned(const Eigen::VectorXd &l_diagonal)
+  {
+    if (l_diagonal.size() == 0)
+      return true;
+    const Eigen::VectorXd d = l_diagonal.cwiseAbs2();
+    return d.allFinite() && d.minCoeff() > kMinPivotRatio * d.maxCoeff();
   }
 };
 
@@ -571,12 +589,22 @@ void pointCovariancesT(const Model &m, bool joint, std::vector<Eigen::Matrix3d> 
         for (int i = 0; i < k; ++i)
           Si(cp[i], cp[j]) += reduced(i, j);
       Si = 0.5 * (Si + Si.transpose());
-      Sigma_ll_point[p] = Si.llt().solve(Eigen::MatrixXd::Identity(nl, nl));
+      const Eigen::LLT<Eigen::MatrixXd> llt(Si);
+      if (llt.info() != Eigen::Success || !MotionCovariance::wellConditioned(Eigen::MatrixXd(llt.matrixL()).diagonal())) {
+        ok[p] = 0;
+        continue;
+      }
+      Sigma_ll_point[p] = llt.solve(Eigen::MatrixXd::Identity(nl, nl));
     }
   }
   MotionCovariance motion;
-  if (joint && nl > 0)
+  if (joint && nl > 0) {
     motion.compute(S, nl);
+    if (motion.failed) { // no point's covariance can be trusted
+      ok.assign(np, 0);
+      return;
+    }
+  }
 
   // Each point's camera-frame position at its report row, c_P = q / rho, and its covariance.
   for (int p = 0; p < np; ++p) {
