@@ -400,10 +400,12 @@ for len in 245 255; do
 done
 # '-' is standard output for estimate's and measure's --out only; --ply - is refused (no file named '-').
 mkdir -p "$PK/cwd"
-(cd "$PK/cwd" && run "$PK.ply" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion.csv" --features klt \
-    --out "$PK/points_plydash.csv" --ply -)
+ABS_YML=$(realpath "$YML") ABS_RIG=$(realpath "$RIG")
+(YAWDEPTH=$(realpath "$YAWDEPTH") && cd "$PK/cwd" &&
+  run "$PK.ply" measure --quiet --camera "$ABS_YML" --rig "$ABS_RIG" --motion "$PK/motion.csv" --features klt \
+      --out "$PK/points_plydash.csv" --ply - &&
+  run "$PK.td" track --quiet --camera "$ABS_YML" --rig "$ABS_RIG" --motion "$PK/motion.csv" --out -)
 one_line "measure --ply -" "$PK.ply" "--ply -: standard output cannot take this output"
-(cd "$PK/cwd" && run "$PK.td" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion.csv" --out -)
 one_line "track --out -" "$PK.td" "--out -: standard output cannot take this output"
 [ -z "$(ls -A "$PK/cwd")" ] && [ ! -e "$PK/points_plydash.csv" ] && pass || fail "--ply - or --out - wrote a file"
 # --residual-check off keeps every track the method found ok; on (the default here) cuts some.

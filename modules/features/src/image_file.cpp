@@ -101,7 +101,7 @@ bool headerSize(const std::vector<unsigned char> &b, std::uint64_t &w, std::uint
 std::string jpegDamage(const std::vector<unsigned char> &b)
 {
   const std::size_t n = b.size();
-  const std::string truncated = "a truncated JPEG: it ends before its end-of-image marker";
+  const char *const truncated = "a truncated JPEG: it ends before its end-of-image marker";
   bool frame = false;
   std::size_t i = 2;
   for (;;) {
