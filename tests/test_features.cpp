@@ -962,7 +962,7 @@ TEST_CASE("video: patterns are checked, folders and bad movies are one line", "[
   CHECK(SequencePattern("f%d.png").file(12) == "f12.png");
   CHECK(SequencePattern("f%%_%09d.png").file(5) == "f%_000000005.png");
   // libstdc++'s std::regex once built from %999999999d ran out of NFA states: now a plain refusal.
-  for (const auto &[bad, says] : std::vector<std::pair<std::string, std::string>>{
+  for (const auto &bad_says : std::vector<std::pair<std::string, std::string>>{
            {"x_%999999999d.png", "'%999999999d' is not %d or %0Nd with N from 1 to 9"},
            {"x_%010d.png", "'%010d' is not"},
            {"x_%4d.png", "'%4d' is not"},
@@ -970,6 +970,8 @@ TEST_CASE("video: patterns are checked, folders and bad movies are one line", "[
            {"x_%", "'%' is not"},
            {"x_%04d_%d.png", "more than one %d or %0Nd"},
            {"x_%%.png", "holds no %d or %0Nd"}}) {
+    const std::string &bad = bad_says.first; // (not a structured binding: C++17 lambdas cannot capture one)
+    const std::string &says = bad_says.second;
     const std::string what = test::errorOf([&] { VideoFrames video(dir.file(bad)); });
     CHECK(what.rfind(dir.file(bad) + ": not a numbered image sequence: ", 0) == 0);
     CHECK(what.find(says) != std::string::npos);

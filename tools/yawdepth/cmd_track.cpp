@@ -34,7 +34,8 @@ void addKltOptions(CLI::App *sub, KltArgs &args)
       ->capture_default_str();
   sub->add_flag("--no-gate", args.no_gate, "KLT: do not gate the tracks with the motion (no epipolar band)");
   sub->add_option("--video", args.video,
-                  "Take the images from a video file or an image sequence (e.g. frames/%04d.png; ViSP's vpVideoReader), "
+                  "Take the images from a video file (ViSP's vpVideoReader) or a numbered image sequence (one %d or %0Nd, "
+                  "N up to 9, e.g. frames/frame_%04d.png; no gaps), "
                   "one frame per motion-log row in order, instead of the log's image column");
 }
 
