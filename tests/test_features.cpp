@@ -907,6 +907,15 @@ TEST_CASE("images: a truncated or damaged JPEG is refused like a truncated PNG",
   CHECK(readGrayImage(dir.write("progressive.jpg", bytesOf(progressive, progressive.size()))).size() == img.size());
   const std::string cut = dir.write("progressive_cut.jpg", bytesOf(progressive, progressive.size() / 2));
   CHECK(test::errorOf([&] { readGrayImage(cut); }).find("truncated JPEG") != std::string::npos);
+  // The other formats' decoders refuse a truncated file themselves (formats.md promises it for all).
+  for (const std::string ext : {".png", ".pgm", ".bmp", ".tif"}) {
+    std::vector<unsigned char> encoded;
+    REQUIRE(cv::imencode(ext, img, encoded));
+    for (const std::size_t keep : {encoded.size() / 2, encoded.size() - 1}) {
+      const std::string file = dir.write("cut" + ext, bytesOf(encoded, keep));
+      CHECK(test::errorOf([&] { readGrayImage(file); }).rfind(file + ": cannot read image (", 0) == 0);
+    }
+  }
 }
 
 TEST_CASE("video: a numbered sequence starts at its lowest number and has no gap", "[features][klt]")
