@@ -349,6 +349,65 @@ run "$PK.kv" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_n
     --report "$PK/report_video"
 [ "$(rc_of "$PK.kv")" -eq 0 ] && cmp -s "$PK/points.csv" "$PK/points_video.csv" && [ -s "$PK/report_video/overlay.png" ] &&
   pass || fail "measure --features klt --video: exit $(rc_of "$PK.kv"), points differ: $(first "$PK.kv.err")"
+# one_line NAME PREFIX TEXT: the run PREFIX failed with status 1 and exactly one stderr line holding TEXT.
+one_line() {
+  [ "$(rc_of "$2")" -eq 1 ] && [ "$(lines_of "$2.err")" -eq 1 ] && grep -qF -- "$3" "$2.err" && pass ||
+    fail "$1: exit $(rc_of "$2"), $(lines_of "$2.err") stderr lines: $(first "$2.err")"
+}
+# Bad images and videos (issue #38): a truncated JPEG in the log's image column, a gap in a numbered
+# sequence, a bad pattern, a folder, a file that is no movie: each one line, nothing written.
+SMALLJPG="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/data/images/small.jpg"
+head -c 600 "$SMALLJPG" > "$PK/cut.jpg"
+awk -F, -v OFS=, 'NR > 1 && $1 == 3 { $7 = "cut.jpg" } { print }' "$PK/motion.csv" > "$PK/motion_cutjpg.csv"
+run "$PK.cj" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_cutjpg.csv" --out "$PK/tracks_cutjpg.csv"
+one_line "track on a truncated JPEG" "$PK.cj" "cut.jpg: cannot read image (a truncated JPEG"
+[ ! -e "$PK/tracks_cutjpg.csv" ] && pass || fail "track on a truncated JPEG wrote its output"
+run "$PK.mj" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_cutjpg.csv" --features klt \
+    --out "$PK/points_cutjpg.csv"
+one_line "measure --features klt on a truncated JPEG" "$PK.mj" "cut.jpg: cannot read image (a truncated JPEG"
+cp "$SMALLJPG" "$PK/whole.jpg"
+awk -F, -v OFS=, 'NR > 1 && $1 == 3 { $7 = "whole.jpg" } { print }' "$PK/motion.csv" > "$PK/motion_wholejpg.csv"
+run "$PK.wj" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_wholejpg.csv" --out "$PK/tracks_wholejpg.csv"
+one_line "track on a whole JPEG of another size" "$PK.wj" "whole.jpg: image is 32x24 but the camera is"
+mkdir -p "$PK/gap"
+cp "$PK"/frame_000[0-7].png "$PK/gap/" && rm -f "$PK/gap/frame_0003.png"
+run "$PK.gap" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_noimg.csv" --video "$PK/gap/frame_%04d.png" \
+    --out "$PK/tracks_gap.csv"
+one_line "track --video with a gap" "$PK.gap" "frame_0003.png: missing from the numbered image sequence"
+[ ! -e "$PK/tracks_gap.csv" ] && pass || fail "track --video with a gap wrote its output"
+for pat in 'x_%999999999d.png' 'x_%04d_%d.png' 'x_%s.png'; do
+  run "$PK.pat" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_noimg.csv" --video "$PK/$pat" \
+      --out "$PK/tracks_pat.csv"
+  one_line "track --video $pat" "$PK.pat" "--video $PK/$pat: not a numbered image sequence"
+  grep -q "NFA" "$PK.pat.err" && fail "track --video $pat: std::regex's message: $(first "$PK.pat.err")"
+done
+run "$PK.dir" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_noimg.csv" --video "$PK/gap" \
+    --out "$PK/tracks_dir.csv"
+one_line "track --video FOLDER" "$PK.dir" "is a folder, not a video file (give a video file, or a numbered image sequence"
+printf 'RIFF\020\000\000\000AVI LIST\004\000\000\000hdrlnot a movie' > "$PK/junk.avi"
+head -c 3000 "$PK/frame_0000.png" > "$PK/junk.mp4"
+for v in junk.avi junk.mp4; do
+  run "$PK.jv" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion_noimg.csv" --video "$PK/$v" \
+      --out "$PK/tracks_junk.csv"
+  one_line "track --video $v (not a movie)" "$PK.jv" "$PK/$v: cannot open"
+done
+# Output names of 245 to 255 bytes: the temporary file beside them must fit too.
+for len in 245 255; do
+  long=$(printf "%0$((len - 4))d.csv" 0)
+  run "$PK.long" track --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion.csv" --out "$PK/$long"
+  [ "$(rc_of "$PK.long")" -eq 0 ] && cmp -s "$PK/$long" "$PK/tracks_img.csv" && pass ||
+    fail "track --out of a $len-byte name: exit $(rc_of "$PK.long"): $(first "$PK.long.err")"
+done
+# '-' is standard output for estimate's and measure's --out only; --ply - is refused (no file named '-').
+mkdir -p "$PK/cwd"
+ABS_YML=$(realpath "$YML") ABS_RIG=$(realpath "$RIG")
+(YAWDEPTH=$(realpath "$YAWDEPTH") && cd "$PK/cwd" &&
+  run "$PK.ply" measure --quiet --camera "$ABS_YML" --rig "$ABS_RIG" --motion "$PK/motion.csv" --features klt \
+      --out "$PK/points_plydash.csv" --ply - &&
+  run "$PK.td" track --quiet --camera "$ABS_YML" --rig "$ABS_RIG" --motion "$PK/motion.csv" --out -)
+one_line "measure --ply -" "$PK.ply" "--ply -: standard output cannot take this output"
+one_line "track --out -" "$PK.td" "--out -: standard output cannot take this output"
+[ -z "$(ls -A "$PK/cwd")" ] && [ ! -e "$PK/points_plydash.csv" ] && pass || fail "--ply - or --out - wrote a file"
 # --residual-check off keeps every track the method found ok; on (the default here) cuts some.
 run "$PK.ko" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PK/motion.csv" --features klt --sigma-odom 1e-5 \
     --sigma-heading 1e-6 --sigma-yaw 1e-6 --residual-check off --out "$PK/points_off.csv"

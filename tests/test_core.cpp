@@ -125,8 +125,12 @@ TEST_CASE("outputs: never an input, never twice", "[core][files]")
   const std::string existing = dir.write("e.csv", "x");
   CHECK(contains(errorOf([&] { checkOutputs(inputs, {{"--out", existing}, {"--tracks-out", existing}}); }),
                  "are the same file"));
-  // Devices may repeat; "-" is standard output; empty names and folders are refused.
-  CHECK_NOTHROW(checkOutputs(inputs, {{"--out", "/dev/null"}, {"--outliers", "/dev/null"}, {"--x", "-"}, {"--y", "-"}}));
+  // Devices may repeat; "-" is not a file name (a writer would make a file named "-"), nor is an
+  // empty name or a folder.
+  CHECK_NOTHROW(checkOutputs(inputs, {{"--out", "/dev/null"}, {"--outliers", "/dev/null"}}));
+  CHECK(contains(errorOf([&] { checkOutputs(inputs, {{"--ply", "-"}}); }),
+                 "--ply -: standard output cannot take this output"));
+  CHECK_NOTHROW(checkOutputs(inputs, {{"--ply", "./-"}}));
   CHECK(contains(errorOf([&] { checkOutputs(inputs, {{"--out", ""}}); }), "--out: empty file name"));
   CHECK(contains(errorOf([&] { checkOutputs(inputs, {{"--out", dir.path.string()}}); }), "is a folder"));
   // The input is untouched by any of it.
@@ -172,6 +176,17 @@ TEST_CASE("outputs: atomic, through links and devices, never over a read-only fi
   CHECK(contains(errorOf([&] { writeFileAtomically(dir.path.string(), "x"); }), "is a folder"));
   CHECK(contains(errorOf([&] { writeFileAtomically(dir.file("no/such/folder/x.csv"), "x"); }),
                  "cannot create a temporary file"));
+  CHECK(dir.temporaries().empty());
+
+  // Names up to the file system's longest (255 bytes): the temporary file's name fits too.
+  for (const std::size_t length : {244, 245, 250, 255}) {
+    const std::string name = dir.file(std::string(length - 4, 'n') + ".csv");
+    writeFileAtomically(name, "long\n");
+    CHECK(slurp(name) == "long\n");
+    writeFileAtomically(name, "again\n"); // replacing it too
+    CHECK(slurp(name) == "again\n");
+  }
+  CHECK(contains(errorOf([&] { writeFileAtomically(dir.file(std::string(256, 'n')), "x"); }), "cannot"));
   CHECK(dir.temporaries().empty());
 }
 

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <iostream>
 #include <fstream>
 #include <map>
 #include <random>
@@ -810,4 +811,215 @@ TEST_CASE("video: bad input is one line, never a crash", "[features][klt]")
   });
   CHECK(what.find("frame 1") != std::string::npos);
   CHECK(what.find("320x240") != std::string::npos);
+}
+
+namespace {
+
+/* A gray image with texture (a JPEG of it has entropy-coded data well past its first 1000 bytes). */
+cv::Mat texturedImage(int width, int height)
+{
+  cv::Mat img(height, width, CV_8UC1);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> level(0, 255);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      img.at<unsigned char>(y, x) = static_cast<unsigned char>((x / 8 + y / 8) % 2 ? level(rng) / 4 : 200);
+  return img;
+}
+
+std::string bytesOf(const std::vector<unsigned char> &b, std::size_t n) { return std::string(b.begin(), b.begin() + n); }
+
+/* What the calls in `f` write to C's stderr (file descriptor 2), captured in a file. */
+std::string stderrOf(const std::function<void()> &f)
+{
+  test::TempDir dir;
+  const std::string log = dir.file("stderr.txt");
+  std::fflush(stderr);
+  const int saved = ::dup(STDERR_FILENO);
+  std::FILE *capture = std::fopen(log.c_str(), "w");
+  REQUIRE(capture != nullptr);
+  ::dup2(::fileno(capture), STDERR_FILENO);
+  try {
+    f();
+  } catch (...) {
+    std::fflush(stderr);
+    ::dup2(saved, STDERR_FILENO);
+    ::close(saved);
+    std::fclose(capture);
+    throw;
+  }
+  std::fflush(stderr);
+  ::dup2(saved, STDERR_FILENO);
+  ::close(saved);
+  std::fclose(capture);
+  return test::slurp(log);
+}
+
+/* What the calls in `f` print: on C's stderr (file descriptor 2, captured in a file), then on
+   std::cout. */
+std::string printedBy(const std::function<void()> &f)
+{
+  std::ostringstream out;
+  std::streambuf *const cout = std::cout.rdbuf(out.rdbuf());
+  const std::string err = stderrOf(f);
+  std::cout.rdbuf(cout);
+  return err + out.str();
+}
+
+} // namespace
+
+TEST_CASE("images: a truncated or damaged JPEG is refused like a truncated PNG", "[features][image]")
+{
+  test::TempDir dir;
+  const cv::Mat img = texturedImage(320, 240);
+  std::vector<unsigned char> jpeg;
+  REQUIRE(cv::imencode(".jpg", img, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90}));
+  REQUIRE(jpeg.size() > 5000);
+  REQUIRE(jpeg[jpeg.size() - 2] == 0xFF);
+  REQUIRE(jpeg[jpeg.size() - 1] == 0xD9);
+  // Whole, and with a trailer after its end-of-image marker (as some cameras write): read.
+  constexpr double kJpegMeanError = 10.0; // gray levels: the JPEG's loss at quality 90 on this texture
+  const std::string whole = dir.write("whole.jpg", bytesOf(jpeg, jpeg.size()));
+  const cv::Mat got = readGrayImage(whole);
+  REQUIRE(got.size() == img.size());
+  CHECK(cv::norm(got, img, cv::NORM_L1) / static_cast<double>(img.total()) < kJpegMeanError);
+  CHECK(readGrayImage(dir.write("trailer.jpg", bytesOf(jpeg, jpeg.size()) + std::string(64, '\0'))).size() ==
+        img.size());
+  // Its first 1000 bytes (libjpeg decodes them to gray without an error), all but its last byte or
+  // its end-of-image marker, its headers only: refused, naming the file.
+  for (const std::size_t keep : {std::size_t(1000), jpeg.size() - 1, jpeg.size() - 2, std::size_t(300), std::size_t(4)}) {
+    const std::string cut = dir.write("cut.jpg", bytesOf(jpeg, keep));
+    const std::string what = test::errorOf([&] { readGrayImage(cut); });
+    CHECK(what.rfind(cut + ": cannot read image (", 0) == 0);
+    CHECK(what.find("truncated JPEG") != std::string::npos);
+    CHECK(what.find('\n') == std::string::npos);
+  }
+  // A segment whose length is 0, image data before the frame header: damaged.
+  std::vector<unsigned char> bad = {0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x00, 0xFF, 0xD9};
+  CHECK(test::errorOf([&] { readGrayImage(dir.write("zero.jpg", bytesOf(bad, bad.size()))); }).find("damaged JPEG") !=
+        std::string::npos);
+  bad = {0xFF, 0xD8, 0xFF, 0xDA, 0x00, 0x02, 0x12, 0x34, 0xFF, 0xD9};
+  CHECK(test::errorOf([&] { readGrayImage(dir.write("noframe.jpg", bytesOf(bad, bad.size()))); })
+            .find("before its frame header") != std::string::npos);
+  // A progressive JPEG (several scans, tables between them) is whole too.
+  std::vector<unsigned char> progressive;
+  REQUIRE(cv::imencode(".jpg", img, progressive, {cv::IMWRITE_JPEG_PROGRESSIVE, 1}));
+  CHECK(readGrayImage(dir.write("progressive.jpg", bytesOf(progressive, progressive.size()))).size() == img.size());
+  const std::string cut = dir.write("progressive_cut.jpg", bytesOf(progressive, progressive.size() / 2));
+  CHECK(test::errorOf([&] { readGrayImage(cut); }).find("truncated JPEG") != std::string::npos);
+  // The other formats' decoders refuse a truncated file themselves (formats.md promises it for all).
+  for (const std::string ext : {".png", ".pgm", ".bmp", ".tif"}) {
+    std::vector<unsigned char> encoded;
+    REQUIRE(cv::imencode(ext, img, encoded));
+    for (const std::size_t keep : {encoded.size() / 2, encoded.size() - 1}) {
+      const std::string file = dir.write("cut" + ext, bytesOf(encoded, keep));
+      CHECK(test::errorOf([&] { readGrayImage(file); }).rfind(file + ": cannot read image (", 0) == 0);
+    }
+  }
+}
+
+TEST_CASE("video: a numbered sequence starts at its lowest number and has no gap", "[features][klt]")
+{
+  test::TempDir dir;
+  const cv::Mat img = texturedImage(64, 48);
+  char name[32];
+  for (const int k : {3, 4, 5, 7}) {
+    std::snprintf(name, sizeof name, "f%04d.png", k);
+    cv::Mat frame = img + cv::Scalar(k);
+    REQUIRE(cv::imwrite(dir.file(name), frame));
+  }
+  REQUIRE(cv::imwrite(dir.file("f00012.png"), img)); // not a name %04d gives: not part of it
+  const SequencePattern pattern(dir.file("f%04d.png"));
+  CHECK(pattern.filesPresent() ==
+        std::vector<std::string>{dir.file("f0003.png"), dir.file("f0004.png"), dir.file("f0005.png"), dir.file("f0007.png")});
+  VideoFrames seq(dir.file("f%04d.png"));
+  for (const int k : {3, 4, 5}) {
+    const cv::Mat got = seq.next();
+    REQUIRE(got.size() == img.size());
+    CHECK(cv::norm(got, img + cv::Scalar(k), cv::NORM_INF) == 0);
+  }
+  // f0006.png is missing and f0007.png exists: an error naming the missing file, not f0007 as frame 4.
+  const std::string gap = test::errorOf([&] { seq.next(); });
+  CHECK(gap.rfind(dir.file("f0006.png") + ": missing from the numbered image sequence", 0) == 0);
+  CHECK(gap.find("goes on at " + dir.file("f0007.png")) != std::string::npos);
+  CHECK(seq.framesRead() == 3);
+  // After the last file: the end.
+  std::filesystem::remove(dir.file("f0007.png"));
+  VideoFrames shorter(dir.file("f%04d.png"));
+  for (int k = 0; k < 3; ++k)
+    shorter.next();
+  CHECK(test::errorOf([&] { shorter.next(); }).find("ended after 3 frames") != std::string::npos);
+  // A damaged frame is refused, naming it.
+  std::vector<unsigned char> jpeg;
+  REQUIRE(cv::imencode(".jpg", img, jpeg));
+  for (const int k : {0, 1})
+    REQUIRE(cv::imwrite(dir.file("j" + std::to_string(k) + ".jpg"), img));
+  dir.write("j2.jpg", std::string(jpeg.begin(), jpeg.begin() + static_cast<long>(jpeg.size() / 2)));
+  VideoFrames jpegs(dir.file("j%d.jpg"));
+  jpegs.next();
+  jpegs.next();
+  CHECK(test::errorOf([&] { jpegs.next(); }).rfind(dir.file("j2.jpg") + ": cannot read image (a truncated JPEG", 0) == 0);
+}
+
+TEST_CASE("video: patterns are checked, folders and bad movies are one line", "[features][klt]")
+{
+  test::TempDir dir;
+  CHECK(SequencePattern::isPattern("frames/f%04d.png"));
+  CHECK_FALSE(SequencePattern::isPattern("100%/movie.avi"));
+  CHECK(SequencePattern("a/f%04d.png").file(7) == "a/f0007.png");
+  CHECK(SequencePattern("a/f%04d.png").file(123456) == "a/f123456.png");
+  CHECK(SequencePattern("f%d.png").file(12) == "f12.png");
+  CHECK(SequencePattern("f%%_%09d.png").file(5) == "f%_000000005.png");
+  // libstdc++'s std::regex once built from %999999999d ran out of NFA states: now a plain refusal.
+  for (const auto &bad_says : std::vector<std::pair<std::string, std::string>>{
+           {"x_%999999999d.png", "'%999999999d' is not %d or %0Nd with N from 1 to 9"},
+           {"x_%010d.png", "'%010d' is not"},
+           {"x_%4d.png", "'%4d' is not"},
+           {"x_%s.png", "'%s' is not"},
+           {"x_%", "'%' is not"},
+           {"x_%04d_%d.png", "more than one %d or %0Nd"},
+           {"x_%%.png", "holds no %d or %0Nd"}}) {
+    const std::string &bad = bad_says.first; // (not a structured binding: C++17 lambdas cannot capture one)
+    const std::string &says = bad_says.second;
+    const std::string what = test::errorOf([&] { VideoFrames video(dir.file(bad)); });
+    CHECK(what.rfind(dir.file(bad) + ": not a numbered image sequence: ", 0) == 0);
+    CHECK(what.find(says) != std::string::npos);
+  }
+  CHECK(test::errorOf([&] { VideoFrames video(dir.file("none_%04d.png")); }).find("no file of this numbered image sequence exists") !=
+        std::string::npos);
+  // A folder: what it is and what is expected.
+  const std::string folder = test::errorOf([&] { VideoFrames video(dir.path.string()); });
+  CHECK(folder.find("is a folder, not a video file") != std::string::npos);
+  CHECK(folder.find("frame_%04d.png") != std::string::npos);
+  // A movie FFmpeg cannot read, and one whose frames are damaged: errors, and nothing on stderr
+  // (FFmpeg's own complaints are silenced).
+  const std::vector<unsigned char> riff = {'R', 'I', 'F', 'F', 0x10, 0, 0, 0, 'A', 'V', 'I', ' ', 'L', 'I', 'S', 'T'};
+  const std::string junk = dir.write("junk.avi", bytesOf(riff, riff.size()) + "not a movie at all");
+  std::string printed = printedBy([&] { CHECK_THROWS_AS(VideoFrames(junk), Error); });
+  CHECK(printed.empty());
+  const std::string movie = dir.file("plane.avi");
+  const cv::Mat img = texturedImage(160, 120);
+  {
+    cv::VideoWriter writer(movie, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, img.size(), false);
+    REQUIRE(writer.isOpened());
+    for (int k = 0; k < 6; ++k)
+      writer.write(img);
+  }
+  std::string bytes = test::slurp(movie);
+  for (std::size_t i = bytes.size() / 3; i < bytes.size() * 2 / 3; i += 7) // damage the middle frames
+    bytes[i] = static_cast<char>(bytes[i] ^ 0x5A);
+  const std::string damaged = dir.write("damaged.avi", bytes);
+  const std::string cut = dir.write("cut.avi", bytes.substr(0, bytes.size() / 2));
+  for (const std::string &file : {damaged, cut}) {
+    printed = printedBy([&] {
+      try {
+        VideoFrames video(file);
+        for (int k = 0; k < 6; ++k)
+          video.next();
+      } catch (const Error &e) {
+        CHECK(std::string(e.what()).find('\n') == std::string::npos);
+      }
+    });
+    CHECK(printed.empty()); // (ViSP printed "Warning: Unable to decode image N" on std::cout)
+  }
 }

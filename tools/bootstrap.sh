@@ -125,7 +125,7 @@ run_sanitized_tests() { run_ctest "$asan_dir"; }
 # the inputs that once crashed it (tests/data/regress/); new inputs go to $asan_dir/fuzz-corpus,
 # a crashing input to $asan_dir/fuzz-artifacts (add it to tests/data/regress/<target>/ once fixed).
 run_fuzzers() {
-  local targets=(camera_file rig_file motion_csv tracks_csv recording) pids=() names=() failed=0 t i
+  local targets=(camera_file rig_file motion_csv tracks_csv recording image_file) pids=() names=() failed=0 t i
   mkdir -p "$asan_dir/fuzz-artifacts"
   for t in "${targets[@]}"; do
     local dirs=("$asan_dir/fuzz-corpus/$t" "$here/fuzz/corpus/$t")

@@ -46,7 +46,9 @@ Runner addEstimate(CLI::App &app)
     std::vector<NamedPath> inputs = {{"--camera", args->camera}, {"--rig", args->rig}, {"--tracks", args->tracks}};
     for (const NamedPath &m : args->motion.inputs())
       inputs.push_back(m);
-    std::vector<NamedPath> outputs = {{"--out", args->out.empty() ? std::string("-") : args->out}};
+    std::vector<NamedPath> outputs; // --out, unless it is standard output (none, or "-")
+    if (!args->out.empty() && args->out != "-")
+      outputs.push_back({"--out", args->out});
     if (args->outliers_given)
       outputs.push_back({"--outliers", args->outliers});
     if (args->ply_given)

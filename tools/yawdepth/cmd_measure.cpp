@@ -38,7 +38,9 @@ void checkMeasureOutputs(const MeasureArgs &a, const CLI::App &sub, const Motion
   inputs.push_back({"--rig", a.rig});
   for (NamedPath &image : imageInputs(motion, a.klt.video))
     inputs.push_back(std::move(image));
-  std::vector<NamedPath> outputs = {{"--out", a.out.empty() ? std::string("-") : a.out}};
+  std::vector<NamedPath> outputs; // --out, unless it is standard output (none, or "-")
+  if (!a.out.empty() && a.out != "-")
+    outputs.push_back({"--out", a.out});
   for (const auto &[option, value] : {std::pair<const char *, const std::string *>{"--tracks-out", &a.tracks_out},
                                       {"--outliers", &a.outliers}, {"--ply", &a.ply}})
     if (sub.count(option) > 0)

@@ -4,8 +4,6 @@
 #include "method_options.h"
 
 #include <algorithm>
-#include <filesystem>
-#include <regex>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -36,7 +34,8 @@ void addKltOptions(CLI::App *sub, KltArgs &args)
       ->capture_default_str();
   sub->add_flag("--no-gate", args.no_gate, "KLT: do not gate the tracks with the motion (no epipolar band)");
   sub->add_option("--video", args.video,
-                  "Take the images from a video file or an image sequence (e.g. frames/%04d.png; ViSP's vpVideoReader), "
+                  "Take the images from a video file (ViSP's vpVideoReader) or a numbered image sequence (one %d or %0Nd, "
+                  "N up to 9, e.g. frames/frame_%04d.png; no gaps), "
                   "one frame per motion-log row in order, instead of the log's image column");
 }
 
@@ -49,33 +48,18 @@ std::vector<NamedPath> imageInputs(const MotionLog &motion, const std::string &v
         out.push_back({"--motion's image", image});
     return out;
   }
-  const std::filesystem::path pattern(video);
-  const std::string name = pattern.filename().string();
-  if (name.find('%') == std::string::npos) {
+  if (!SequencePattern::isPattern(video)) {
     out.push_back({"--video", video});
     return out;
   }
-  // The pattern's printf conversion (%d, %04d) as a regular expression on the folder's file names.
-  static const std::regex conversion("%0?([0-9]*)d");
-  const auto literal = [](char c) {
-    return std::string("\\^$.|?*+()[]{}").find(c) != std::string::npos ? std::string(1, '\\') + c : std::string(1, c);
-  };
-  std::string re;
-  std::size_t last = 0;
-  for (std::sregex_iterator it(name.begin(), name.end(), conversion), end; it != end; ++it) {
-    for (std::size_t i = last; i < static_cast<std::size_t>(it->position()); ++i)
-      re += literal(name[i]);
-    re += (*it)[1].length() > 0 ? "[0-9]{" + (*it)[1].str() + ",}" : "[0-9]+";
-    last = static_cast<std::size_t>(it->position() + it->length());
+  std::vector<std::string> files;
+  try {
+    files = SequencePattern(video).filesPresent();
+  } catch (const Error &e) {
+    throw Error(std::string("--video ") + e.what());
   }
-  for (std::size_t i = last; i < name.size(); ++i)
-    re += literal(name[i]);
-  const std::regex files(re);
-  std::error_code ec;
-  const std::filesystem::path folder = pattern.has_parent_path() ? pattern.parent_path() : std::filesystem::path(".");
-  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
-    if (std::regex_match(it->path().filename().string(), files))
-      out.push_back({"--video", it->path().string()});
+  for (std::string &f : files)
+    out.push_back({"--video", std::move(f)});
   return out;
 }
 
@@ -98,7 +82,13 @@ std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const
   if (args.video.empty()) {
     seq = trackSequence(camera, rig, motion.samples, motion.images, noise, args.klt, !args.no_gate, report);
   } else {
-    VideoFrames video(args.video);
+    std::unique_ptr<VideoFrames> opened;
+    try {
+      opened = std::make_unique<VideoFrames>(args.video);
+    } catch (const Error &e) {
+      throw Error(std::string("--video ") + e.what());
+    }
+    VideoFrames &video = *opened;
     const FrameSource frames = [&](std::size_t) {
       try {
         return video.next();

@@ -147,7 +147,8 @@ void checkOutputs(const std::vector<NamedPath> &inputs, const std::vector<NamedP
   std::map<std::string, const NamedPath *> seen;
   for (const NamedPath &o : outputs) {
     if (o.path == "-")
-      continue;
+      fail(o.option + " -: standard output cannot take this output ('-' is not a file name here; for a file named "
+                      "'-', give ./-)");
     if (o.path.empty())
       fail(o.option + ": empty file name");
     struct stat st;
@@ -225,7 +226,14 @@ void AtomicFiles::add(const std::string &path, const std::string &contents)
 
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   TempFile tmp;
-  const std::string templ = (dir / ("." + target.filename().string() + ".tmpXXXXXX")).string();
+  // `.NAME.tmpXXXXXX` beside the target, or `.yawdepth.tmpXXXXXX` when that would not fit in the
+  // folder's longest file name (a target's name of 245 characters or more, on most file systems).
+  const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+  const std::string beside = "." + target.filename().string() + ".tmpXXXXXX";
+  const std::string templ =
+      (dir / (beside.size() <= static_cast<std::size_t>(name_max > 0 ? name_max : NAME_MAX) ? beside
+                                                                                           : ".yawdepth.tmpXXXXXX"))
+          .string();
   std::vector<char> buf(templ.begin(), templ.end());
   buf.push_back('\0');
   tmp.fd = ::mkstemp(buf.data());

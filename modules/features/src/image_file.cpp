@@ -1,22 +1,22 @@
 /*!
   \file image_file.cpp
   \brief Reading an image file as 8-bit gray: bounded reads, the size its header declares checked
-  before decoding, the decoders' complaints kept off stderr.
+  before decoding, a JPEG's structure checked (libjpeg decodes a truncated file to gray without an
+  error), the decoders' complaints kept off stderr.
 */
 #include <yawdepth/features/detector.h>
 
 #include <cctype>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
-#include <fcntl.h>
-#include <mutex>
+#include <cstring>
 #include <string>
-#include <unistd.h>
 #include <vector>
 #include <opencv2/imgcodecs.hpp>
 #include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
+
+#include "quiet_decoders.h"
 
 namespace yawdepth {
 
@@ -92,6 +92,64 @@ bool headerSize(const std::vector<unsigned char> &b, std::uint64_t &w, std::uint
   return false;
 }
 
+/* Why a JPEG (it starts with SOI, 0xFFD8) cannot be whole, or empty when its structure holds: its
+   segments, each within the file, a frame header (SOF) before the first scan (SOS), each scan's
+   entropy-coded data up to the next marker, and the end-of-image marker (EOI, 0xFFD9) after the
+   last scan. Bytes after EOI are not read (a camera's trailer); stray bytes between segments are
+   skipped, as libjpeg does. Damage inside the entropy-coded data that keeps this structure is
+   not seen (the decoder has the last word there). */
+std::string jpegDamage(const std::vector<unsigned char> &b)
+{
+  const std::size_t n = b.size();
+  const char *const truncated = "a truncated JPEG: it ends before its end-of-image marker";
+  bool frame = false;
+  std::size_t i = 2;
+  for (;;) {
+    while (i < n && b[i] != 0xFF) // stray bytes before a marker
+      ++i;
+    while (i < n && b[i] == 0xFF) // fill bytes
+      ++i;
+    if (i >= n)
+      return truncated;
+    const unsigned char m = b[i++]; // i: after the marker's code
+    if (m == 0xD9)
+      return "";
+    if (m == 0x00 || m == 0x01 || m == 0xD8 || (m >= 0xD0 && m <= 0xD7))
+      continue; // no segment: a stuffed byte out of a scan, TEM, a repeated SOI, RSTn
+    if (i + 2 > n)
+      return truncated;
+    const std::size_t len = (std::size_t(b[i]) << 8) | b[i + 1];
+    if (len < 2)
+      return "a damaged JPEG: a segment of length " + std::to_string(len);
+    if (i + len > n)
+      return truncated;
+    if (m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC)
+      frame = true;
+    i += len;
+    if (m != 0xDA)
+      continue;
+    if (!frame)
+      return "a damaged JPEG: image data before its frame header";
+    // The scan's entropy-coded data: 0xFF is followed by 0x00 (a stuffed byte) or RSTn inside it,
+    // by another marker at its end.
+    for (;;) {
+      const void *ff = i < n ? std::memchr(b.data() + i, 0xFF, n - i) : nullptr;
+      if (ff == nullptr)
+        return truncated;
+      i = static_cast<std::size_t>(static_cast<const unsigned char *>(ff) - b.data());
+      if (i + 1 >= n)
+        return truncated;
+      const unsigned char c = b[i + 1];
+      if (c == 0x00 || (c >= 0xD0 && c <= 0xD7))
+        i += 2;
+      else if (c == 0xFF)
+        i += 1;
+      else
+        break; // the marker after the scan
+    }
+  }
+}
+
 } // namespace
 
 cv::Mat readGrayImage(const std::string &path, const CameraModel &camera)
@@ -124,28 +182,20 @@ cv::Mat readGrayImage(const std::string &path) {
                                   w * h > kMaxImagePixels)) // (each side first: the product must not overflow)
     throw Error(path + ": cannot read image (its header declares " + std::to_string(w) + " x " + std::to_string(h) +
                 " pixels; at most " + std::to_string(kMaxImagePixels) + " pixels are read)");
+  if (bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8) {
+    const std::string damage = jpegDamage(bytes);
+    if (!damage.empty())
+      throw Error(path + ": cannot read image (" + damage + ")");
+  }
   cv::Mat img;
   {
-    static std::mutex stderr_mutex;
-    std::lock_guard<std::mutex> lock(stderr_mutex);
-    std::fflush(stderr);
-    const int saved = dup(STDERR_FILENO);
-    const int null_fd = open("/dev/null", O_WRONLY);
-    if (saved >= 0 && null_fd >= 0)
-      dup2(null_fd, STDERR_FILENO);
+    const detail::QuietDecoders quiet;
     std::string failure;
     try {
       img = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
     } catch (const cv::Exception &e) {
       failure = e.err;
     }
-    std::fflush(stderr);
-    if (saved >= 0) {
-      dup2(saved, STDERR_FILENO);
-      close(saved);
-    }
-    if (null_fd >= 0)
-      close(null_fd);
     if (!failure.empty())
       throw Error(path + ": cannot read image (" + failure + ")");
   }

@@ -102,8 +102,9 @@ struct NamedPath {
 /*!
   \brief Before anything is written: throws yawdepth::Error when an output would replace an input
   (same file, see sameFile()), when two outputs are the same file, or when an output's name is
-  empty or a folder. Outputs that are character devices (`/dev/null`) may repeat; "-" (standard
-  output) is skipped.
+  empty or a folder. Outputs that are character devices (`/dev/null`) may repeat. "-" is refused
+  (writers would make a file named "-"): a program that sends an output to standard output for
+  "-" leaves that output out of `outputs`.
   \param inputs The files the command reads.
   \param outputs The files it will write.
 */
