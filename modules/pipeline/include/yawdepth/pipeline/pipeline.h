@@ -66,13 +66,14 @@ struct PipelineResult {
   std::vector<std::vector<bool>> outliers; //!< Per track and observation: rejected (or unusable).
   std::vector<MotionSample> motion;        //!< The motion as estimated (refine) or as given (the others).
   ResidualCheckResult residuals;           //!< The residual check's findings (defaults when it did not run).
-  /*! fused, window, refine: the whole log against the noise model given (see estimatePoints()). */
+  /*! \brief fused, window, refine: the whole log against the noise model given (see estimatePoints()). */
   struct Consistency {
     double s0 = 1;            //!< sqrt of the median chi-square ratio of the tracks at the model given (1: not measured)
     double outlier_share = 0; //!< share of the observations flagged as outliers or unusable
     int tracks_used = 0;      //!< tracks in s0
     bool mistake = false;     //!< the tracks do not fit the motion: points gated at the model given (see estimatePoints())
-  } consistency;
+  };
+  Consistency consistency; //!< The whole log against the noise model given (defaults for paper and exact).
   /*! One line each, for the user: what the data say is wrong (empty: nothing). */
   std::vector<std::string> warnings;
 };
