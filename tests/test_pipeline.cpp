@@ -545,3 +545,77 @@ TEST_CASE("residual check: bad options and input", "[pipeline][residuals]")
                                  ResidualCheckOptions(), fewer),
                   Error);
 }
+
+TEST_CASE("estimatePoints: the whole log against the noise model, and points their tracks cannot confirm",
+          "[pipeline][residuals]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  SECTION("the model right: s0 measured, no warning, no mistake, the same points as without the rule")
+  {
+    const Scene s = residualScene(0.3, 41);
+    for (const Method m : {Method::Fused, Method::Window, Method::Refine}) {
+      const PipelineResult r = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, false, m));
+      INFO(toString(m) << " s0 " << r.consistency.s0);
+      CHECK(r.consistency.tracks_used >= 40);
+      CHECK(r.consistency.s0 < 1.5);
+      CHECK_FALSE(r.consistency.mistake);
+      CHECK(r.warnings.empty());
+    }
+  }
+  SECTION("pixels twice as noisy, the check off: a warning that the sigmas are too small")
+  {
+    const Scene s = residualScene(0.6, 42);
+    const PipelineResult r = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, false, Method::Window));
+    CHECK(r.consistency.s0 > 1.5);
+    CHECK_FALSE(r.consistency.mistake);
+    REQUIRE(r.warnings.size() == 1);
+    CHECK(r.warnings[0].find("too small") != std::string::npos);
+    // With the check on, the model is re-estimated and the whole log's figure kept from the first run.
+    const PipelineResult c = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, true, Method::Window));
+    CHECK(c.residuals.noise_scale > 1.5);
+    CHECK(c.consistency.s0 == Approx(r.consistency.s0));
+    CHECK(c.warnings.empty());
+  }
+  SECTION("random tracks (every pixel uniform over the image): a mistake, warned, no ok point left")
+  {
+    // (A frame offset on this scene's even steps is another consistent scene: tests/mistakes_cli.sh
+    // shifts an arm's uneven ones.)
+    const Scene s = residualScene(0.3, 43);
+    std::vector<Track> random = s.tracks;
+    std::mt19937_64 rng(43);
+    std::uniform_real_distribution<double> U(0, 1);
+    for (Track &t : random)
+      for (Observation &o : t.observations) {
+        o.u = camera.width() * U(rng);
+        o.v = camera.height() * U(rng);
+      }
+    for (const Method m : {Method::Fused, Method::Window, Method::Refine})
+      for (const bool check : {false, true}) {
+        const PipelineResult r = estimatePoints(camera, rig, s.measured, random, residualOptions(0.3, check, m));
+        INFO(toString(m) << (check ? " checked" : "") << " s0 " << r.consistency.s0 << " rejected "
+                         << r.consistency.outlier_share);
+        int ok = 0;
+        for (const PointEstimate &p : r.points)
+          ok += p.ok() ? 1 : 0;
+        CHECK(ok == 0);
+        CHECK(r.consistency.mistake);
+        CHECK(r.warnings.size() == 1);
+      }
+  }
+  SECTION("an ok point whose observations were mostly rejected is inconsistent")
+  {
+    const Scene s = residualScene(0.3, 44);
+    std::vector<Track> tracks = s.tracks;
+    // One track's observations all but the last two moved by 40 px: the methods reject them.
+    Track &t = tracks.front();
+    REQUIRE(t.observations.size() >= 8);
+    for (std::size_t k = 0; k + 2 < t.observations.size(); ++k)
+      t.observations[k].u += (k % 2 ? 40.0 : -40.0);
+    for (const Method m : {Method::Window, Method::Refine}) {
+      const PipelineResult r = estimatePoints(camera, rig, s.measured, tracks, residualOptions(0.3, false, m));
+      INFO(toString(m) << " status " << toString(r.points.front().status));
+      CHECK_FALSE(r.points.front().ok());
+    }
+  }
+}

@@ -272,7 +272,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
     markUnconfirmed(r);
     r.consistency = wholeLog(camera, rig, motion, tracks, r, options);
   }
-  const PipelineResult::Consistency &log = r.consistency;
+  const PipelineResult::Consistency log = r.consistency; // a copy: a second run replaces r
   if (log.mistake) {
     ResidualCheckOptions gate = options.residual_check;
     gate.scale_sigma = false;
