@@ -279,7 +279,10 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
     gate.correlated = false;
     gate.gate_at_model = true;
     r.residuals = checkResiduals(camera, rig, motion, tracks, r.outliers, options.noise, gate, r.points);
-    const std::string residuals = log.s0 > kMistakeS0 ? "their residuals are " + figure(log.s0) + " times the noise model's and " : "";
+    const std::string residuals =
+        !std::isfinite(log.s0) ? "most estimates fall behind cameras that saw them, and "
+        : log.s0 > kMistakeS0  ? "their residuals are " + figure(log.s0) + " times the noise model's and "
+                               : "";
     r.warnings.push_back("the tracks do not fit the motion log: " + residuals + figure(100 * log.outlier_share) +
                          " % of the observations were rejected (likely: tracks and motion a frame apart, angles in "
                          "degrees, a wrong rig (camera_offset or camera_pose, a sign, the yaw's sign or zero) or camera); " +
