@@ -1176,6 +1176,24 @@ TEST_CASE_METHOD(RigScene, "calibrate-rig: a wrong square size is warned when th
 
 namespace {
 
+/* The board in the camera (cMo) for a path sample q = (dir x, dir y, distance, roll): the camera on
+   the ray through the board's centre along (dir x, dir y, -1), looking at the centre, rolled by q(3). */
+Eigen::Isometry3d cMoOnPath(const BoardLayout &board, const Eigen::Vector4d &q)
+{
+  const Eigen::Vector3d o_centre(0.5 * (board.pattern.cols - 1) * board.pattern.square,
+                                 0.5 * (board.pattern.rows - 1) * board.pattern.square, 0.0);
+  const Eigen::Vector3d dir = Eigen::Vector3d(q(0), q(1), -1.0).normalized();
+  const Eigen::Vector3d c = o_centre + q(2) * dir;
+  const Eigen::Vector3d z = (o_centre - c).normalized();
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Isometry3d oMc = Eigen::Isometry3d::Identity();
+  oMc.linear() << x, y, z;
+  oMc.linear() = oMc.linear() * Eigen::AngleAxisd(q(3), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  oMc.translation() = c;
+  return oMc.inverse();
+}
+
 /* A camera on an arm moving continuously in front of a fixed board: the camera's direction from
    the board's centre and its distance and roll follow `path(t)` (dir x, dir y, distance, roll);
    the hand's poses logged at 100 Hz on the motion clock with white noise (0.3 mm, 0.03 deg per
@@ -1194,21 +1212,7 @@ ArmRecording armRecording(const CameraModel &camera, const BoardLayout &board, c
 {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> unit(0.0, 1.0);
-  const Eigen::Vector3d o_centre(0.5 * (board.pattern.cols - 1) * board.pattern.square,
-                                 0.5 * (board.pattern.rows - 1) * board.pattern.square, 0.0);
-  const auto cMoAt = [&](double t) {
-    const Eigen::Vector4d q = path(t);
-    const Eigen::Vector3d dir = Eigen::Vector3d(q(0), q(1), -1.0).normalized();
-    const Eigen::Vector3d c = o_centre + q(2) * dir;
-    const Eigen::Vector3d z = (o_centre - c).normalized();
-    const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
-    const Eigen::Vector3d y = z.cross(x);
-    Eigen::Isometry3d oMc = Eigen::Isometry3d::Identity();
-    oMc.linear() << x, y, z;
-    oMc.linear() = oMc.linear() * Eigen::AngleAxisd(q(3), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    oMc.translation() = c;
-    return Eigen::Isometry3d(oMc.inverse());
-  };
+  const auto cMoAt = [&](double t) { return cMoOnPath(board, path(t)); };
   // Eye-in-hand: cMo = X^-1 eMr Y, so rMe = (X cMo Y^-1)^-1.
   const auto rMeAt = [&](double t) { return Eigen::Isometry3d((X * cMoAt(t) * Y.inverse()).inverse()); };
   ArmRecording rec;
@@ -1343,22 +1347,11 @@ TEST_CASE("write a rendered timestamped arm recording for the command line", "[.
   }
   // The images: the board rendered at the true pose of each image (motion time t + latency); the
   // renderer's pose is the board in the camera, cMo = X^-1 eMr(t + latency) Y from the same path.
-  const Eigen::Vector3d o_centre(0.5 * (board.pattern.cols - 1) * board.pattern.square,
-                                 0.5 * (board.pattern.rows - 1) * board.pattern.square, 0.0);
   for (double t : times) {
-    const Eigen::Vector4d q = path(t + latency);
-    const Eigen::Vector3d dirn = Eigen::Vector3d(q(0), q(1), -1.0).normalized();
-    const Eigen::Vector3d c = o_centre + q(2) * dirn;
-    const Eigen::Vector3d z = (o_centre - c).normalized();
-    const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
-    const Eigen::Vector3d y = z.cross(x);
-    Eigen::Isometry3d oMc = Eigen::Isometry3d::Identity();
-    oMc.linear() << x, y, z;
-    oMc.linear() = oMc.linear() * Eigen::AngleAxisd(q(3), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    oMc.translation() = c;
+    const Eigen::Isometry3d cMo = cMoOnPath(board, path(t + latency));
     char name[64];
     std::snprintf(name, sizeof name, "/images/%.6f.png", t0 + t);
-    REQUIRE(cv::imwrite(dir + name, renderAt(camera, board, oMc.inverse(), 3000 + static_cast<std::uint64_t>(1000 * t))));
+    REQUIRE(cv::imwrite(dir + name, renderAt(camera, board, cMo, 3000 + static_cast<std::uint64_t>(1000 * t))));
   }
   CHECK(std::filesystem::exists(dir + "/poses.tum"));
 }

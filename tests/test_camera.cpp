@@ -194,6 +194,21 @@ TEST_CASE("camera: Brown model matches OpenCV projectPoints / undistortPoints", 
   }
 }
 
+/* Relative error of distortNormalized()'s Jacobian at normalised point m against central finite
+   differences (the value with and without the Jacobian must be identical). */
+static double distortJacobianError(const CameraModel &cam, const Eigen::Vector2d &m) {
+  Eigen::Matrix2d J;
+  const Eigen::Vector2d d = cam.distortNormalized(m, &J);
+  REQUIRE((d - cam.distortNormalized(m)).norm() == 0.0);
+  Eigen::Matrix2d Jfd;
+  for (int k = 0; k < 2; ++k) {
+    Eigen::Vector2d h = Eigen::Vector2d::Zero();
+    h[k] = kFdStepNormalised;
+    Jfd.col(k) = (cam.distortNormalized(m + h) - cam.distortNormalized(m - h)) / (2 * kFdStepNormalised);
+  }
+  return (J - Jfd).cwiseAbs().maxCoeff() / std::max(1.0, J.cwiseAbs().maxCoeff());
+}
+
 TEST_CASE("camera: distortNormalized Jacobian matches central differences", "[camera]") {
   std::mt19937 rng(kSeed + 1);
   for (const auto &nc : distortedCameras()) {
@@ -201,17 +216,7 @@ TEST_CASE("camera: distortNormalized Jacobian matches central differences", "[ca
     const CameraModel &cam = nc.cam;
     double worst = 0;
     for (int i = 0; i < kRandomPoints; ++i) {
-      const Eigen::Vector2d m = randomNormalised(cam, rng);
-      Eigen::Matrix2d J;
-      const Eigen::Vector2d d = cam.distortNormalized(m, &J);
-      REQUIRE((d - cam.distortNormalized(m)).norm() == 0.0);
-      Eigen::Matrix2d Jfd;
-      for (int k = 0; k < 2; ++k) {
-        Eigen::Vector2d h = Eigen::Vector2d::Zero();
-        h[k] = kFdStepNormalised;
-        Jfd.col(k) = (cam.distortNormalized(m + h) - cam.distortNormalized(m - h)) / (2 * kFdStepNormalised);
-      }
-      worst = std::max(worst, (J - Jfd).cwiseAbs().maxCoeff() / std::max(1.0, J.cwiseAbs().maxCoeff()));
+      worst = std::max(worst, distortJacobianError(cam, randomNormalised(cam, rng)));
     }
     CHECK(worst < kDistortJacobianTol);
   }
@@ -739,16 +744,7 @@ TEST_CASE("camera: Kannala-Brandt Jacobians match central differences", "[camera
     for (const double r : {0.0, 3e-7, 1e-6, 2e-6, 1e-5})
       points.emplace_back(0.8 * r, 0.6 * r);
     for (const Eigen::Vector2d &m : points) {
-      Eigen::Matrix2d J;
-      const Eigen::Vector2d d = cam.distortNormalized(m, &J);
-      REQUIRE((d - cam.distortNormalized(m)).norm() == 0.0);
-      Eigen::Matrix2d Jfd;
-      for (int k = 0; k < 2; ++k) {
-        Eigen::Vector2d h = Eigen::Vector2d::Zero();
-        h[k] = kFdStepNormalised;
-        Jfd.col(k) = (cam.distortNormalized(m + h) - cam.distortNormalized(m - h)) / (2 * kFdStepNormalised);
-      }
-      worst_d = std::max(worst_d, (J - Jfd).cwiseAbs().maxCoeff() / std::max(1.0, J.cwiseAbs().maxCoeff()));
+      worst_d = std::max(worst_d, distortJacobianError(cam, m));
 
       worst_u = std::max(worst_u, undistortJacobianError(cam, cam.project(m), kFdStepPixelFisheye));
     }

@@ -203,24 +203,24 @@ void printCameraModel(const CameraCalibration &cal, bool fixed_principal_point)
   const CameraModel &c = cal.camera;
   const std::vector<double> &sd = cal.std_devs;
   auto pm = [](double v, double s, int p) { return fixed(v, p) + " +- " + fixed(s, p); };
+  const auto intrinsics = [&](const char *model) {
+    std::cout << "Camera (OpenCV, " << model << "), 1-sigma:\n"
+              << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
+              << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
+              << (fixed_principal_point ? " (fixed)" : "") << "\n";
+  };
   if (c.distortion() == CameraModel::Distortion::KannalaBrandt)
   { // std_devs holds fx fy u0 v0 k1..k4 in its first eight places
     const std::vector<double> &kb = c.kannalaBrandtCoefficients();
-    std::cout << "Camera (OpenCV, Kannala-Brandt fisheye model), 1-sigma:\n"
-              << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
-              << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
-              << (fixed_principal_point ? " (fixed)" : "") << "\n"
-              << "  k1 = " << pm(kb[0], sd[4], 5) << "   k2 = " << pm(kb[1], sd[5], 5) << "\n"
+    intrinsics("Kannala-Brandt fisheye model");
+    std::cout << "  k1 = " << pm(kb[0], sd[4], 5) << "   k2 = " << pm(kb[1], sd[5], 5) << "\n"
               << "  k3 = " << pm(kb[2], sd[6], 5) << "   k4 = " << pm(kb[3], sd[7], 5) << "\n";
     printDistortionModels(cal);
     return;
   }
   const std::vector<double> &k = c.brownCoefficients();
-  std::cout << "Camera (OpenCV, Brown model), 1-sigma:\n"
-            << "  fx = " << pm(c.kx(), sd[0], 2) << " px   fy = " << pm(c.ky(), sd[1], 2) << " px\n"
-            << "  u0 = " << pm(c.u0(), sd[2], 2) << " px   v0 = " << pm(c.v0(), sd[3], 2) << " px"
-            << (fixed_principal_point ? " (fixed)" : "") << "\n"
-            << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
+  intrinsics("Brown model");
+  std::cout << "  k1 = " << pm(k[0], sd[4], 5) << "   k2 = " << pm(k[1], sd[5], 5) << "\n"
             << "  p1 = " << pm(k[2], sd[6], 6) << "   p2 = " << pm(k[3], sd[7], 6) << "\n"
             << "  k3 = " << pm(k[4], sd[8], 5) << (k[4] != 0 ? "" : " (fixed)");
   if (k[5] != 0 || k[6] != 0 || k[7] != 0)

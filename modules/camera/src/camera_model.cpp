@@ -172,6 +172,19 @@ CameraModel::CameraModel(const vpCameraParameters &cam, unsigned width, unsigned
   }
 }
 
+CameraModel CameraModel::withIntrinsics(double fx, double fy, double u0, double v0, unsigned width, unsigned height)
+{
+  CameraModel c;
+  c.cam_ = pinhole(fx, fy, u0, v0);
+  c.kx_ = fx;
+  c.ky_ = fy;
+  c.u0_ = u0;
+  c.v0_ = v0;
+  c.width_ = width;
+  c.height_ = height;
+  return c;
+}
+
 CameraModel CameraModel::brown(double fx, double fy, double u0, double v0, const std::vector<double> &coeffs,
                                unsigned width, unsigned height) {
   checkIntrinsics(fx, fy, u0, v0);
@@ -183,14 +196,7 @@ CameraModel CameraModel::brown(double fx, double fy, double u0, double v0, const
     if (!std::isfinite(coeffs[i]))
       throw Error("camera: distortion coefficient " + std::to_string(i) + " = " + num(coeffs[i]) +
                   " must be finite");
-  CameraModel c;
-  c.cam_ = pinhole(fx, fy, u0, v0);
-  c.kx_ = fx;
-  c.ky_ = fy;
-  c.u0_ = u0;
-  c.v0_ = v0;
-  c.width_ = width;
-  c.height_ = height;
+  CameraModel c = withIntrinsics(fx, fy, u0, v0, width, height);
   c.model_ = n == 0 ? Distortion::None : Distortion::Brown;
   c.coeffs_.assign(8, 0.0);
   for (std::size_t i = 0; i < n; ++i)
@@ -208,14 +214,7 @@ CameraModel CameraModel::kannalaBrandt(double fx, double fy, double u0, double v
     if (!std::isfinite(k[i]))
       throw Error("camera: Kannala-Brandt coefficient k" + std::to_string(i + 1) + " = " + num(k[i]) +
                   " must be finite");
-  CameraModel c;
-  c.cam_ = pinhole(fx, fy, u0, v0);
-  c.kx_ = fx;
-  c.ky_ = fy;
-  c.u0_ = u0;
-  c.v0_ = v0;
-  c.width_ = width;
-  c.height_ = height;
+  CameraModel c = withIntrinsics(fx, fy, u0, v0, width, height);
   c.model_ = Distortion::KannalaBrandt;
   c.kb_ = k;
   c.theta_max_ = kbMonotonicLimit(c.kb_.data());

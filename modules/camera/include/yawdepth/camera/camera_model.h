@@ -116,6 +116,8 @@ public:
   bool undistortPixel(const Eigen::Vector2d &uv, Eigen::Vector2d &uv_undist) const;
 
 private:
+  /*! \brief The intrinsics and image size set, no distortion yet (the named constructors' shared part). */
+  static CameraModel withIntrinsics(double fx, double fy, double u0, double v0, unsigned width, unsigned height);
   /*! \brief undistort() for KannalaBrandt, from the distorted normalised point `target`. */
   bool undistortKannalaBrandt(const Eigen::Vector2d &target, Eigen::Vector2d &m, Eigen::Matrix2d *J) const;
   /*! \brief The tail of both undistortions: accepts the root `x` of distorted point `target` when
