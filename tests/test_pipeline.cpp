@@ -603,6 +603,29 @@ TEST_CASE("estimatePoints: the whole log against the noise model, and points the
         CHECK(r.warnings.size() == 1);
       }
   }
+  SECTION("a flipped lever arm or yaw sign: a warning that names it; the rig and log as given: none")
+  {
+    const Scene s = residualScene(0.3, 45);
+    const YawRig flipped(Eigen::Vector3d(0.1503, 0.0, 0.0));
+    std::vector<MotionSample> yaw_negated = s.measured;
+    for (MotionSample &row : yaw_negated)
+      row.yaw = -row.yaw;
+    auto names = [](const PipelineResult &r, const std::string &what) {
+      for (const std::string &w : r.warnings)
+        if (w.find("with " + what) != std::string::npos && w.find("flipped the tracks fit better") != std::string::npos)
+          return true;
+      return false;
+    };
+    for (const Method m : {Method::Fused, Method::Window, Method::Refine}) {
+      INFO(toString(m));
+      const PipelineResult right = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(0.3, false, m));
+      CHECK(right.warnings.empty());
+      CHECK(names(estimatePoints(camera, flipped, s.measured, s.tracks, residualOptions(0.3, false, m)),
+                  "the lever arm's sign"));
+      const PipelineResult y = estimatePoints(camera, rig, yaw_negated, s.tracks, residualOptions(0.3, true, m));
+      CHECK(names(y, "the yaw's sign"));
+    }
+  }
   SECTION("an ok point whose observations were mostly rejected is inconsistent")
   {
     const Scene s = residualScene(0.3, 44);

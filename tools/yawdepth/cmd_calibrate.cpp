@@ -352,7 +352,7 @@ void printBoardScale(const BoardScaleCheck &c, const char *source)
   if (c.distance_spread > 0)
     std::cout << "; the views' distances to the board spread by " << fixed(1000 * c.distance_spread, 1) << " mm";
   std::cout << "\n";
-  if (c.status == BoardScaleStatus::Mismatch)
+  if (c.status == BoardScaleStatus::Mismatch || c.status == BoardScaleStatus::Unconfirmed)
     std::cerr << "calibrate-rig: warning: " << c.message << "\n";
 }
 

@@ -1,5 +1,7 @@
 #include <yawdepth/pipeline/pipeline.h>
 
+#include "rig_doubts.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -307,6 +309,12 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
                          " times what the noise model allows: the sigmas are too small by about that (raise the "
                          "pixel noise, or let the residual check scale them)");
   }
+  if (whole_track)
+    for (const pipeline_detail::RigDoubt &d : pipeline_detail::rigDoubts(camera, rig, motion, tracks, options))
+      r.warnings.push_back("with " + d.what + " flipped the tracks fit better (residuals " + figure(d.s0_alternative) +
+                           (std::isfinite(d.s0_given) ? " instead of " + figure(d.s0_given) + " times the noise model"
+                                                      : " times the noise model, where as given most tracks do not fit") +
+                           "): check that sign");
   if (options.max_depth_sigma > 0)
     for (PointEstimate &p : r.points)
       if (p.ok() && !(p.sigmaZ() <= options.max_depth_sigma * p.c_P.z()))

@@ -20,10 +20,13 @@ namespace yawdepth {
 /*! \brief What the board scale check found. */
 enum class BoardScaleStatus {
   NotEstimated, //!< the views cannot tell the board's size (no metric motion between them)
-  Consistent,   //!< the size given agrees with the views (or the difference is too small or too uncertain to matter)
-  Mismatch      //!< the board looks larger or smaller than given: a warning (checkBoardScale()'s message)
+  Consistent,   //!< the size given agrees with the views (or the difference is too small to matter)
+  Mismatch,     //!< the board looks larger or smaller than given: a warning (checkBoardScale()'s message)
+  /*! the size given agrees, but the views could not have told a wrong one: min_sigmas sigmas exceed
+      BoardScaleOptions::detectable (a warning: the result is only as good as the size typed) */
+  Unconfirmed
 };
-/*! \brief "not_estimated", "consistent", "mismatch". */
+/*! \brief "not_estimated", "consistent", "mismatch", "unconfirmed". */
 const char *toString(BoardScaleStatus s);
 
 /*! \brief When a scale differs enough from 1 to say so. */
@@ -36,7 +39,10 @@ struct BoardScaleOptions {
   /*! A significant |s - 1| above this is refused (yawdepth::Error), not warned: a wrong unit or
       number (mm for m, the board's size for a square's), not a printer's scaling. */
   double max_relative = 0.25;
-  /*! \brief Throws yawdepth::Error unless 0 < min_relative < max_relative and min_sigmas > 0, all finite. */
+  /*! The relative size error the views must be able to see (at min_sigmas): 25 mm typed for 23.6 mm
+      is 5.6 %. A consistent scale whose min_sigmas sigmas exceed it is Unconfirmed. */
+  double detectable = 0.05;
+  /*! \brief Throws yawdepth::Error unless 0 < min_relative < max_relative, min_sigmas > 0 and detectable > 0, all finite. */
   void validate() const;
 };
 
@@ -48,13 +54,14 @@ struct BoardScaleCheck {
   /*! The views' spread (standard deviation) of the camera's distance to the board (m), which
       tells the scale from a camera sliding along its axis (hand-eye; 0 when not computed). */
   double distance_spread = 0.0;
-  std::string message; //!< one line for a Mismatch (empty otherwise)
+  std::string message; //!< one line for a Mismatch or Unconfirmed (empty otherwise)
 };
 
 /*!
-  \brief The check of an estimated scale `scale` +- `sigma` (see BoardScaleOptions): Consistent or
+  \brief The check of an estimated scale `scale` +- `sigma` (see BoardScaleOptions): Consistent,
   Mismatch (its message names the figure, e.g. "the board looks 0.944 times the size given by
-  --pattern chessboard:9x6:0.025 (+-0.003): check the square size").
+  --pattern chessboard:9x6:0.025 (+-0.003): check the square size") or Unconfirmed ("the views
+  cannot confirm the board's size: ... a size off by less than 12 % would pass unseen").
   \throws yawdepth::Error with that message when the mismatch is gross (above max_relative), or when
   the scale or sigma is not finite and positive.
 */

@@ -1,0 +1,95 @@
+#include "rig_doubts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <yawdepth/estimation/track_estimator.h>
+#include <yawdepth/pipeline/residual_check.h>
+
+namespace yawdepth {
+namespace pipeline_detail {
+
+namespace {
+
+constexpr double kBetter = 1.21;     // s0^2 lower by this factor (s0 by 1.1)
+constexpr double kEvidence = 3;      // and by this many standard errors
+constexpr double kMinLever = 0.01;   // m
+constexpr double kMinYawSpan = 0.05; // rad
+
+struct Fit {
+  double f2 = 0, f2_sigma = 0;
+  bool measured = false;
+};
+
+Fit fit(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+        const std::vector<Track> &tracks, const PipelineOptions &options)
+{
+  TrackEstimatorOptions to;
+  to.method = Method::Fused;
+  to.two_view.noise = options.noise;
+  to.two_view.gates = options.gates;
+  std::vector<std::vector<bool>> outliers;
+  std::vector<PointEstimate> points = estimateTracks(camera, rig, motion, tracks, to, &outliers);
+  ResidualCheckOptions probe = options.residual_check;
+  probe.scale_sigma = false;
+  probe.correlated = false;
+  const ResidualCheckResult c = checkResiduals(camera, rig, motion, tracks, outliers, options.noise, probe, points);
+  Fit f;
+  f.measured = c.tracks_used >= options.residual_check.min_tracks;
+  f.f2 = c.variance_factor;
+  f.f2_sigma = c.variance_factor_sigma;
+  return f;
+}
+
+YawRig leverNegated(const YawRig &rig)
+{
+  if (rig.axisAligned())
+    return YawRig(Eigen::Vector3d(-rig.cameraOffset()));
+  vpHomogeneousMatrix vMc0 = rig.vMc(0.0);
+  for (unsigned i = 0; i < 3; ++i)
+    vMc0[i][3] = -vMc0[i][3];
+  return YawRig(vMc0);
+}
+
+} // namespace
+
+std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
+                                const std::vector<Track> &tracks, const PipelineOptions &options)
+{
+  std::vector<RigDoubt> out;
+  if (motion.size() < 3)
+    return out;
+  const auto [lo, hi] = std::minmax_element(motion.begin(), motion.end(),
+                                            [](const MotionSample &a, const MotionSample &b) { return a.yaw < b.yaw; });
+  const bool yaw_turns = hi->yaw - lo->yaw >= kMinYawSpan;
+  // The yaw's sign matters when the yaw turns or stays away from 0 (a camera looking sideways).
+  const bool yaw_matters = yaw_turns || std::max(std::abs(hi->yaw), std::abs(lo->yaw)) >= kMinYawSpan;
+  double body_turn = 0; // the largest rotation of the vision frame from the first row's
+  for (const MotionSample &s : motion)
+    body_turn = std::max(body_turn, logSO3(motion.front().rotation().transpose() * s.rotation()).norm());
+  const bool lever_matters = rig.cameraOffset().norm() >= kMinLever && (yaw_turns || body_turn >= kMinYawSpan);
+  if (!yaw_matters && !lever_matters)
+    return out;
+  // As given, too few tracks may fit to be measured (a gross mistake): any alternative that fits wins.
+  const Fit given = fit(camera, rig, motion, tracks, options);
+  const bool given_fits = given.measured && std::isfinite(given.f2);
+  auto compare = [&](const std::string &what, const Fit &alt) {
+    if (!alt.measured || !std::isfinite(alt.f2))
+      return;
+    if (!given_fits || (alt.f2 * kBetter < given.f2 &&
+                        alt.f2 + kEvidence * std::hypot(alt.f2_sigma, given.f2_sigma) < given.f2))
+      out.push_back({what, given_fits ? std::sqrt(given.f2) : HUGE_VAL, std::sqrt(alt.f2)});
+  };
+  if (lever_matters)
+    compare("the lever arm's sign (the rig file's camera_offset, or camera_pose's translation)",
+            fit(camera, leverNegated(rig), motion, tracks, options));
+  if (yaw_matters) {
+    std::vector<MotionSample> negated = motion;
+    for (MotionSample &s : negated)
+      s.yaw = -s.yaw;
+    compare("the yaw's sign (the motion log's yaw readings)", fit(camera, rig, negated, tracks, options));
+  }
+  return out;
+}
+
+} // namespace pipeline_detail
+} // namespace yawdepth
