@@ -1,0 +1,1 @@
+// placeholder: cdr (the bag issue, #32, in progress)

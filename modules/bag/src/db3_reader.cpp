@@ -1,0 +1,1 @@
+// placeholder: db3_reader (the bag issue, #32, in progress)

@@ -1,0 +1,1 @@
+// placeholder: mcap_reader (the bag issue, #32, in progress)

@@ -1,0 +1,1 @@
+// placeholder: messages_cdr (the bag issue, #32, in progress)
