@@ -71,3 +71,25 @@ lines += ['  compression_format: ""', '  compression_mode: ""', "  relative_file
           "    - ros2_db3_0.db3", ""]
 with open(os.path.join(folder, "metadata.yaml"), "w") as f:
     f.write("\n".join(lines))
+
+# Two refused databases: an SQLite file that is not a rosbag2 bag, and a topic not in CDR.
+broken = os.path.join(out, "broken")
+os.makedirs(broken, exist_ok=True)
+for name in ("not_rosbag2.db3", "json_topic.db3"):
+    if os.path.exists(os.path.join(broken, name)):
+        os.remove(os.path.join(broken, name))
+db = sqlite3.connect(os.path.join(broken, "not_rosbag2.db3"))
+db.executescript("CREATE TABLE readings(id INTEGER PRIMARY KEY, value REAL); INSERT INTO readings VALUES (1, 2.5);")
+db.commit()
+db.close()
+db = sqlite3.connect(os.path.join(broken, "json_topic.db3"))
+db.executescript("""
+    CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
+                        serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
+    CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL,
+                          data BLOB NOT NULL);
+    INSERT INTO topics VALUES (1, '/status', 'std_msgs/msg/String', 'json', '');
+    INSERT INTO messages VALUES (1, 1, 1700000000000000000, '{"data": "ok"}');
+""")
+db.commit()
+db.close()
