@@ -4,7 +4,8 @@ with rosbag2_storage_default_plugins' schema:
   DIR/ros2.db3                 schema version 4 (Jazzy: topics.type_description_hash, message_definitions)
   DIR/ros2_db3/metadata.yaml   a bag folder, its ros2_db3_0.db3 of schema version 3 (Humble)
 Rows are inserted out of timestamp order: a reader must sort by timestamp.
-  make_db3.py [DIR]   (default: tests/data/bags/)"""
+  make_db3.py [DIR]   (default: tests/data/bags/)
+  make_db3.py DIR --fuzz-seed FILE   also a small .db3 (512-byte pages, a few messages) for fuzz_db3"""
 import base64
 import json
 import os
@@ -14,16 +15,19 @@ import sys
 
 here = os.path.dirname(os.path.abspath(__file__))
 out = os.path.abspath(sys.argv[1]) if len(sys.argv) > 1 else os.path.dirname(here)
+fuzz_seed = sys.argv[3] if len(sys.argv) > 3 and sys.argv[2] == "--fuzz-seed" else None
 with open(os.path.join(out, "ros2_payloads.json")) as f:
     payloads = json.load(f)
 topics = payloads["topics"]
 messages = payloads["messages"]
 
 
-def write(path, version):
+def write(path, version, small=False):
     if os.path.exists(path):
         os.remove(path)
     db = sqlite3.connect(path)
+    if small:
+        db.execute("PRAGMA page_size = 512")
     hash_column = ", type_description_hash TEXT NOT NULL" if version >= 4 else ""
     db.executescript(f"""
         CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
@@ -46,6 +50,8 @@ def write(path, version):
         db.execute(f"INSERT INTO topics VALUES (?, ?, ?, ?, ?{', ?' if version >= 4 else ''})",
                    row + (("RIHS01_" + "0" * 64,) if version >= 4 else ()))
     rows = [(ids[m["topic"]], int(m["log_time"]), base64.b64decode(m["cdr"])) for m in messages]
+    if small:
+        rows = [r for r in rows if len(r[2]) < 200][:8]
     random.Random(7).shuffle(rows)
     db.executemany("INSERT INTO messages(topic_id, timestamp, data) VALUES (?, ?, ?)", rows)
     db.commit()
@@ -93,3 +99,6 @@ db.executescript("""
 """)
 db.commit()
 db.close()
+
+if fuzz_seed:
+    write(fuzz_seed, 3, small=True)

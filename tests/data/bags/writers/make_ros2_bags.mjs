@@ -3,8 +3,10 @@
 // lz4js; and a file without chunks or summary), CDR through @foxglove/rosmsg2-serialization's
 // MessageWriter from the ROS 2 message definitions below (parsed by @foxglove/rosmsg). Also the CDR
 // payloads for make_db3.py, and ros2_expected.json: every value written, times as decimal strings.
-//   node make_ros2_bags.mjs [--out DIR] [--seed N | --random]
-// The checked-in bags are seed 1 (the default) into ../ (tests/data/bags/).
+//   node make_ros2_bags.mjs [--out DIR] [--seed N | --random] [--fuzz-seeds DIR]
+// The checked-in bags are seed 1 (the default) into ../ (tests/data/bags/). --fuzz-seeds also writes
+// the fuzzers' seed corpora: DIR/mcap (small MCAP files without their magic), DIR/cdr (a type byte,
+// fuzz_cdr.cpp's order, then a payload).
 import { McapWriter } from "@mcap/core";
 import { parse } from "@foxglove/rosmsg";
 import { MessageWriter } from "@foxglove/rosmsg2-serialization";
@@ -18,10 +20,12 @@ import { fileURLToPath } from "node:url";
 const here = path.dirname(fileURLToPath(import.meta.url));
 let out = path.resolve(here, "..");
 let seed = 1;
+let fuzzSeeds;
 for (let i = 2; i < process.argv.length; ++i) {
   const a = process.argv[i];
   if (a === "--out") out = path.resolve(process.argv[++i]);
   else if (a === "--seed") seed = Number(process.argv[++i]);
+  else if (a === "--fuzz-seeds") fuzzSeeds = path.resolve(process.argv[++i]);
   else if (a === "--random") seed = Math.floor(Math.random() * 2 ** 31) + 1;
   else throw new Error(`unknown argument ${a}`);
 }
@@ -215,6 +219,7 @@ const compressors = {
   zstd: (data) => ({ compression: "zstd", compressedData: zstd.compress(data, 3) }),
   lz4: (data) => ({ compression: "lz4", compressedData: Uint8Array.from(lz4.compress(data)) }),
 };
+let schemaText = true; // the fuzz seeds leave the schemas' text out (the reader does not read it)
 async function writeMcap(file, list, options) {
   const sink = new Sink();
   const writer = new McapWriter({ writable: sink, ...options });
@@ -222,7 +227,7 @@ async function writeMcap(file, list, options) {
   const schemas = {}, channels = {};
   for (const m of list) {
     if (!(m.type in schemas))
-      schemas[m.type] = await writer.registerSchema({ name: m.type, encoding: "ros2msg", data: Buffer.from(defs[m.type]) });
+      schemas[m.type] = await writer.registerSchema({ name: m.type, encoding: "ros2msg", data: schemaText ? Buffer.from(defs[m.type]) : new Uint8Array() });
     if (!(m.topic in channels))
       channels[m.topic] = await writer.registerChannel({
         schemaId: schemas[m.type],
@@ -303,3 +308,42 @@ fs.writeFileSync(
   path.join(out, "ros2_expected.json"),
   json({ seed, messages: messages.map((m) => ({ topic: m.topic, type: m.type, log_time: m.log_time, value: m.value })) }) + "\n",
 );
+
+if (fuzzSeeds) {
+  const order = [
+    "sensor_msgs/msg/Image",
+    "sensor_msgs/msg/CompressedImage",
+    "sensor_msgs/msg/CameraInfo",
+    "geometry_msgs/msg/PoseStamped",
+    "geometry_msgs/msg/PoseWithCovarianceStamped",
+    "nav_msgs/msg/Odometry",
+    "tf2_msgs/msg/TFMessage",
+    "sensor_msgs/msg/JointState",
+  ];
+  fs.mkdirSync(path.join(fuzzSeeds, "cdr"), { recursive: true });
+  fs.mkdirSync(path.join(fuzzSeeds, "mcap"), { recursive: true });
+  const seen = new Set();
+  const small = [];
+  for (const m of messages) {
+    if (seen.has(m.topic) || m.topic === "/camera/rgb8" || m.topic === "/camera/bgr8" || m.topic === "/camera/mono16") continue;
+    seen.add(m.topic);
+    small.push(m);
+    fs.writeFileSync(
+      path.join(fuzzSeeds, "cdr", m.topic.replace(/\//g, "_").slice(1)),
+      Buffer.concat([Buffer.from([order.indexOf(m.type)]), Buffer.from(m.cdr)]),
+    );
+  }
+  const saved = out;
+  out = path.join(fuzzSeeds, "mcap");
+  schemaText = false;
+  const tiny = (compression) => ({ useChunks: true, chunkSize: 1024, compressChunk: compressors[compression] });
+  await writeMcap("plain", small, tiny("none"));
+  await writeMcap("zstd", small, tiny("zstd"));
+  await writeMcap("lz4", small, tiny("lz4"));
+  await writeMcap("unchunked", small, { useChunks: false, useStatistics: false, useSummaryOffsets: false, repeatSchemas: false, repeatChannels: false, useAttachmentIndex: false, useMetadataIndex: false, useMessageIndex: false, useChunkIndex: false });
+  for (const f of ["plain", "zstd", "lz4", "unchunked"]) {
+    const b = fs.readFileSync(path.join(out, f));
+    fs.writeFileSync(path.join(out, f), b.subarray(8)); // fuzz_mcap adds the magic
+  }
+  out = saved;
+}
