@@ -579,6 +579,26 @@ TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path a
                      "corrupt chunk");
     }
   }
+  SECTION("an uncompressed_size other than the chunk's")
+  {
+    for (const char *name : {"ros2_zstd.mcap", "ros2_lz4.mcap"}) {
+      const std::string whole = slurp(kBags + name);
+      const Record &chunk = first(records(whole), 0x06);
+      const std::uint64_t usize = le(whole, chunk.pos + 9 + 16, 8);
+      const std::string where = ": chunk at byte " + std::to_string(chunk.pos) + ": ";
+      std::string s = whole;
+      putLe(s, chunk.pos + 9 + 16, usize - 1, 8);
+      std::string path = dir.write(name, s);
+      requireOneLine(errorOf([&] { readAll(path); }), path + where,
+                     "decompressed to more than " + std::to_string(usize - 1) + " bytes");
+      putLe(s, chunk.pos + 9 + 16, usize + 1000, 8);
+      path = dir.write(name, s);
+      requireOneLine(errorOf([&] { readAll(path); }), path + where, "decompressed to " + std::to_string(usize) + " bytes");
+      putLe(s, chunk.pos + 9 + 16, std::uint64_t(5) << 30, 8);
+      path = dir.write(name, s);
+      requireOneLine(errorOf([&] { readAll(path); }), path + where, "over the 1 GiB limit");
+    }
+  }
   SECTION("a CRC mismatch")
   {
     std::string s = slurp(kBags + "ros2_plain.mcap");

@@ -3,6 +3,7 @@
 // Statistics records or, for a file without a summary, from a scan of its data section.
 #include "readers.h"
 
+#include <algorithm>
 #include <cinttypes>
 #include <cstdio>
 #include <cstring>
@@ -470,16 +471,11 @@ private:
         throw Error(where + ": uncompressed records of " + std::to_string(rlen) + " bytes, its uncompressed_size says " +
                     std::to_string(usize) + " (corrupt chunk)");
     } else {
-      plain_.resize(std::size_t(usize) + 1); // one byte more: output beyond usize is seen
-      std::size_t got = 0;
-      if (compression == "zstd") {
-        const std::size_t z = ZSTD_decompress(plain_.data(), plain_.size(), records, std::size_t(rlen));
-        if (ZSTD_isError(z))
-          throw Error(where + ": zstd decompression failed: " + ZSTD_getErrorName(z) + " (corrupt chunk)");
-        got = z;
-      } else {
-        got = lz4(where, records, std::size_t(rlen));
-      }
+      // Decompressed into a buffer grown as output comes (a corrupt uncompressed_size costs no
+      // memory), up to one byte more than it says: output beyond it is seen.
+      const std::size_t cap = std::size_t(usize) + 1;
+      const std::size_t got = compression == "zstd" ? zstd(where, records, std::size_t(rlen), cap)
+                                                    : lz4(where, records, std::size_t(rlen), cap);
       if (got != usize)
         throw Error(where + ": decompressed to " + (got > usize ? "more than " + std::to_string(usize) : std::to_string(got)) +
                     " bytes, its uncompressed_size says " + std::to_string(usize) + " (corrupt chunk)");
@@ -503,27 +499,60 @@ private:
     return true;
   }
 
-  std::size_t lz4(const std::string &where, const std::uint8_t *src, std::size_t n)
+  /* Makes room for more output in plain_ (doubling, at most `cap` bytes); false when it is full. */
+  bool grow(std::size_t out, std::size_t cap)
   {
-    LZ4F_dctx *ctx = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION)))
+    if (out < plain_.size())
+      return true;
+    if (plain_.size() >= cap)
+      return false;
+    plain_.resize(std::min(cap, std::max<std::size_t>(plain_.size() * 2, 1 << 20)));
+    return true;
+  }
+
+  std::size_t zstd(const std::string &where, const std::uint8_t *src, std::size_t n, std::size_t cap)
+  {
+    std::unique_ptr<ZSTD_DStream, decltype(&ZSTD_freeDStream)> ds(ZSTD_createDStream(), ZSTD_freeDStream);
+    if (!ds || ZSTD_isError(ZSTD_initDStream(ds.get())))
+      throw Error(where + ": cannot create a zstd decompression context");
+    ZSTD_inBuffer in{src, n, 0};
+    std::size_t out = 0, ret = 1, consumed = 0;
+    plain_.clear();
+    while (grow(out, cap)) {
+      ZSTD_outBuffer o{plain_.data(), plain_.size(), out};
+      ret = ZSTD_decompressStream(ds.get(), &o, &in);
+      if (ZSTD_isError(ret))
+        throw Error(where + ": zstd decompression failed: " + ZSTD_getErrorName(ret) + " (corrupt chunk)");
+      const bool progress = o.pos > out || in.pos > consumed;
+      out = o.pos;
+      consumed = in.pos;
+      if ((in.pos == in.size && ret == 0) || (!progress && out < plain_.size()))
+        break; // the last frame ended, or no progress (the input ended inside a frame)
+    }
+    if (out < cap && ret != 0)
+      throw Error(where + ": zstd frame cut short (corrupt chunk)");
+    return out;
+  }
+
+  std::size_t lz4(const std::string &where, const std::uint8_t *src, std::size_t n, std::size_t cap)
+  {
+    LZ4F_dctx *raw = nullptr;
+    if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION)))
       throw Error(where + ": cannot create an lz4 decompression context");
+    std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> ctx(raw, LZ4F_freeDecompressionContext);
     std::size_t in = 0, out = 0, ret = 1;
-    while (in < n) {
+    plain_.clear();
+    while (grow(out, cap)) {
       std::size_t dst = plain_.size() - out, srcn = n - in;
-      ret = LZ4F_decompress(ctx, plain_.data() + out, &dst, src + in, &srcn, nullptr);
-      if (LZ4F_isError(ret)) {
-        const std::string e = LZ4F_getErrorName(ret);
-        LZ4F_freeDecompressionContext(ctx);
-        throw Error(where + ": lz4 decompression failed: " + e + " (corrupt chunk)");
-      }
+      ret = LZ4F_decompress(ctx.get(), plain_.data() + out, &dst, src + in, &srcn, nullptr);
+      if (LZ4F_isError(ret))
+        throw Error(where + ": lz4 decompression failed: " + LZ4F_getErrorName(ret) + " (corrupt chunk)");
       in += srcn;
       out += dst;
-      if (out == plain_.size() || (dst == 0 && srcn == 0))
-        break; // more than the chunk says, or no progress
+      if ((in == n && ret == 0) || (dst == 0 && srcn == 0 && out < plain_.size()))
+        break; // the last frame ended, or no progress (the input ended inside a frame)
     }
-    LZ4F_freeDecompressionContext(ctx);
-    if (ret != 0 && out < plain_.size())
+    if (out < cap && ret != 0)
       throw Error(where + ": lz4 frame cut short (corrupt chunk)");
     return out;
   }
