@@ -499,14 +499,16 @@ private:
     return true;
   }
 
-  /* Makes room for more output in plain_ (doubling, at most `cap` bytes); false when it is full. */
-  bool grow(std::size_t out, std::size_t cap)
+  /* Makes room for more output in plain_ (first 4 times the input `n`, then doubling, at most `cap`
+     bytes); false when it is full. */
+  bool grow(std::size_t out, std::size_t cap, std::size_t n)
   {
     if (out < plain_.size())
       return true;
     if (plain_.size() >= cap)
       return false;
-    plain_.resize(std::min(cap, std::max<std::size_t>(plain_.size() * 2, 1 << 20)));
+    const std::size_t first = n < (SIZE_MAX >> 3) ? std::max<std::size_t>(4 * n, 1 << 16) : cap;
+    plain_.resize(std::min(cap, plain_.empty() ? first : plain_.size() * 2));
     return true;
   }
 
@@ -518,7 +520,7 @@ private:
     ZSTD_inBuffer in{src, n, 0};
     std::size_t out = 0, ret = 1, consumed = 0;
     plain_.clear();
-    while (grow(out, cap)) {
+    while (grow(out, cap, n)) {
       ZSTD_outBuffer o{plain_.data(), plain_.size(), out};
       ret = ZSTD_decompressStream(ds.get(), &o, &in);
       if (ZSTD_isError(ret))
@@ -542,7 +544,7 @@ private:
     std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> ctx(raw, LZ4F_freeDecompressionContext);
     std::size_t in = 0, out = 0, ret = 1;
     plain_.clear();
-    while (grow(out, cap)) {
+    while (grow(out, cap, n)) {
       std::size_t dst = plain_.size() - out, srcn = n - in;
       ret = LZ4F_decompress(ctx.get(), plain_.data() + out, &dst, src + in, &srcn, nullptr);
       if (LZ4F_isError(ret))
