@@ -514,15 +514,17 @@ private:
 
   std::size_t zstd(const std::string &where, const std::uint8_t *src, std::size_t n, std::size_t cap)
   {
-    std::unique_ptr<ZSTD_DStream, decltype(&ZSTD_freeDStream)> ds(ZSTD_createDStream(), ZSTD_freeDStream);
-    if (!ds || ZSTD_isError(ZSTD_initDStream(ds.get())))
+    if (!zstd_)
+      zstd_.reset(ZSTD_createDStream());
+    ZSTD_DStream *ds = zstd_.get();
+    if (!ds || ZSTD_isError(ZSTD_DCtx_reset(ds, ZSTD_reset_session_only)))
       throw Error(where + ": cannot create a zstd decompression context");
     ZSTD_inBuffer in{src, n, 0};
     std::size_t out = 0, ret = 1, consumed = 0;
     plain_.clear();
     while (grow(out, cap, n)) {
       ZSTD_outBuffer o{plain_.data(), plain_.size(), out};
-      ret = ZSTD_decompressStream(ds.get(), &o, &in);
+      ret = ZSTD_decompressStream(ds, &o, &in);
       if (ZSTD_isError(ret))
         throw Error(where + ": zstd decompression failed: " + ZSTD_getErrorName(ret) + " (corrupt chunk)");
       const bool progress = o.pos > out || in.pos > consumed;
@@ -538,15 +540,19 @@ private:
 
   std::size_t lz4(const std::string &where, const std::uint8_t *src, std::size_t n, std::size_t cap)
   {
-    LZ4F_dctx *raw = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION)))
-      throw Error(where + ": cannot create an lz4 decompression context");
-    std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> ctx(raw, LZ4F_freeDecompressionContext);
+    if (!lz4_) {
+      LZ4F_dctx *raw = nullptr;
+      if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION)))
+        throw Error(where + ": cannot create an lz4 decompression context");
+      lz4_.reset(raw);
+    }
+    LZ4F_dctx *ctx = lz4_.get();
+    LZ4F_resetDecompressionContext(ctx); // after a corrupt frame too
     std::size_t in = 0, out = 0, ret = 1;
     plain_.clear();
     while (grow(out, cap, n)) {
       std::size_t dst = plain_.size() - out, srcn = n - in;
-      ret = LZ4F_decompress(ctx.get(), plain_.data() + out, &dst, src + in, &srcn, nullptr);
+      ret = LZ4F_decompress(ctx, plain_.data() + out, &dst, src + in, &srcn, nullptr);
       if (LZ4F_isError(ret))
         throw Error(where + ": lz4 decompression failed: " + LZ4F_getErrorName(ret) + " (corrupt chunk)");
       in += srcn;
@@ -563,6 +569,9 @@ private:
   std::vector<std::unique_ptr<McapFile>> files_;
   std::vector<BagTopic> topics_;
   std::vector<std::uint8_t> buf_, packed_, plain_;
+  // The decompression contexts, kept from chunk to chunk.
+  std::unique_ptr<ZSTD_DStream, decltype(&ZSTD_freeDStream)> zstd_{nullptr, ZSTD_freeDStream};
+  std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> lz4_{nullptr, LZ4F_freeDecompressionContext};
   std::int64_t last_ = 0;
   bool have_last_ = false;
 };
