@@ -383,7 +383,7 @@ std::vector<Record> records(const std::string &s)
   }
   return out;
 }
-const Record &first(const std::vector<Record> &rs, int op)
+Record first(const std::vector<Record> &rs, int op)
 {
   for (const Record &r : rs)
     if (r.op == op)
@@ -571,7 +571,7 @@ TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path a
   {
     for (const char *name : {"ros2_zstd.mcap", "ros2_lz4.mcap"}) {
       std::string s = slurp(kBags + name);
-      const Record &chunk = first(records(s), 0x06);
+      const Record chunk = first(records(s), 0x06);
       for (std::size_t k = chunk.pos + 60; k < chunk.pos + 9 + chunk.len; k += 7)
         s[k] = char(s[k] ^ 0x5A);
       const std::string path = dir.write(name, s);
@@ -583,7 +583,7 @@ TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path a
   {
     for (const char *name : {"ros2_zstd.mcap", "ros2_lz4.mcap"}) {
       const std::string whole = slurp(kBags + name);
-      const Record &chunk = first(records(whole), 0x06);
+      const Record chunk = first(records(whole), 0x06);
       const std::uint64_t usize = le(whole, chunk.pos + 9 + 16, 8);
       const std::string where = ": chunk at byte " + std::to_string(chunk.pos) + ": ";
       std::string s = whole;
@@ -602,7 +602,7 @@ TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path a
   SECTION("a CRC mismatch")
   {
     std::string s = slurp(kBags + "ros2_plain.mcap");
-    const Record &chunk = first(records(s), 0x06);
+    const Record chunk = first(records(s), 0x06);
     REQUIRE(le(s, chunk.pos + 9 + 24, 4) != 0); // the writer wrote the CRC
     s[chunk.pos + chunk.len - 3] = char(s[chunk.pos + chunk.len - 3] ^ 1);
     const std::string path = dir.write("crc.mcap", s);
@@ -612,7 +612,7 @@ TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path a
   SECTION("an unknown compression")
   {
     std::string s = slurp(kBags + "ros2_zstd.mcap");
-    const Record &chunk = first(records(s), 0x06);
+    const Record chunk = first(records(s), 0x06);
     const std::size_t at = chunk.pos + 9 + 28; // after the times, the size and the CRC
     REQUIRE(s.substr(at + 4, 4) == "zstd");
     s.replace(at + 4, 4, "zstx");
@@ -623,7 +623,7 @@ TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path a
   SECTION("a record longer than the file")
   {
     std::string s = slurp(kBags + "ros2_lz4.mcap");
-    const Record &chunk = first(records(s), 0x06);
+    const Record chunk = first(records(s), 0x06);
     putLe(s, chunk.pos + 1, std::uint64_t(1) << 40, 8);
     const std::string path = dir.write("long.mcap", s);
     requireOneLine(errorOf([&] { readAll(path); }), path + ": Chunk record at byte " + std::to_string(chunk.pos),
@@ -632,7 +632,7 @@ TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path a
   SECTION("a message on a channel never defined")
   {
     std::string s = slurp(kBags + "ros2_unchunked.mcap");
-    const Record &m = first(records(s), 0x05);
+    const Record m = first(records(s), 0x05);
     putLe(s, m.pos + 9, 999, 2);
     const std::string path = dir.write("chan.mcap", s);
     requireOneLine(errorOf([&] { readAll(path); }), path + ": Message record at byte " + std::to_string(m.pos),
@@ -654,14 +654,14 @@ TEST_CASE("bag_ros2: records of unknown opcodes are skipped by their length", "[
   SECTION("a file without summary")
   {
     std::string s = slurp(kBags + "ros2_unchunked.mcap");
-    const Record &m = first(records(s), 0x05);
+    const Record m = first(records(s), 0x05);
     s.insert(m.pos, unknown);
     CHECK(readAll(dir.write("op.mcap", s)) == 34);
   }
   SECTION("a chunked file, the footer's summary offset moved")
   {
     std::string s = slurp(kBags + "ros2_zstd.mcap");
-    const Record &chunk = first(records(s), 0x06);
+    const Record chunk = first(records(s), 0x06);
     s.insert(chunk.pos, unknown);
     const std::size_t footer = s.size() - 8 - 29;
     REQUIRE(s[footer] == 0x02);
