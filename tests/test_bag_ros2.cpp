@@ -738,6 +738,9 @@ TEST_CASE("bag_ros2: the CDR reader never reads past a message", "[bag]")
   Raw other = firstOf("/pose");
   other.bytes[1] = 0x03; // PL_CDR_LE
   requireOneLine(errorOf([&] { decodePose(other.message()); }), "/pose: ", "CDR encapsulation 00 03");
+  Raw zstd = firstOf("/pose");
+  zstd.bytes[0] = 0x28, zstd.bytes[1] = 0xB5, zstd.bytes[2] = 0x2F, zstd.bytes[3] = 0xFD;
+  requireOneLine(errorOf([&] { decodePose(zstd.message()); }), "/pose: ", "zstd-compressed message");
   // A missing NUL.
   Raw nul = firstOf("/pose");
   const std::size_t len = std::size_t(nul.bytes[12]);

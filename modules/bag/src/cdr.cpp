@@ -13,6 +13,9 @@ Reader::Reader(const std::uint8_t *data, std::size_t size, std::string where) : 
 {
   if (size < 4 || !data)
     fail("CDR message of " + std::to_string(size) + " bytes, shorter than its 4-byte encapsulation header");
+  if (data[0] == 0x28 && data[1] == 0xB5 && data[2] == 0x2F && data[3] == 0xFD)
+    fail("a zstd-compressed message (rosbag2's per-message compression), not CDR: decompress the bag first "
+         "(ros2 bag convert)");
   if (data[0] != 0x00 || (data[1] != 0x00 && data[1] != 0x01)) {
     char h[16];
     std::snprintf(h, sizeof h, "%02x %02x", data[0], data[1]);

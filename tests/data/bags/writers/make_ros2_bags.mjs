@@ -237,8 +237,20 @@ async function writeMcap(file, list, options) {
       });
   }
   let seq = 0;
-  for (const m of list)
+  for (const [i, m] of list.entries()) {
     await writer.addMessage({ channelId: channels[m.topic], sequence: seq++, logTime: m.log_time, publishTime: m.log_time, data: m.cdr });
+    if (i === 3 && schemaText) {
+      // Records a bag reader skips: an attachment and metadata, between messages (and chunks).
+      await writer.addAttachment({
+        name: "camera.yaml",
+        logTime: m.log_time,
+        createTime: m.log_time,
+        mediaType: "application/yaml",
+        data: Buffer.from("image_width: 8\nimage_height: 6\n"),
+      });
+      await writer.addMetadata({ name: "robot", metadata: new Map([["model", "yawbot"], ["serial", "0001"]]) });
+    }
+  }
   await writer.end();
   fs.writeFileSync(path.join(out, file), Buffer.concat(sink.parts));
 }
