@@ -309,13 +309,23 @@ void sameMessage(Counter &c, const BagMessage &m, const Json &want)
   ++c.messages;
 }
 
-/* The bags of a folder of reference-written files, each with its format. */
+/* Whether this build reads `f` (MCAP needs zstd and lz4, .db3 SQLite). */
+bool reads(BagFormat f)
+{
+  const std::vector<BagFormat> r = readableBagFormats();
+  return std::find(r.begin(), r.end(), f) != r.end();
+}
+
+/* The bags of a folder of reference-written files that this build reads, each with its format. */
 std::vector<std::pair<std::string, BagFormat>> bagsIn(const std::string &dir)
 {
-  return {{dir + "ros2_plain.mcap", BagFormat::Mcap},   {dir + "ros2_zstd.mcap", BagFormat::Mcap},
-          {dir + "ros2_lz4.mcap", BagFormat::Mcap},     {dir + "ros2_unchunked.mcap", BagFormat::Mcap},
-          {dir + "ros2_split", BagFormat::Mcap},        {dir + "ros2.db3", BagFormat::Sqlite3},
-          {dir + "ros2_db3", BagFormat::Sqlite3}};
+  std::vector<std::pair<std::string, BagFormat>> all = {
+      {dir + "ros2_plain.mcap", BagFormat::Mcap}, {dir + "ros2_zstd.mcap", BagFormat::Mcap},
+      {dir + "ros2_lz4.mcap", BagFormat::Mcap},   {dir + "ros2_unchunked.mcap", BagFormat::Mcap},
+      {dir + "ros2_split", BagFormat::Mcap},      {dir + "ros2.db3", BagFormat::Sqlite3},
+      {dir + "ros2_db3", BagFormat::Sqlite3}};
+  all.erase(std::remove_if(all.begin(), all.end(), [](const auto &b) { return !reads(b.second); }), all.end());
+  return all;
 }
 
 /* Every bag of `dir` read whole, each message compared with ros2_expected.json. */
@@ -446,7 +456,7 @@ struct Raw {
 Raw firstOf(const std::string &topic)
 {
   Raw raw;
-  const std::unique_ptr<BagReader> r = openBag(kBags + "ros2_zstd.mcap");
+  const std::unique_ptr<BagReader> r = openBag(kBags + (reads(BagFormat::Mcap) ? "ros2_zstd.mcap" : "ros2.db3"));
   BagReadOptions o;
   o.topics = {topic};
   r->read(o, [&](const BagMessage &m) {
@@ -463,9 +473,11 @@ Raw firstOf(const std::string &topic)
 TEST_CASE("bag_ros2: every reference-written bag decodes to the values written", "[bag]")
 {
   const Counter c = checkBags(kBags);
-  // 7 bags of 34 messages each, every field of every message compared.
-  CHECK(c.messages == 7 * 34);
-  CHECK(c.fields == 7 * 2250);
+  // 7 bags (5 MCAP, 2 .db3) of 34 messages each, every field of every message compared.
+  const std::size_t bags = bagsIn(kBags).size();
+  CHECK(bags == (reads(BagFormat::Mcap) ? 5 : 0) + (reads(BagFormat::Sqlite3) ? 2 : 0));
+  CHECK(c.messages == bags * 34);
+  CHECK(c.fields == bags * 2250);
 }
 
 TEST_CASE("bag_ros2: the bags written again with fresh values (YAWDEPTH_BAG_ROS2_DIR)", "[.][writers]")
@@ -473,8 +485,9 @@ TEST_CASE("bag_ros2: the bags written again with fresh values (YAWDEPTH_BAG_ROS2
   const char *dir = std::getenv("YAWDEPTH_BAG_ROS2_DIR");
   REQUIRE(dir);
   const Counter c = checkBags(std::string(dir) + "/");
-  CHECK(c.messages == 7 * 34);
-  CHECK(c.fields >= 7 * 2200); // the PNG's length varies with its pixels
+  const std::size_t bags = bagsIn(std::string(dir) + "/").size();
+  CHECK(c.messages == bags * 34);
+  CHECK(c.fields >= bags * 2200); // the PNG's length varies with its pixels
   WARN("compared " << c.messages << " messages, " << c.fields << " fields");
 }
 
@@ -521,6 +534,8 @@ TEST_CASE("bag_ros2: a decoder refuses a message of another type", "[bag]")
 
 TEST_CASE("bag_ros2: an MCAP file cut anywhere fails with its path, after the messages before the cut", "[bag]")
 {
+  if (!reads(BagFormat::Mcap))
+    return; // this build reads no MCAP
   const TempDir dir;
   for (const char *name : {"ros2_zstd.mcap", "ros2_lz4.mcap", "ros2_plain.mcap", "ros2_unchunked.mcap"}) {
     const std::string whole = slurp(kBags + name);
@@ -566,6 +581,8 @@ TEST_CASE("bag_ros2: an MCAP file cut anywhere fails with its path, after the me
 
 TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path and where", "[bag]")
 {
+  if (!reads(BagFormat::Mcap))
+    return; // this build reads no MCAP
   const TempDir dir;
   SECTION("a corrupt zstd or lz4 chunk")
   {
@@ -649,6 +666,8 @@ TEST_CASE("bag_ros2: corrupt MCAP chunks and records are refused with the path a
 
 TEST_CASE("bag_ros2: records of unknown opcodes are skipped by their length", "[bag]")
 {
+  if (!reads(BagFormat::Mcap))
+    return; // this build reads no MCAP
   const TempDir dir;
   const std::string unknown = std::string(1, char(0x80)) + std::string("\x05\0\0\0\0\0\0\0", 8) + "hello";
   SECTION("a file without summary")
@@ -674,6 +693,8 @@ TEST_CASE("bag_ros2: records of unknown opcodes are skipped by their length", "[
 
 TEST_CASE("bag_ros2: refused .db3 files", "[bag]")
 {
+  if (!reads(BagFormat::Sqlite3))
+    return; // this build reads no .db3
   const std::string other = kBags + "broken/not_rosbag2.db3";
   requireOneLine(errorOf([&] { openBag(other); }), other + ": ", "not a rosbag2 bag");
   const std::string json = kBags + "broken/json_topic.db3";
