@@ -475,7 +475,7 @@ TEST_CASE("bag_ros2: every reference-written bag decodes to the values written",
   const Counter c = checkBags(kBags);
   // 7 bags (5 MCAP, 2 .db3) of 34 messages each, every field of every message compared.
   const std::size_t bags = bagsIn(kBags).size();
-  CHECK(bags == (reads(BagFormat::Mcap) ? 5 : 0) + (reads(BagFormat::Sqlite3) ? 2 : 0));
+  CHECK(bags == std::size_t((reads(BagFormat::Mcap) ? 5 : 0) + (reads(BagFormat::Sqlite3) ? 2 : 0)));
   CHECK(c.messages == bags * 34);
   CHECK(c.fields == bags * 2250);
 }
