@@ -40,6 +40,20 @@ install_missing() {
 
 stage() { echo "== bootstrap: $*" >&2; }
 
+# The reference writers of the ROS 2 test bags (tests/data/bags/writers/: @mcap/core and Foxglove's
+# CDR serializer, from the npm registry, versions pinned by its package-lock.json), for the
+# bag_ros2_writers test, when node and npm are on PATH (that test is skipped otherwise).
+install_bag_writers() {
+  local dir="$here/tests/data/bags/writers"
+  if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+    echo "bootstrap: node or npm not found: bag_ros2_writers will be skipped" >&2
+    return 0
+  fi
+  [ -d "$dir/node_modules/@mcap/core" ] && return 0
+  (cd "$dir" && npm ci --no-audit --no-fund >/dev/null) ||
+    echo "bootstrap: npm ci in $dir failed: bag_ros2_writers will be skipped" >&2
+}
+
 # Both trees are unity builds (CMake's UNITY_BUILD: a module's sources compiled as one file), which
 # parse ViSP's, OpenCV's and Eigen's headers and instantiate their templates once per module instead
 # of once per source: measured, the Release tree's compiler time falls from 15.3 to 11.0 CPU-minutes.
@@ -125,7 +139,10 @@ run_sanitized_tests() { run_ctest "$asan_dir"; }
 # the inputs that once crashed it (tests/data/regress/); new inputs go to $asan_dir/fuzz-corpus,
 # a crashing input to $asan_dir/fuzz-artifacts (add it to tests/data/regress/<target>/ once fixed).
 run_fuzzers() {
-  local targets=(camera_file rig_file motion_csv tracks_csv recording image_file) pids=() names=() failed=0 t i
+  local targets=() pids=() names=() failed=0 t i
+  for t in camera_file rig_file motion_csv tracks_csv recording image_file cdr mcap db3; do
+    [ -x "$asan_dir/fuzz/fuzz_$t" ] && targets+=("$t") # the bag readers are built when their libraries are found
+  done
   mkdir -p "$asan_dir/fuzz-artifacts"
   for t in "${targets[@]}"; do
     local dirs=("$asan_dir/fuzz-corpus/$t" "$here/fuzz/corpus/$t")
@@ -203,6 +220,7 @@ timed() {
 test_all() {
   local t0=$SECONDS rc_release=0 rc_asan_build=0 rc_asan_tests=0 rc_tidy=0
   install_missing
+  install_bag_writers
   configure
   timed "clang-tidy" nice -n 10 bash -c "$(declare -p here build_dir jobs analyzed_modules); $(declare -f run_clang_tidy); run_clang_tidy" \
     >"$build_dir/clang-tidy.out" 2>&1 &

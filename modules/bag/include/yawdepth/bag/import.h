@@ -1,0 +1,70 @@
+#pragma once
+/*!
+  \file import.h
+  \brief A bag turned into the files every command reads (`yawdepth import-bag`,
+  `measure --bag`): the images, each image's pose (the motion source interpolated at its time on
+  SE(3), as alignMotionToImages() does for recordings), the pan joint at each image time, the
+  camera from `camera_info` and the camera's mount from `/tf_static`.
+
+  Frames: `world` (the motion source's fixed frame: the odometry's `header.frame_id`, the pose's,
+  or WORLD of `--tf WORLD:BODY`), `body` (the odometry's `child_frame_id`, the pose's subject, or
+  BODY; the motion log's vision frame), the camera frame (`--camera-frame`, default the images'
+  `frame_id`, usually an optical frame: z forward, x right, y down, as yawdepth's camera). wMb is
+  the body's pose in the world, bMc the camera's pose in the body (the rig's `camera_pose`).
+*/
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace yawdepth {
+
+/*! \brief What `import-bag` reads and where it writes (the options of docs/formats.md, "import-bag"). */
+struct BagImportOptions {
+  std::string bag;                //!< the bag file or ROS 2 bag folder
+  std::string out_dir;            //!< created; see BagImportResult for what is written there
+  std::string image_topic;        //!< sensor_msgs/Image or sensor_msgs/CompressedImage (required)
+  std::string camera_info_topic;  //!< empty: the image topic's sibling `camera_info`
+  /*! The motion, exactly one of: */
+  std::string odom_topic;         //!< nav_msgs/Odometry
+  std::string pose_topic;         //!< geometry_msgs/PoseStamped or PoseWithCovarianceStamped
+  std::string tf_world, tf_body;  //!< `--tf WORLD:BODY`: BODY's pose in WORLD from `/tf` (+ `/tf_static`)
+  std::string camera_frame;       //!< empty: the images' `frame_id`
+  std::string joint_topic;        //!< sensor_msgs/JointState with the pan joint, or empty
+  std::string joint;              //!< the pan joint's name in joint_topic (required with it)
+  double start = 0.0;             //!< seconds after the bag's first message to start at
+  double duration = -1.0;         //!< seconds to read from start; negative: to the end
+  int every = 1;                  //!< keep every Nth image (N >= 1)
+  double time_offset = 0.0;       //!< image at camera time t was taken at motion time t + time_offset (s)
+  double max_pose_gap = 0.2;      //!< an image between pose samples further apart is skipped (s)
+  /*! \brief Throws yawdepth::Error naming the option that is wrong (none or several motion sources, ...). */
+  void validate() const;
+};
+
+/*! \brief What was read, matched and written. */
+struct BagImportResult {
+  std::string images_dir;    //!< `images/`: one PNG per kept image, named by its header stamp (ns)
+  std::string motion_path;   //!< `motion.csv`: frame-based, 6-DoF wMb, with `t`, `image` and (with a joint) `yaw` columns
+  std::string camera_path;   //!< `camera.yaml`: the ROS camera_info YAML of the first `camera_info`
+  std::string rig_path;      //!< `rig.yaml`: `camera_pose` (bMc, from /tf_static; identity when camera frame = body)
+  std::vector<std::string> topics_used; //!< "topic (type): N messages" for each topic read
+  std::size_t images_read = 0, images_kept = 0, images_matched = 0;
+  std::size_t skipped_before = 0, skipped_after = 0, skipped_gap = 0;
+  std::size_t poses = 0, joint_readings = 0;
+  double image_first = 0, image_last = 0;   //!< the images' stamps (s)
+  double motion_first = 0, motion_last = 0; //!< the motion samples' stamps (s)
+  std::vector<std::string> warnings;        //!< e.g. camera_info changing during the bag
+  /*! \brief The summary import-bag prints: topics used, message counts, time spans, images matched and skipped. */
+  std::string summary() const;
+};
+
+/*!
+  \brief Read the bag and write the files (each one whole or not at all: on any error nothing is
+  left in out_dir that looks complete).
+  \throws yawdepth::Error with a one-line reason naming the bag, topic or frame: a missing topic
+  (listing the bag's topics and types), a wrong message type, a TF chain that does not connect
+  (naming the frames that exist), images of another size than camera_info, a corrupt bag.
+*/
+BagImportResult importBag(const BagImportOptions &options);
+
+} // namespace yawdepth

@@ -1,0 +1,1 @@
+// placeholder: import_bag (the bag issue, #32, in progress)

@@ -1,0 +1,1 @@
+// placeholder: ros1_reader (the bag issue, #32, in progress)
