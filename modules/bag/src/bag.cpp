@@ -97,7 +97,7 @@ std::unique_ptr<BagReader> openFile(const std::string &path, const std::string &
 #ifdef YAWDEPTH_BAG_MCAP
     return bag_detail::openMcap(name, files);
 #else
-    notBuilt(path, "an MCAP file", "zstd and lz4 (Debian: libzstd-dev, liblz4-dev)");
+    notBuilt(path, "an MCAP file", "zstd, lz4 and zlib (Debian: libzstd-dev, liblz4-dev, zlib1g-dev)");
 #endif
   }
   if (h.size() == 16 && h.compare(0, 15, kSqliteMagic) == 0 && h[15] == '\0') {

@@ -1,5 +1,5 @@
 // The MCAP reader (https://mcap.dev/spec): records read from the file in order, chunks
-// decompressed one at a time (none, zstd, lz4 frames), topics from the summary's Channel and
+// decompressed one at a time (none, zstd, lz4 frames; CRCs by zlib), topics from the summary's Channel and
 // Statistics records or, for a file without a summary, from a scan of its data section.
 #include "readers.h"
 
@@ -12,6 +12,7 @@
 #include <map>
 #include <set>
 #include <yawdepth/error.h>
+#include <zlib.h>
 #include <zstd.h>
 
 namespace yawdepth {
@@ -60,22 +61,16 @@ std::string seconds(std::int64_t ns)
   return t;
 }
 
+/* MCAP's CRC-32 is zlib's (the IEEE polynomial). */
 std::uint32_t crc32(std::uint32_t crc, const std::uint8_t *p, std::size_t n)
 {
-  static const auto table = [] {
-    std::array<std::uint32_t, 256> t{};
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k)
-        c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  crc = ~crc;
-  for (std::size_t i = 0; i < n; ++i)
-    crc = table[(crc ^ p[i]) & 0xFF] ^ (crc >> 8);
-  return ~crc;
+  while (n > 0) { // zlib takes a uInt length
+    const uInt step = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
+    crc = static_cast<std::uint32_t>(::crc32(crc, p, step));
+    p += step;
+    n -= step;
+  }
+  return crc;
 }
 
 std::uint64_t le(const std::uint8_t *p, int n)
