@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <console_bridge/console.h>
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/query.h>
@@ -384,7 +385,17 @@ private:
 
 } // namespace
 
-std::unique_ptr<BagReader> openRos1(const std::string &path) { return std::make_unique<Ros1Reader>(path); }
+std::unique_ptr<BagReader> openRos1(const std::string &path)
+{
+  // rosbag_storage logs through console_bridge (to stderr); the library never prints: its
+  // exceptions carry the reasons.
+  static const bool quiet = [] {
+    console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_NONE);
+    return true;
+  }();
+  (void)quiet;
+  return std::make_unique<Ros1Reader>(path);
+}
 
 } // namespace bag_detail
 } // namespace yawdepth
