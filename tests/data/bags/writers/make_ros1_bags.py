@@ -3,6 +3,7 @@
 ros1_truth.json, the values every message was written with. Run with Debian's python3:
 
     /usr/bin/python3 tests/data/bags/writers/make_ros1_bags.py tests/data/bags
+    /usr/bin/python3 tests/data/bags/writers/make_ros1_bags.py --fuzz-seeds fuzz/corpus/ros1_bag
 
 Bags (times are ROS times from T0 = 1700000000 s; tau = t - T0):
   robot.bag      uncompressed. /camera/image_raw mono8 16x12 at 20 Hz (stamps T0 - 0.03 + 0.05 k,
@@ -350,7 +351,40 @@ def measure_bag(out, truth):
     bag.close()
 
 
+def fuzz_seeds(out):
+    """Tiny bags for fuzz/corpus/ros1_bag: a few messages each, uncompressed and lz4, bz2."""
+    os.makedirs(out, exist_ok=True)
+    for name, compression, topics in [("odom_image", "none", ("odom", "image")),
+                                      ("tf_lz4", "lz4", ("tf", "joint")),
+                                      ("info_bz2", "bz2", ("info", "pose"))]:
+        bag = rosbag.Bag(os.path.join(out, name + ".bag"), "w", compression=compression)
+        for k in range(2):
+            t = T0 + 0.1 * k
+            if "odom" in topics:
+                write_odom(bag, [0.1 * k], [])
+            if "image" in topics:
+                bag.write("/cam/image_raw", raw_image(t, "cam", pattern(k, 4, 3), "mono8"), rt(t))
+            if "tf" in topics:
+                bag.write("/tf", TFMessage([transform(t, "world", "base_link", *odom_pose(0.1 * k))]), rt(t))
+            if "joint" in topics:
+                j = JointState()
+                header(j, t, "")
+                j.name, j.position = ["pan_joint"], [0.1 * k]
+                bag.write("/joint_states", j, rt(t))
+            if "info" in topics:
+                bag.write("/cam/camera_info", camera_info(t, "cam", 4, 3, 5.0), rt(t))
+            if "pose" in topics:
+                ps = PoseStamped()
+                header(ps, t, "world")
+                set_pose(ps.pose, *odom_pose(0.1 * k))
+                bag.write("/pose", ps, rt(t))
+        bag.close()
+
+
 def main():
+    if len(sys.argv) > 2 and sys.argv[1] == "--fuzz-seeds":
+        fuzz_seeds(sys.argv[2])
+        return
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..")
     truth = {"T0": T0, "image_latency": 0.040, "static_tf": [[a, b, p, q] for a, b, p, q in STATIC]}
     robot_bag(out, truth)
