@@ -466,6 +466,18 @@ TEST_CASE("ROS 1 reader: truncated, unindexed and corrupt bags are an Error, nev
     const std::string p = dir.write("unindexed.bag", s);
     CHECK(errorOf([&] { openBag(p); }) == p + ": unindexed bag (its recording did not finish: rosbag reindex it)");
   }
+  // Two mutants that make rosbag_storage alone memcpy 2 GB past its chunk buffer (AddressSanitizer:
+  // heap-buffer-overflow in Bag::readMessageDataIntoStream, rosbag/bag.h:414): refused by the check.
+  for (int seed : {56, 82}) {
+    std::mt19937 rng(seed);
+    std::string s = whole;
+    for (int k = 0; k < 1 + int(rng() % 4); ++k) { // (the count drawn again at each turn, as they were made)
+      const char value = char(rng() % 3 == 0 ? 0xff : rng() % 256);
+      s[rng() % s.size()] = value;
+    }
+    const std::string p = dir.write("overflow" + std::to_string(seed) + ".bag", s);
+    CHECK_THAT(errorOf([&] { openBag(p); }), Catch::Contains(p + ": truncated or corrupt: a message runs past its chunk"));
+  }
   // Random damage: each mutant opens and reads, or fails with an Error.
   std::mt19937 rng(7);
   std::size_t errors = 0, fine = 0;

@@ -126,6 +126,7 @@ public:
           corrupt(start, "an index record without its chunk");
         if (field32(fields, "ver", start) != 1)
           corrupt(start, "an index record of version other than 1");
+        index_connections_.push_back(field32(fields, "conn", start));
         const std::uint32_t count = field32(fields, "count", start);
         if (std::uint64_t(count) * 12 != data_len)
           corrupt(start, "an index record of " + std::to_string(count) + " entries in " + std::to_string(data_len) +
@@ -141,7 +142,10 @@ public:
         break;
       }
       case kConnection:
-        field32(fields, "conn", start);
+        if (start >= index_pos)
+          connections_.push_back(field32(fields, "conn", start));
+        else
+          field32(fields, "conn", start);
         field(fields, "topic", start);
         if (data_len < 4)
           corrupt(start, "a connection record without its header");
@@ -155,6 +159,12 @@ public:
           if (chunk_pos < kMagicSize || chunk_pos >= index_pos)
             corrupt(start, "a chunk info record names a chunk at byte " + std::to_string(chunk_pos));
           chunk_positions_.push_back(chunk_pos);
+          if (field32(fields, "ver", start) != 1)
+            corrupt(start, "a chunk info record of version other than 1");
+          if (std::uint64_t(field32(fields, "count", start)) * 8 != data_len)
+            corrupt(start, "a chunk info record whose count does not match its size");
+          field64(fields, "start_time", start);
+          field64(fields, "end_time", start);
         }
         break;
       case kBagHeader:
@@ -169,6 +179,11 @@ public:
     }
     if (!header_seen)
       truncated(size_, "no bag header");
+    // Every index record's connection is one of the index's connection records.
+    std::sort(connections_.begin(), connections_.end());
+    for (std::uint32_t c : index_connections_)
+      if (!std::binary_search(connections_.begin(), connections_.end(), c))
+        corrupt(index_pos, "an index record names connection " + std::to_string(c) + ", which the index does not hold");
     // Every chunk info must name a chunk record.
     for (std::uint64_t c : chunk_positions_)
       if (!std::binary_search(chunks_.begin(), chunks_.end(), c))
@@ -272,6 +287,7 @@ private:
   std::ifstream in_;
   std::uint64_t size_ = 0;
   std::vector<std::uint64_t> chunks_, chunk_positions_;
+  std::vector<std::uint32_t> connections_, index_connections_;
 };
 
 ros::Time rosTime(std::int64_t ns)
