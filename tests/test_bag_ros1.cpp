@@ -696,6 +696,9 @@ TEST_CASE("importBag: --every, --start, --duration, --time-offset", "[bag]")
   CHECK(r.images_kept == 10);
   CHECK(r.image_first == Approx(T0 + 0.17).margin(1e-6));
   CHECK(r.image_last == Approx(T0 + 0.62).margin(1e-6));
+  // /tf_static, recorded once at T0, is read over the whole bag: the mount is there.
+  const Eigen::Isometry3d bMc = isoOf(vpHomogeneousMatrix(*readRigFile(r.rig_path).camera_pose));
+  CHECK((bMc.translation() - staticChain().translation()).norm() < 1e-12);
   o.out_dir = dir.file("e");
   o.every = 3;
   r = importBag(o);

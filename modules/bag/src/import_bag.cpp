@@ -453,6 +453,16 @@ BagImportResult importBag(const BagImportOptions &o)
   bool info_changed = false;
   std::int64_t info_changed_at = 0;
   std::vector<TransformMessage> statics, dynamics;
+  if (static_topic) { // the whole bag's: a latched /tf_static is usually recorded once, at the start
+    BagReadOptions ro;
+    ro.topics = {kTfStatic};
+    bag->read(ro, [&](const BagMessage &m) {
+      for (TransformMessage &x : decodeTf(m).transforms)
+        statics.push_back(std::move(x));
+      ++counts[kTfStatic];
+      return true;
+    });
+  }
   {
     BagReadOptions ro;
     ro.topics = {info_topic.name};
@@ -460,20 +470,12 @@ BagImportResult importBag(const BagImportOptions &o)
       ro.topics.push_back(motion_topic->name);
     if (tf_motion)
       ro.topics.push_back(kTf);
-    if (static_topic)
-      ro.topics.push_back(kTfStatic);
     if (joint_topic)
       ro.topics.push_back(joint_topic->name);
     ro.start = s_start;
     ro.end = s_end;
     bag->read(ro, [&](const BagMessage &m) {
       const std::string &t = m.topic->name;
-      if (t == kTfStatic) { // the whole bag's: a static transform may come at any time
-        for (TransformMessage &x : decodeTf(m).transforms)
-          statics.push_back(std::move(x));
-        ++counts[t];
-        return true;
-      }
       const bool in_window = m.log_time >= w_start && m.log_time <= w_end;
       if (t == info_topic.name) {
         if (!in_window && info)
