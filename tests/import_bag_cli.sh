@@ -150,6 +150,9 @@ bad "an unknown distortion model" "distortion model 'fisheye_xyz'" \
 head -c 90000 "$BAGS/robot.bag" >"$W/cut.bag"
 bad "a truncated bag" "cut.bag: truncated or corrupt" \
   import-bag "$W/cut.bag" --out-dir "$W/bad" --image-topic /camera/image_raw --odom-topic /odom
+mkfifo "$W/pipe.bag" && { timeout 20 cat "$BAGS/robot.bag" >"$W/pipe.bag" 2>/dev/null & }
+bad "a ROS 1 bag from a pipe" "pipe.bag: a ROS 1 bag is read from a regular file (its index is at its end), not a pipe" \
+  import-bag "$W/pipe.bag" --out-dir "$W/bad" --image-topic /camera/image_raw --odom-topic /odom
 bad "measure --bag: the import's error" "no topic /nope" \
   measure --bag "$BAGS/robot.bag" --image-topic /nope --odom-topic /odom --pattern chessboard:9x6:0.04 --out "$W/bad"
 # A camera_info that changes: a warning, the import done.

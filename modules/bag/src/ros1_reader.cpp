@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <console_bridge/console.h>
@@ -64,10 +65,19 @@ std::map<std::string, std::string> headerFields(const std::vector<std::uint8_t> 
   return f;
 }
 
+/* `path`, unless it is not a regular file (a pipe could be read only once, and rosbag seeks). */
+const std::string &regularFile(const std::string &path)
+{
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw Error(path + ": a ROS 1 bag is read from a regular file (its index is at its end), not a pipe");
+  return path;
+}
+
 /* Walks a ROS 1 bag's records (seeking over data, reading only headers and index records). */
 class Ros1Checker {
 public:
-  explicit Ros1Checker(const std::string &path) : path_(path), in_(path, std::ios::binary)
+  explicit Ros1Checker(const std::string &path) : path_(path), in_(regularFile(path), std::ios::binary)
   {
     if (!in_)
       throw Error(path + ": cannot open the bag");
