@@ -20,7 +20,10 @@ what=${1:-demo}
 packages=(g++ make cmake pkg-config libvisp-dev libopencv-dev libeigen3-dev libapriltag-dev libceres-dev
           catch2 libbenchmark-dev libcli11-dev libyaml-cpp-dev
           clang-14 libclang-rt-14-dev llvm-14 clang-tidy-14 doxygen visp-images-data
-          python3-camera-calibration-parsers python3-camera-calibration python3-opencv python3-cv-bridge python3-image-geometry)
+          python3-camera-calibration-parsers python3-camera-calibration python3-opencv python3-cv-bridge python3-image-geometry
+          librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
+          libtf2-dev python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-tf2-msgs
+          libsqlite3-dev libzstd-dev liblz4-dev)
 
 install_missing() {
   local missing=()

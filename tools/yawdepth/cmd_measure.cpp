@@ -6,7 +6,9 @@
 #include "commands.h"
 #include "method_options.h"
 
+#include <filesystem>
 #include <iostream>
+#include <stdlib.h> // mkdtemp
 #include <unistd.h>
 #include <memory>
 #include <yawdepth/camera/camera_file.h>
@@ -28,6 +30,8 @@ struct MeasureArgs {
   InputOptions input;
   bool quiet = false;
   std::string debug_dir;
+  std::string bag;   // --bag: imported into a temporary folder first
+  BagOptions bag_options;
 };
 
 /* Before anything is written: no output may replace an input (the images too) or another output. */
@@ -267,6 +271,46 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
   return 0;
 }
 
+/* A temporary folder, removed with its contents. */
+struct ScratchDir {
+  std::string path;
+  ScratchDir()
+  {
+    std::string templ = (std::filesystem::temp_directory_path() / "yawdepth_bag_XXXXXX").string();
+    if (!::mkdtemp(templ.data()))
+      throw Error(std::filesystem::temp_directory_path().string() + ": cannot create a temporary folder for --bag");
+    path = templ;
+  }
+  ~ScratchDir()
+  {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  ScratchDir(const ScratchDir &) = delete;
+  ScratchDir &operator=(const ScratchDir &) = delete;
+};
+
+/* measure --bag: the bag imported into a temporary folder (removed afterwards), then measured from
+   the files written there; --camera and --rig, when given, replace the imported ones. */
+int runMeasureBag(const MeasureArgs &a, const CLI::App &sub)
+{
+  ScratchDir scratch;
+  const std::string out = (std::filesystem::path(scratch.path) / "import").string();
+  const BagImportOptions o = a.bag_options.options(a.bag, out, a.motion.time_offset, a.motion.max_pose_gap);
+  const BagImportResult r = importCommandBag("measure", o, a.quiet ? nullptr : &std::cerr);
+  MeasureArgs m = a;
+  m.bag.clear();
+  m.motion.motion = {r.motion_path};
+  m.motion.format = "yawdepth";
+  m.motion.images.clear();
+  m.motion.time_offset_option = nullptr; // applied by the import
+  if (m.camera.empty())
+    m.camera = r.camera_path;
+  if (m.rig.empty())
+    m.rig = r.rig_path;
+  return runMeasure(m, sub);
+}
+
 } // namespace
 
 Runner addMeasure(CLI::App &app)
@@ -275,9 +319,9 @@ Runner addMeasure(CLI::App &app)
   CLI::App *sub = app.add_subcommand(
       "measure", "Detect a chessboard or AprilTags (or track natural corners) in the images of a motion log and "
                  "measure their 3D points.");
-  sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
+  sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML (with --bag: default the bag's camera_info)");
   sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
-  sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset)")->required();
+  sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset; with --bag: default the mount from /tf_static)");
   addMotionOptions(sub, a->motion,
                    "Motion log with an image column (paths relative to the CSV's folder), a timestamped one with "
                    "--images, or with --features klt --video any motion log");
@@ -301,7 +345,28 @@ Runner addMeasure(CLI::App &app)
   sub->add_option("--debug-dir", a->debug_dir,
                   "Write each image with its detected features and ids drawn (DIR/NNNN_NAME.png, NNNN its row in the log)");
   addInputOptions(sub, a->input);
-  return [a, sub]() { return runMeasure(*a, *sub); };
+  CLI::Option *bag = sub->add_option(
+      "--bag", a->bag,
+      "A ROS 1 or ROS 2 bag instead of --motion: imported as import-bag does (its options below, --time-offset and "
+      "--max-pose-gap) into a temporary folder first");
+  addBagOptions(sub, a->bag_options);
+  bag->excludes(sub->get_option("--motion"))->excludes(sub->get_option("--images"));
+  sub->get_option("--motion")->required(false);
+  sub->parse_complete_callback([sub, a]() {
+    if (!a->bag.empty()) {
+      if (sub->count("--image-topic") == 0)
+        throw CLI::RequiredError("--image-topic (with --bag)");
+      return;
+    }
+    for (const char *o : {"--camera", "--rig", "--motion"})
+      if (sub->count(o) == 0)
+        throw CLI::RequiredError(o);
+    for (const char *o : {"--image-topic", "--camera-info-topic", "--odom-topic", "--pose-topic", "--tf",
+                          "--camera-frame", "--joint-topic", "--joint", "--start", "--duration", "--every"})
+      if (sub->count(o) > 0)
+        throw CLI::ValidationError(o, "reads a bag: give --bag");
+  });
+  return [a, sub]() { return a->bag.empty() ? runMeasure(*a, *sub) : runMeasureBag(*a, *sub); };
 }
 
 } // namespace yawdepth::cli

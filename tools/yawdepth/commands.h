@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 #include <opencv2/core.hpp>
+#include <yawdepth/bag/import.h>
 #include <yawdepth/core/files.h>
 #include <yawdepth/features/detector.h>
 #include <yawdepth/io/recording.h>
@@ -23,6 +24,7 @@ Runner addTrack(CLI::App &app);
 Runner addCalibrateCamera(CLI::App &app);
 Runner addCalibrateRig(CLI::App &app);
 Runner addImport(CLI::App &app);
+Runner addImportBag(CLI::App &app);
 
 /*! \brief The bounds on CSV inputs (motion log, tracks), set by --max-input-mb. */
 struct InputOptions {
@@ -66,6 +68,23 @@ void addMotionOptions(CLI::App *sub, MotionOptions &options, const std::string &
 */
 LoadedMotion loadCommandMotion(const std::string &command, const MotionOptions &options, const RigFile *rig,
                                const InputLimits &limits, bool quiet);
+
+/*!
+  \brief The bag options of `import-bag` and `measure --bag` (docs/formats.md, "import-bag"): the
+  topics, `--tf WORLD:BODY`, the camera frame, the pan joint, the window. `--time-offset` and
+  `--max-pose-gap` are the command's own (MotionOptions for measure).
+*/
+struct BagOptions {
+  BagImportOptions import; //!< all but bag, out_dir, time_offset, max_pose_gap
+  std::string tf;          //!< --tf WORLD:BODY
+  /*! \brief importBag()'s options for `bag` into `out_dir`, --tf split at its colon. */
+  BagImportOptions options(const std::string &bag, const std::string &out_dir, double time_offset,
+                           double max_pose_gap) const;
+};
+/*! \brief Add the bag options to `sub` (not the bag itself). */
+void addBagOptions(CLI::App *sub, BagOptions &options);
+/*! \brief importBag() for a command: its warnings warned; the summary on `summary` unless null. */
+BagImportResult importCommandBag(const std::string &command, const BagImportOptions &options, std::ostream *summary);
 
 /*! \brief A warning for stderr, `yawdepth COMMAND: warning: TEXT`, printed when the command succeeds
     (a failure prints its one error line only); never silenced by --quiet. */

@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <yawdepth/bag/bag.h>
 #include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 
@@ -195,6 +196,7 @@ static std::vector<Command> addCommands(CLI::App &app)
   add(addCalibrateCamera);
   add(addCalibrateRig);
   add(addImport);
+  add(addImportBag);
   return commands;
 }
 
@@ -253,7 +255,13 @@ int main(int argc, char **argv)
                "odometry and image motion, on ViSP).",
                "yawdepth"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("yawdepth 0.1.0"));
+  std::string version = "yawdepth 0.1.0\nbag formats read:";
+  const std::vector<yawdepth::BagFormat> formats = yawdepth::readableBagFormats();
+  for (yawdepth::BagFormat f : formats)
+    version += std::string(" ") + yawdepth::toString(f);
+  if (formats.empty())
+    version += " none";
+  app.set_version_flag("--version", version);
   const std::vector<Command> commands = addCommands(app);
   if (argc > 1 && argv[1][0] != '-' && !knownCommand(commands, argv[1]))
     return 2;
