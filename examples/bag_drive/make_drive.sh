@@ -42,12 +42,20 @@ mkdir -p "$out"
 status=0
 if /usr/bin/python3 -c 'import rosbag, sensor_msgs.msg, nav_msgs.msg, geometry_msgs.msg, tf2_msgs.msg' 2>/dev/null; then
   /usr/bin/python3 "$here/write_ros1_bag.py" "$out/plan" "$out/drive.bag"
+  # Read back by rosbag: each topic's type, count and rate.
+  /usr/bin/python3 -c '
+import sys, rosbag
+info = rosbag.Bag(sys.argv[1]).get_type_and_topic_info()
+for topic, t in sorted(info.topics.items()):
+    print("  %s: %d %s%s" % (topic, t.message_count, t.msg_type, " at %.1f Hz" % t.frequency if t.frequency else ""))
+' "$out/drive.bag"
 else
   echo "make_drive.sh: no ROS 1 bag: /usr/bin/python3 cannot import rosbag and the message modules" >&2
   status=3
 fi
 if command -v node >/dev/null && [ -d "$writers/node_modules/@mcap/core" ]; then
   node "$here/write_mcap.mjs" "$out/plan" "$out/drive.mcap" "$writers"
+  node "$here/write_mcap.mjs" --check "$out/drive.mcap" "$writers" # read back by @mcap/core and the CDR reader
 else
   echo "make_drive.sh: no MCAP bag: needs node and $writers/node_modules (npm ci --no-audit --no-fund there)" >&2
   status=3

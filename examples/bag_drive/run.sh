@@ -30,6 +30,14 @@ noise=(--sigma-odom 0.0002)
 mkdir -p "$w"
 w=$(cd "$w" && pwd)
 
+writers=${YAWDEPTH_BAG_WRITERS:-$here/../../tests/data/bags/writers}
+if ! /usr/bin/python3 -c 'import rosbag, sensor_msgs.msg, nav_msgs.msg, geometry_msgs.msg, tf2_msgs.msg' 2>/dev/null ||
+  ! command -v node >/dev/null || [ ! -d "$writers/node_modules/@mcap/core" ]; then
+  echo "run.sh: SKIP: needs /usr/bin/python3 with rosbag and the ROS message modules (Debian's python3-rosbag," \
+    "python3-sensor-msgs, python3-nav-msgs, python3-geometry-msgs, python3-tf2-msgs), node and" \
+    "$writers/node_modules (npm ci --no-audit --no-fund there)"
+  exit 77
+fi
 bash "$here/make_drive.sh" "$y" "$w/drive" "$frames"
 rc=$?
 [ "$rc" -eq 3 ] && { echo "run.sh: SKIP: a bag writer's prerequisites are missing (see above)"; exit 77; }
@@ -93,5 +101,5 @@ printf '%s\n' "${rows[@]}" | awk -F'|' '
     }
   }
   END { if (n != 5) { print "run.sh: FAIL: " n " of 5 bag inputs measured"; bad = 1 } exit bad }' || failed=1
-[ "$failed" -eq 0 ] && echo "run.sh: every bag within 10 % of the direct files' depth RMSE ($w)"
+[ "$failed" -eq 0 ] && echo "run.sh: every bag within 10 % of the direct files' depth and world RMS ($w)"
 exit "$failed"
