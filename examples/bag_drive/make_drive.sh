@@ -7,8 +7,9 @@
 # chessboard of 20 mm squares, 0.62 m to the side, passed at 0.1 m/s (FRAMES images at 20 Hz over
 # 0.35 m, default 70 = 3.5 s; fewer frames cover the same path faster) on a gentle turn toward the
 # board (4 deg to the right) while the pan joint turns from 78 to 98 deg to follow it, so the board
-# crosses the image from the left edge to the right. One board: simulate renders a single one. The odometry is dead-reckoned
-# with 0.2 mm of noise per image increment (per axis); the pan readings are exact.
+# crosses the image from the left edge to the right. One board: simulate renders a single one. The
+# odometry is dead-reckoned with 0.2 mm of noise per image increment (per axis); the pan readings
+# are exact.
 # Then the same drive as bags (drive_plan.py computes every message once; frames, times and the
 # 40 ms image latency are described there):
 #   OUT/sim/           simulate's own files: motion.csv (the odometry, pan and images),
