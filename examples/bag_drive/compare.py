@@ -37,16 +37,33 @@ def mtv(R, v):
 def main():
     name, motion, points, report, err, sim, stamps = sys.argv[1:8]
     truth_motion = {int(r["frame"]): r for r in csv.DictReader(open(os.path.join(sim, "motion_truth.csv")))}
-    by_image = {}
+    by_image, by_stamp, by_exposure = {}, {}, {}
     for r in csv.DictReader(open(stamps)):
         by_image[r["image"]] = int(r["frame"])
-        by_image[r["stamp_ns"] + ".png"] = int(r["frame"])
+        by_stamp[int(r["stamp_ns"])] = int(r["frame"])
+        by_exposure[int(r["exposure_ns"]) // 1000000] = int(r["frame"])
+
+    def rendered_frame(row):
+        """The rendered frame of a log row: by simulate's image name, by an image named by its stamp
+        in ns, else by the row's motion time t (the exposure, to the millisecond)."""
+        name = os.path.basename(row["image"])
+        stem = os.path.splitext(name)[0]
+        if name in by_image:
+            return by_image[name]
+        if stem.isdigit() and int(stem) in by_stamp:
+            return by_stamp[int(stem)]
+        if row.get("t"):
+            ms = round(float(row["t"]) * 1000)
+            if ms in by_exposure:
+                return by_exposure[ms]
+        raise SystemExit(f"compare.py: {motion}: frame {row['frame']}: image {row['image']} is no rendered frame")
+
     frame_of = {}  # the measured log's frame -> the rendered frame
     n_images = 0
     for r in csv.DictReader(open(motion)):
         if r.get("image"):
             n_images += 1
-            frame_of[int(r["frame"])] = by_image[os.path.basename(r["image"])]
+            frame_of[int(r["frame"])] = rendered_frame(r)
 
     def pose(k):
         r = truth_motion[k]
