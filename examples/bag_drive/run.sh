@@ -17,8 +17,9 @@
 # depth RMSE against the truth (mm), median |depth error| / sigma_zc, the RMS distance of the
 # corners from their true places in the odometry's world (mm: at constant velocity a wrong time
 # offset leaves the depths but moves the board, 4 mm for the 40 ms latency), median block length
-# (mm; 20 is the board's). Exit status 1 when a bag's depth RMSE or world RMS exceeds the 6-DoF
-# direct files' by more than 10 % or it has fewer points ok; 77 when a writer's prerequisites (make_drive.sh) or
+# (mm; 20 is the board's). A last row imports the ROS 1 bag without --time-offset, which must come
+# out worse (the latency is in the bag). Exit status 1 when a bag's depth RMSE or world RMS exceeds
+# the 6-DoF direct files' by more than 10 %, it has fewer points ok, or the last row is not worse; 77 when a writer's prerequisites (make_drive.sh) or
 # `yawdepth import-bag` are missing (nothing to compare).
 set -uo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -70,7 +71,7 @@ bag_input() { # NAME BAG IMAGE_TOPIC POSE_ARGS...
   local name=$1 bag=$2 topic=$3; shift 3
   local d=$w/import_${name// /_}
   if ! "$y" import-bag "$bag" --out-dir "$d" --image-topic "$topic" --camera-info-topic /camera/camera_info "$@" \
-    --camera-frame camera_optical_frame --joint-topic /joint_states --joint pan_joint --time-offset -0.04 \
+    --camera-frame camera_optical_frame --joint-topic /joint_states --joint pan_joint --time-offset "${offset:--0.04}" \
     >"$d.log" 2>&1; then
     echo "run.sh: $name: import-bag failed:" >&2; tail -3 "$d.log" >&2
     failed=1; return 1
@@ -82,6 +83,8 @@ bag_input "ROS 1 bag, compressed" "$w/drive/drive.bag" /camera/image_raw/compres
 bag_input "ROS 1 bag, --tf" "$w/drive/drive.bag" /camera/image_raw --tf odom:base_link
 bag_input "MCAP, image_raw" "$w/drive/drive.mcap" /camera/image_raw --odom-topic /odom
 bag_input "MCAP, compressed" "$w/drive/drive.mcap" /camera/image_raw/compressed --odom-topic /odom
+# The latency is in the bag: without --time-offset (0 instead of -0.04) the board must come out worse.
+offset=0 bag_input "no --time-offset (ROS 1; must be worse)" "$w/drive/drive.bag" /camera/image_raw --odom-topic /odom
 
 echo "| input | images | board found | points ok | depth RMSE (mm) | median abs(error)/sigma | world RMS (mm) | block median (mm) |"
 echo "|---|---|---|---|---|---|---|---|"
@@ -100,6 +103,11 @@ printf '%s\n' "${rows[@]}" | awk -F'|' '
       print "run.sh: FAIL: " name ": " ok " points ok, depth RMSE " rmse " mm, world RMS " wrms " mm; the 6-DoF direct files: " ref_ok ", " ref " mm, " wref " mm"
     }
   }
-  END { if (n != 5) { print "run.sh: FAIL: " n " of 5 bag inputs measured"; bad = 1 } exit bad }' || failed=1
-[ "$failed" -eq 0 ] && echo "run.sh: every bag within 10 % of the direct files' depth and world RMS ($w)"
+  name == "no --time-offset (ROS 1; must be worse)" {
+    if (wrms >= 0 && wrms <= 1.1 * wref + 0.01) { bad = 1; print "run.sh: FAIL: without --time-offset the board is where it should be: is the latency in the bag?" }
+    lat = 1
+  }
+  END { if (!lat) { print "run.sh: FAIL: the import without --time-offset did not run"; bad = 1 }
+        if (n != 5) { print "run.sh: FAIL: " n " of 5 bag inputs measured"; bad = 1 } exit bad }' || failed=1
+[ "$failed" -eq 0 ] && echo "run.sh: every bag within 10 % of the direct files' depth and world RMS, and worse without the time offset ($w)"
 exit "$failed"
