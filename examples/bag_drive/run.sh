@@ -19,8 +19,8 @@
 # offset leaves the depths but moves the board, 4 mm for the 40 ms latency), median block length
 # (mm; 20 is the board's). A last row imports the ROS 1 bag without --time-offset, which must come
 # out worse (the latency is in the bag). Exit status 1 when a bag's depth RMSE or world RMS exceeds
-# the 6-DoF direct files' by more than 10 %, it has fewer points ok, or the last row is not worse; 77 when a writer's prerequisites (make_drive.sh) or
-# `yawdepth import-bag` are missing (nothing to compare).
+# the 6-DoF direct files' by more than 10 %, it has fewer points ok, or the last row is not worse;
+# 77 when a writer's prerequisites (make_drive.sh) or `yawdepth import-bag` are missing.
 set -uo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 y=${1:?usage: run.sh YAWDEPTH [WORKDIR] [FRAMES]}
@@ -55,21 +55,24 @@ awk -F, 'NR == 1 { print "frame,tx,ty,tz,tux,tuy,tuz,yaw,image"; next } { print 
   "$sim/motion.csv" >"$sim/motion_6dof.csv"
 
 rows=() failed=0
+slug() { local s=${1//[^A-Za-z0-9]/_}; echo "$w/$s"; }
 measure() { # NAME CAMERA RIG MOTION
-  local name=$1
+  local name=$1 f
+  f=$(slug "$name")
   if ! "$y" measure --camera "$2" --rig "$3" --motion "$4" --pattern "$pattern" "${noise[@]}" \
-    --out "$w/$name.points.csv" --report "$w/$name.report" >"$w/$name.measure.log" 2>&1; then
-    echo "run.sh: $name: measure failed:" >&2; tail -3 "$w/$name.measure.log" >&2
+    --out "$f.points.csv" --report "$f.report" >"$f.measure.log" 2>&1; then
+    echo "run.sh: $name: measure failed:" >&2; tail -3 "$f.measure.log" >&2
     failed=1; return 1
   fi
-  rows+=("$(python3 "$here/compare.py" "$name" "$4" "$w/$name.points.csv" "$w/$name.report" "$w/$name.measure.log" "$sim" "$stamps")")
+  rows+=("$(python3 "$here/compare.py" "$name" "$4" "$f.points.csv" "$f.report" "$f.measure.log" "$sim" "$stamps")")
 }
 measure "simulate's files (planar)" "$here/../../calib/paper_camera.xml" "$here/../../calib/paper_rig.yaml" "$sim/motion.csv"
 measure "simulate's files (6-DoF)" "$here/../../calib/paper_camera.xml" "$here/../../calib/paper_rig.yaml" "$sim/motion_6dof.csv"
 
 bag_input() { # NAME BAG IMAGE_TOPIC POSE_ARGS...
   local name=$1 bag=$2 topic=$3; shift 3
-  local d=$w/import_${name// /_}
+  local d
+  d=$(slug "import $name")
   if ! "$y" import-bag "$bag" --out-dir "$d" --image-topic "$topic" --camera-info-topic /camera/camera_info "$@" \
     --camera-frame camera_optical_frame --joint-topic /joint_states --joint pan_joint --time-offset "${offset:--0.04}" \
     >"$d.log" 2>&1; then
