@@ -2,6 +2,7 @@
 // motion.csv, camera.yaml, rig.yaml); the bag options are shared with `measure --bag`.
 #include "commands.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -18,6 +19,10 @@ BagImportOptions BagOptions::options(const std::string &bag, const std::string &
   o.out_dir = out_dir;
   o.time_offset = time_offset;
   o.max_pose_gap = max_pose_gap;
+  if (!joint_axis.empty())
+    std::copy(joint_axis.begin(), joint_axis.end(), o.joint_axis.begin());
+  if (!joint_origin.empty())
+    std::copy(joint_origin.begin(), joint_origin.end(), o.joint_origin.begin());
   if (!tf.empty()) {
     const std::size_t colon = tf.find(':');
     if (colon == std::string::npos || tf.find(':', colon + 1) != std::string::npos)
@@ -47,6 +52,17 @@ void addBagOptions(CLI::App *sub, BagOptions &b)
                   "The camera's frame, its mount in the body from /tf_static (default: the images' frame_id)");
   sub->add_option("--joint-topic", o.joint_topic, "sensor_msgs/JointState with the pan joint (the yaw column)");
   sub->add_option("--joint", o.joint, "The pan joint's name in --joint-topic");
+  sub->add_option("--joint-axis", b.joint_axis,
+                  "The pan joint's axis in the body, X,Y,Z (default 0,1,0, yawdepth's vision frame; REP 103's z-up "
+                  "base_link: 0,0,1)")
+      ->delimiter(',')
+      ->expected(3)
+      ->check(Finite);
+  sub->add_option("--joint-origin", b.joint_origin,
+                  "A point on the pan joint's axis, in the body, X,Y,Z (m; default 0,0,0; from the robot's URDF)")
+      ->delimiter(',')
+      ->expected(3)
+      ->check(Finite);
   sub->add_option("--start", o.start, "Seconds after the bag's first message to start at")
       ->check(FiniteNonNegative)
       ->capture_default_str();

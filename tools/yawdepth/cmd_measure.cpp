@@ -362,7 +362,8 @@ Runner addMeasure(CLI::App &app)
       if (sub->count(o) == 0)
         throw CLI::RequiredError(o);
     for (const char *o : {"--image-topic", "--camera-info-topic", "--odom-topic", "--pose-topic", "--tf",
-                          "--camera-frame", "--joint-topic", "--joint", "--start", "--duration", "--every"})
+                          "--camera-frame", "--joint-topic", "--joint", "--joint-axis", "--joint-origin", "--start",
+                          "--duration", "--every"})
       if (sub->count(o) > 0)
         throw CLI::ValidationError(o, "reads a bag: give --bag");
   });

@@ -77,6 +77,7 @@ LoadedMotion loadCommandMotion(const std::string &command, const MotionOptions &
 struct BagOptions {
   BagImportOptions import; //!< all but bag, out_dir, time_offset, max_pose_gap
   std::string tf;          //!< --tf WORLD:BODY
+  std::vector<double> joint_axis, joint_origin; //!< --joint-axis X,Y,Z, --joint-origin X,Y,Z (empty: the defaults)
   /*! \brief importBag()'s options for `bag` into `out_dir`, --tf split at its colon. */
   BagImportOptions options(const std::string &bag, const std::string &out_dir, double time_offset,
                            double max_pose_gap) const;

@@ -17,6 +17,7 @@
 #include <set>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpQuaternionVector.h>
+#include <visp3/core/vpThetaUVector.h>
 #include <yawdepth/bag/bag.h>
 #include <yawdepth/bag/messages.h>
 #include <yawdepth/camera/camera_file.h>
@@ -95,6 +96,41 @@ struct Stamped {
   std::int64_t t = 0; // ns
   vpHomogeneousMatrix M;
 };
+
+/* The vision frame of a pan joint in the body: +Y along `axis`, the origin at `origin` (the smallest
+   rotation taking +Y to the axis). */
+vpHomogeneousMatrix panFrame(const std::array<double, 3> &axis, const std::array<double, 3> &origin)
+{
+  const vpColVector y({0.0, 1.0, 0.0});
+  vpColVector a({axis[0], axis[1], axis[2]});
+  a.normalize();
+  const vpColVector v = vpColVector::crossProd(y, a);
+  const double s = v.frobeniusNorm(), c = vpColVector::dotProd(y, a);
+  vpRotationMatrix R; // identity
+  if (s > 1e-12)
+    R.buildFrom(vpThetaUVector(v[0] / s * std::atan2(s, c), v[1] / s * std::atan2(s, c), v[2] / s * std::atan2(s, c)));
+  else if (c < 0)
+    R.buildFrom(vpThetaUVector(M_PI, 0.0, 0.0));
+  return vpHomogeneousMatrix(vpTranslationVector(origin[0], origin[1], origin[2]), R);
+}
+
+/* The mean axis the vision frame turns about, in its own frame, over a pose series (weighted by each
+   step's angle), and the total angle. */
+vpColVector turnAxis(const std::vector<Stamped> &motion, double &total)
+{
+  vpColVector sum(3, 0.0);
+  total = 0;
+  for (std::size_t i = 1; i < motion.size(); ++i) {
+    const vpThetaUVector tu((motion[i - 1].M.inverse() * motion[i].M).getRotationMatrix());
+    const double angle = std::sqrt(tu[0] * tu[0] + tu[1] * tu[1] + tu[2] * tu[2]);
+    total += angle;
+    // The sign of the axis is arbitrary for the comparison: align with the running sum.
+    const double d = tu[0] * sum[0] + tu[1] * sum[1] + tu[2] * sum[2];
+    for (unsigned k = 0; k < 3; ++k)
+      sum[k] += d < 0 ? -tu[k] : tu[k];
+  }
+  return sum;
+}
 
 /* Linear interpolation of a sorted (stamp, value) series; -1 before, 1 after, 2 in a gap, 0 ok. */
 int interpolate(const std::vector<std::pair<double, double>> &s, double t, double gap, double &value)
@@ -347,6 +383,12 @@ void BagImportOptions::validate() const
     throw Error("--duration: not a finite number");
   if (every < 1)
     throw Error("--every " + std::to_string(every) + ": 1 or more");
+  const double axis_norm = std::hypot(joint_axis[0], joint_axis[1], joint_axis[2]);
+  if (!std::isfinite(axis_norm) || !(axis_norm > 1e-9))
+    throw Error("--joint-axis: three finite numbers, not all 0");
+  for (double v : joint_origin)
+    if (!std::isfinite(v))
+      throw Error("--joint-origin: three finite numbers (m)");
   TimeAlignmentOptions a;
   a.time_offset = time_offset;
   a.max_pose_gap = max_pose_gap;
@@ -640,6 +682,28 @@ BagImportResult importBag(const BagImportOptions &o)
   std::stable_sort(motion.begin(), motion.end(), [](const Stamped &a, const Stamped &b) { return a.t < b.t; });
   motion.erase(std::unique(motion.begin(), motion.end(), [](const Stamped &a, const Stamped &b) { return a.t == b.t; }),
                motion.end());
+  // With a pan joint, the vision frame on the joint's axis (see BagImportOptions::joint_axis).
+  if (joint_topic) {
+    const vpHomogeneousMatrix bMv = panFrame(o.joint_axis, o.joint_origin);
+    for (Stamped &x : motion)
+      x.M = x.M * bMv;
+    bMc = bMv.inverse() * bMc;
+    // A robot that turns about another axis than the pan's (REP 103's z-up base_link with the
+    // default +Y): the data reveal it, so say so.
+    double turned = 0;
+    const vpColVector axis = turnAxis(motion, turned);
+    constexpr double kMinTurn = 0.1;           // rad, over the window
+    constexpr double kMaxAxisAngle = M_PI / 9; // 20 degrees
+    if (turned > kMinTurn && axis.frobeniusNorm() > 0.5 * turned &&
+        std::abs(axis[1]) / axis.frobeniusNorm() < std::cos(kMaxAxisAngle)) {
+      const vpColVector b = bMv.getRotationMatrix() * (axis / axis.frobeniusNorm());
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "(%.2f, %.2f, %.2f)", b[0], b[1], b[2]);
+      r.warnings.push_back(path + ": the body turns about " + buf + " in " + body_frame +
+                           ", not about the pan axis --joint-axis gives: for REP 103's z-up base_link give "
+                           "--joint-axis 0,0,1 and the joint's position as --joint-origin");
+    }
+  }
   std::sort(joint.begin(), joint.end(), [](const auto &a, const auto &b) { return a.first < b.first; });
   joint.erase(std::unique(joint.begin(), joint.end(), [](const auto &a, const auto &b) { return a.first == b.first; }),
               joint.end());

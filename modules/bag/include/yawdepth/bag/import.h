@@ -12,6 +12,7 @@
   `frame_id`, usually an optical frame: z forward, x right, y down, as yawdepth's camera). wMb is
   the body's pose in the world, bMc the camera's pose in the body (the rig's `camera_pose`).
 */
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -32,6 +33,14 @@ struct BagImportOptions {
   std::string camera_frame;       //!< empty: the images' `frame_id`
   std::string joint_topic;        //!< sensor_msgs/JointState with the pan joint, or empty
   std::string joint;              //!< the pan joint's name in joint_topic (required with it)
+  /*! The pan joint's axis in BODY (any length; its position turns the camera right-handedly about
+      it) and a point on that axis (m, in BODY). yawdepth's vision frame turns the camera about its +Y
+      through its origin: with a joint, the motion log is written for the vision frame v whose +Y is
+      this axis and whose origin is this point (wMv = wMb bMv), and camera_pose is vMc. The default,
+      +Y through BODY's origin, is yawdepth's own convention; REP 103's z-up base_link needs
+      {0, 0, 1} and the joint's position (from the robot's URDF). */
+  std::array<double, 3> joint_axis{0, 1, 0};
+  std::array<double, 3> joint_origin{0, 0, 0}; //!< see joint_axis
   double start = 0.0;             //!< seconds after the bag's first message to start at
   double duration = -1.0;         //!< seconds to read from start; negative: to the end
   int every = 1;                  //!< keep every Nth image (N >= 1)
@@ -44,9 +53,9 @@ struct BagImportOptions {
 /*! \brief What was read, matched and written. */
 struct BagImportResult {
   std::string images_dir;    //!< `images/`: one PNG per kept image, named by its header stamp (ns)
-  std::string motion_path;   //!< `motion.csv`: frame-based, 6-DoF wMb, with `t`, `image` and (with a joint) `yaw` columns
+  std::string motion_path;   //!< `motion.csv`: frame-based, 6-DoF wMb (wMv with a joint), with `t`, `image` and (with a joint) `yaw` columns
   std::string camera_path;   //!< `camera.yaml`: the ROS camera_info YAML of the first `camera_info`
-  std::string rig_path;      //!< `rig.yaml`: `camera_pose` (bMc, from /tf_static; identity when camera frame = body)
+  std::string rig_path;      //!< `rig.yaml`: `camera_pose` (bMc, or vMc with a joint, from /tf_static; identity when camera frame = body)
   std::vector<std::string> topics_used; //!< "topic (type): N messages" for each topic read
   std::size_t images_read = 0, images_kept = 0, images_matched = 0;
   std::size_t skipped_before = 0, skipped_after = 0, skipped_gap = 0;
