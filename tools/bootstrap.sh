@@ -23,7 +23,10 @@ packages=(g++ make cmake pkg-config libvisp-dev libopencv-dev libeigen3-dev liba
           python3-camera-calibration-parsers python3-camera-calibration python3-opencv python3-cv-bridge python3-image-geometry
           librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
           libtf2-dev python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-tf2-msgs
-          libsqlite3-dev libzstd-dev liblz4-dev)
+          libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev python3-ament-package)
+# The ROS 2 bag writers of the tests (tests/data/bags/writers: @mcap/core and ROS 2's CDR from the npm
+# registry) run on Node.js: Debian's, unless the machine has one already.
+command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)
 
 install_missing() {
   local missing=()
@@ -48,13 +51,9 @@ stage() { echo "== bootstrap: $*" >&2; }
 # bag_ros2_writers test, when node and npm are on PATH (that test is skipped otherwise).
 install_bag_writers() {
   local dir="$here/tests/data/bags/writers"
-  if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
-    echo "bootstrap: node or npm not found: bag_ros2_writers will be skipped" >&2
-    return 0
-  fi
   [ -d "$dir/node_modules/@mcap/core" ] && return 0
   (cd "$dir" && npm ci --no-audit --no-fund >/dev/null) ||
-    echo "bootstrap: npm ci in $dir failed: bag_ros2_writers will be skipped" >&2
+    { echo "bootstrap: npm ci in $dir failed (the ROS 2 bag writers of the tests)" >&2; return 1; }
 }
 
 # Both trees are unity builds (CMake's UNITY_BUILD: a module's sources compiled as one file), which
@@ -175,7 +174,7 @@ run_fuzzers() {
 # benchmarks, examples or fuzz targets: CI's 20 minutes on 2 cores do not hold them; run
 # `run-clang-tidy-14 -p build tools/yawdepth` by hand when changing the CLI).
 # The path-sensitive static analyzer (clang-analyzer-*) runs on the modules that read untrusted
-# input (core, io, camera: files, parsers, the camera model), file by file, with the compile
+# input (core, io, camera, bag: files, parsers, the camera model, bag containers), file by file, with the compile
 # commands of a configure-only tree without unity build (the analyzer starts only from functions of
 # the main file, which a unity file's included sources are not). The numerical modules, which the
 # sanitizer tests run, get the other checks, one unity file per module from the Release tree (their
@@ -184,7 +183,7 @@ run_fuzzers() {
 # are then walked once instead of once per source.
 # A source the Release tree does not compile (refine_unavailable.cpp, built only without Ceres) has
 # no compile command and is skipped.
-analyzed_modules='core|io|camera'
+analyzed_modules='core|io|camera|bag'
 run_clang_tidy() {
   local other db="$build_dir/tidy-db"
   other=$(cd "$here/modules" && ls -d */ | tr -d / | grep -v -x -E "$analyzed_modules" | paste -sd '|')
