@@ -329,9 +329,8 @@ public:
           t.type = c->datatype;
           t.encoding = BagEncoding::Ros1;
           topics_.push_back(t);
-        } else if (topics_[it->second].type != c->datatype) {
-          throw Error(path + ": topic " + c->topic + " has messages of two types, " + topics_[it->second].type +
-                      " and " + c->datatype);
+        } else if (topics_[it->second].type != c->datatype) { // refused when it is read
+          mixed_[c->topic] = topics_[it->second].type + " and " + c->datatype;
         }
       }
       std::sort(topics_.begin(), topics_.end(), [](const BagTopic &a, const BagTopic &b) { return a.name < b.name; });
@@ -364,6 +363,9 @@ public:
                 names.end());
     if (names.empty() || options.end < options.start)
       return;
+    for (const std::string &n : options.topics) // (a read of every topic passes them as the first type)
+      if (mixed_.count(n))
+        throw Error(path_ + ": topic " + n + " has messages of two types, " + mixed_.at(n));
     std::int64_t last_good = INT64_MIN;
     std::uint64_t visited = 0;
     std::vector<std::uint8_t> buffer;
@@ -408,6 +410,7 @@ private:
   std::string path_;
   rosbag::Bag bag_;
   std::vector<BagTopic> topics_;
+  std::map<std::string, std::string> mixed_; // topics recorded with two types: "A and B"
 };
 
 } // namespace
