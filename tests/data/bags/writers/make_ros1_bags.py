@@ -354,7 +354,7 @@ def measure_bag(out, truth):
 def fuzz_seeds(out):
     """Tiny bags for fuzz/corpus/ros1_bag: a few messages each, uncompressed and lz4, bz2."""
     os.makedirs(out, exist_ok=True)
-    for name, compression, topics in [("odom_image", "none", ("odom", "image")),
+    for name, compression, topics in [("odom_image", "none", ("odom", "image", "info")),
                                       ("tf_lz4", "lz4", ("tf", "joint")),
                                       ("info_bz2", "bz2", ("info", "pose"))]:
         bag = rosbag.Bag(os.path.join(out, name + ".bag"), "w", compression=compression)
