@@ -4,7 +4,9 @@
 // offsets its index records give and, in an uncompressed chunk, the message record at each offset.
 // rosbag_storage trusts those numbers (it memcpy's by them), so a truncated or corrupt file must be
 // refused before it is opened. The check reads record headers and index records only (seeking over
-// the data): a 10 GB bag costs it a few reads per message, not a second pass over the bytes.
+// the data): a 10 GB bag costs it a few reads per message, not a second pass over the bytes. The
+// records inside a bz2 or lz4 chunk are not checked (that would mean decompressing every chunk
+// twice): there rosbag_storage's own checks are all there is.
 #include "readers.h"
 
 #include <algorithm>
@@ -28,7 +30,7 @@ namespace {
 
 constexpr std::size_t kMagicSize = 13;                      // "#ROSBAG V2.0\n"
 constexpr std::uint32_t kMaxHeader = 16u << 20;             // a record header (connection: its message definition)
-constexpr std::uint64_t kMaxChunk = std::uint64_t(1) << 30; // a chunk, uncompressed
+constexpr std::uint64_t kMaxChunk = std::uint64_t(256) << 20; // a chunk, uncompressed (rosbag writes 768 KiB ones)
 
 enum Op : std::uint8_t { kMsgData = 0x02, kBagHeader = 0x03, kIndexData = 0x04, kChunk = 0x05, kChunkInfo = 0x06, kConnection = 0x07 };
 
