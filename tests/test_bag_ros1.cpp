@@ -731,7 +731,8 @@ TEST_CASE("importBag: every encoding written as it came", "[bag]")
     o.out_dir = dir.file(name);
     o.image_topic = std::string("/cam/") + name + (comp ? "/image_raw/compressed" : "/image_raw");
     o.odom_topic = "/odom";
-    const BagImportResult r = importBag(o); // camera_info: the sibling, /cam/NAME/camera_info
+    o.camera_info_topic = "/cam/camera_info";
+    const BagImportResult r = importBag(o);
     REQUIRE(r.images_matched == 4);
     const MotionLog log = readMotionCsv(r.motion_path);
     for (std::size_t k = 0; k < 4; ++k) {
