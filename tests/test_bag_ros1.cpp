@@ -818,6 +818,15 @@ TEST_CASE("importBag: bad input, a one-line reason naming the bag, topic or fram
     x.start = 5;
     fails(x, {"/camera/image_raw has no message in the window"});
   }
+  SECTION("the default camera_info: the image topic's sibling (for .../compressed, the one before)")
+  {
+    BagImportOptions x = o;
+    x.bag = kEncodings;
+    x.image_topic = "/cam/jpeg/image_raw/compressed";
+    fails(x, {kEncodings + ": no topic /cam/jpeg/camera_info (the image topic's camera_info; give --camera-info-topic)"});
+    x.image_topic = "/cam/rgb8/image_raw";
+    fails(x, {"no topic /cam/rgb8/camera_info"});
+  }
   SECTION("frames")
   {
     BagImportOptions x = o;
