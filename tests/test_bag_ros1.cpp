@@ -454,8 +454,8 @@ TEST_CASE("ROS 1 reader: truncated, unindexed and corrupt bags are an Error, nev
     CHECK(e.rfind(p + ": ", 0) == 0);
     if (n >= 4200)
       CHECK(contains(e, "truncated or corrupt"));
-    if (n >= 4200)
-      CHECK(contains(e, "of " + std::to_string(n) + " bytes"));
+    if (n >= 4200) // how far it got
+      CHECK(contains(e, std::to_string(n)));
   }
   // index_pos = 0: a recording that did not finish.
   {

@@ -110,9 +110,12 @@ public:
         index_pos = field64(fields, "index_pos", start);
         if (index_pos == 0)
           throw Error(path_ + ": unindexed bag (its recording did not finish: rosbag reindex it)");
-        if (index_pos > size_ || index_pos < kMagicSize)
-          truncated(size_, "the index is at byte " + std::to_string(index_pos) + " of a file of " +
-                               std::to_string(size_) + " bytes");
+        if (index_pos > size_)
+          throw Error(path_ + ": truncated or corrupt: read " + std::to_string(size_) + " of at least " +
+                      std::to_string(index_pos) + " bytes (the index is at byte " + std::to_string(index_pos) +
+                      ": a recording cut short, which rosbag reindex may recover)");
+        if (index_pos < kMagicSize)
+          corrupt(start, "the index position " + std::to_string(index_pos));
         continue;
       }
       switch (op) {
