@@ -1,8 +1,12 @@
 // libFuzzer target: a ROS 1 bag (the structural check, rosbag_storage behind it) opened, every
-// message read and decoded by its topic's type. The input is the whole file.
+// message read and decoded by its topic's type; a bag with the seeds' /cam/image_raw and /odom is
+// also imported (importBag into a temporary folder). The input is the whole file.
 #include "fuzz_common.h"
 
+#include <filesystem>
+#include <unistd.h>
 #include <yawdepth/bag/bag.h>
+#include <yawdepth/bag/import.h>
 #include <yawdepth/bag/messages.h>
 #include <yawdepth/error.h>
 
@@ -34,6 +38,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
       }
       return true;
     });
+    if (bag->topic("/cam/image_raw") && bag->topic("/odom")) {
+      static const std::string out = path + ".out";
+      yawdepth::BagImportOptions o;
+      o.bag = path;
+      o.out_dir = out;
+      o.image_topic = "/cam/image_raw";
+      o.odom_topic = "/odom";
+      o.camera_frame = "base_link"; // the seeds have no /tf_static: the camera is the body
+      o.max_pose_gap = 1.0;
+      std::error_code ec;
+      std::filesystem::remove_all(out, ec);
+      try {
+        yawdepth::importBag(o);
+      } catch (const yawdepth::Error &) {
+      }
+      std::filesystem::remove_all(out, ec);
+    }
   } catch (const yawdepth::Error &) {
   }
   return 0;

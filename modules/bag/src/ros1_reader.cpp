@@ -4,7 +4,9 @@
 // offsets its index records give and, in an uncompressed chunk, the message record at each offset.
 // rosbag_storage trusts those numbers (it memcpy's by them), so a truncated or corrupt file must be
 // refused before it is opened. The check reads record headers and index records only (seeking over
-// the data): a 10 GB bag costs it a few reads per message, not a second pass over the bytes.
+// the data): a 10 GB bag costs it a few reads per message, not a second pass over the bytes. The
+// records inside a bz2 or lz4 chunk are not checked (that would mean decompressing every chunk
+// twice): there rosbag_storage's own checks are all there is.
 #include "readers.h"
 
 #include <algorithm>
@@ -28,7 +30,7 @@ namespace {
 
 constexpr std::size_t kMagicSize = 13;                      // "#ROSBAG V2.0\n"
 constexpr std::uint32_t kMaxHeader = 16u << 20;             // a record header (connection: its message definition)
-constexpr std::uint64_t kMaxChunk = std::uint64_t(1) << 30; // a chunk, uncompressed
+constexpr std::uint64_t kMaxChunk = std::uint64_t(256) << 20; // a chunk, uncompressed (rosbag writes 768 KiB ones)
 
 enum Op : std::uint8_t { kMsgData = 0x02, kBagHeader = 0x03, kIndexData = 0x04, kChunk = 0x05, kChunkInfo = 0x06, kConnection = 0x07 };
 
@@ -108,9 +110,12 @@ public:
         index_pos = field64(fields, "index_pos", start);
         if (index_pos == 0)
           throw Error(path_ + ": unindexed bag (its recording did not finish: rosbag reindex it)");
-        if (index_pos > size_ || index_pos < kMagicSize)
-          truncated(size_, "the index is at byte " + std::to_string(index_pos) + " of a file of " +
-                               std::to_string(size_) + " bytes");
+        if (index_pos > size_)
+          throw Error(path_ + ": truncated or corrupt: read " + std::to_string(size_) + " of at least " +
+                      std::to_string(index_pos) + " bytes (the index is at byte " + std::to_string(index_pos) +
+                      ": a recording cut short, which rosbag reindex may recover)");
+        if (index_pos < kMagicSize)
+          corrupt(start, "the index position " + std::to_string(index_pos));
         continue;
       }
       switch (op) {
@@ -329,9 +334,8 @@ public:
           t.type = c->datatype;
           t.encoding = BagEncoding::Ros1;
           topics_.push_back(t);
-        } else if (topics_[it->second].type != c->datatype) {
-          throw Error(path + ": topic " + c->topic + " has messages of two types, " + topics_[it->second].type +
-                      " and " + c->datatype);
+        } else if (topics_[it->second].type != c->datatype) { // refused when it is read
+          mixed_[c->topic] = topics_[it->second].type + " and " + c->datatype;
         }
       }
       std::sort(topics_.begin(), topics_.end(), [](const BagTopic &a, const BagTopic &b) { return a.name < b.name; });
@@ -364,6 +368,9 @@ public:
                 names.end());
     if (names.empty() || options.end < options.start)
       return;
+    for (const std::string &n : options.topics) // (a read of every topic passes them as the first type)
+      if (mixed_.count(n))
+        throw Error(path_ + ": topic " + n + " has messages of two types, " + mixed_.at(n));
     std::int64_t last_good = INT64_MIN;
     std::uint64_t visited = 0;
     std::vector<std::uint8_t> buffer;
@@ -408,6 +415,7 @@ private:
   std::string path_;
   rosbag::Bag bag_;
   std::vector<BagTopic> topics_;
+  std::map<std::string, std::string> mixed_; // topics recorded with two types: "A and B"
 };
 
 } // namespace

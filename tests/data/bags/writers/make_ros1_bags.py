@@ -14,7 +14,8 @@ Bags (times are ROS times from T0 = 1700000000 s; tau = t - T0):
                  -> camera_link -> camera_optical_frame, REP 103's optical rotation); /joint_states
                  (wheel, pan_joint at 50 Hz over tau in [0.1, 0.9]).
   encodings.bag  lz4 chunks. 4 images in each of mono8, rgb8, bgr8, mono16, a JPEG and a PNG
-                 CompressedImage, each with its camera_info; /odom over tau in [0, 0.4].
+                 CompressedImage (/cam/NAME/image_raw[/compressed]), one /cam/camera_info for them
+                 all; /odom at 50 Hz over tau in [0, 0.4].
   camera_cases.bag  lz4. /cam/image_raw (mono8 16x12) with four camera_info topics: /cam/camera_info
                  (K changes at the third), /cam/fisheye_xyz_info (an unknown distortion model),
                  /cam/big_info (20x15), /cam/equidistant_info; /odom, /tf_static.
@@ -236,7 +237,10 @@ def encodings_bag(out, truth):
     bag = rosbag.Bag(os.path.join(out, "encodings.bag"), "w", compression="lz4")
     bag.write("/tf_static", TFMessage([transform(T0, a, b, p, q) for a, b, p, q in STATIC]), rt(T0))
     odom = []
-    write_odom(bag, [i / 100.0 for i in range(41)], odom)
+    write_odom(bag, [i / 50.0 for i in range(21)], odom)
+    for k in range(4):  # one camera_info for every encoding's topic
+        t = T0 + 0.05 + 0.1 * k
+        bag.write("/cam/camera_info", camera_info(t, "camera_optical_frame", 16, 12, 20.0), rt(t + 0.01))
     enc = {}
     for k in range(4):
         t = T0 + 0.05 + 0.1 * k
@@ -246,7 +250,6 @@ def encodings_bag(out, truth):
                                     ("mono16", pattern(k, 16, 12, 1, np.uint16), "mono16")]:
             m = raw_image(t, "camera_optical_frame", arr, encoding)
             bag.write("/cam/%s/image_raw" % name, m, rt(t + 0.01))
-            bag.write("/cam/%s/camera_info" % name, camera_info(t, "camera_optical_frame", 16, 12, 20.0), rt(t + 0.01))
             enc.setdefault(name, []).append({"stamp_ns": m.header.stamp.to_nsec(), "encoding": encoding,
                                              "step": m.step, "first_bytes": list(bytearray(m.data[:8]))})
         for name, ext in [("jpeg", ".jpg"), ("png", ".png")]:
@@ -258,7 +261,6 @@ def encodings_bag(out, truth):
             m.format = name
             m.data = data.tobytes()
             bag.write("/cam/%s/image_raw/compressed" % name, m, rt(t + 0.01))
-            bag.write("/cam/%s/camera_info" % name, camera_info(t, "camera_optical_frame", 16, 12, 20.0), rt(t + 0.01))
             enc.setdefault(name, []).append({"stamp_ns": m.header.stamp.to_nsec(), "bytes": len(m.data),
                                              "first_bytes": list(bytearray(m.data[:8]))})
     truth["encodings"] = enc
@@ -268,7 +270,7 @@ def encodings_bag(out, truth):
 def camera_cases_bag(out, truth):
     bag = rosbag.Bag(os.path.join(out, "camera_cases.bag"), "w", compression="lz4")
     odom = []
-    write_odom(bag, [i / 100.0 for i in range(31)], odom)
+    write_odom(bag, [i / 50.0 for i in range(16)], odom)
     bag.write("/tf_static", TFMessage([transform(T0, a, b, p, q) for a, b, p, q in STATIC]), rt(T0))
     for k in range(3):
         t = T0 + 0.05 + 0.1 * k
@@ -354,7 +356,7 @@ def measure_bag(out, truth):
 def fuzz_seeds(out):
     """Tiny bags for fuzz/corpus/ros1_bag: a few messages each, uncompressed and lz4, bz2."""
     os.makedirs(out, exist_ok=True)
-    for name, compression, topics in [("odom_image", "none", ("odom", "image")),
+    for name, compression, topics in [("odom_image", "none", ("odom", "image", "info")),
                                       ("tf_lz4", "lz4", ("tf", "joint")),
                                       ("info_bz2", "bz2", ("info", "pose"))]:
         bag = rosbag.Bag(os.path.join(out, name + ".bag"), "w", compression=compression)
