@@ -865,3 +865,47 @@ TEST_CASE("importBag: bad input, a one-line reason naming the bag, topic or fram
     fails(x, {x.bag + ": truncated or corrupt"});
   }
 }
+
+TEST_CASE("importBag: a pan joint about another axis than +Y (REP 103's z-up base_link)", "[bag]")
+{
+  // The same bag imported with the default axis and with --joint-axis 0,0,1 --joint-origin p: the
+  // camera's pose that yawdepth's model rebuilds from the second (wMv vMc(yaw), the yaw about v's +Y)
+  // is the first's body pose turned about the body's z axis through p by the joint's position.
+  TempDir dir;
+  BagImportOptions o = robotOptions(dir.file("y"));
+  o.joint_topic = "/joint_states";
+  o.joint = "pan_joint";
+  const BagImportResult plain = importBag(o);
+  // The writer's body turns about its z: the default axis gets the warning that names it.
+  REQUIRE(plain.warnings.size() == 1);
+  CHECK(contains(plain.warnings[0], "the body turns about"));
+  CHECK(contains(plain.warnings[0], "--joint-axis 0,0,1"));
+  o.out_dir = dir.file("z");
+  o.joint_axis = {0, 0, 2}; // any length
+  o.joint_origin = {0.1, -0.02, 0.3};
+  const BagImportResult rep103 = importBag(o);
+  CHECK(rep103.warnings.empty());
+  const MotionLog a = readMotionCsv(plain.motion_path), b = readMotionCsv(rep103.motion_path);
+  REQUIRE(a.samples.size() == b.samples.size());
+  REQUIRE(a.samples.size() >= 10);
+  const Eigen::Isometry3d bMc0 = isoOf(vpHomogeneousMatrix(*readRigFile(plain.rig_path).camera_pose));
+  const YawRig rig = rigOf(readRigFile(rep103.rig_path));
+  const Eigen::Vector3d p(0.1, -0.02, 0.3);
+  double worst_t = 0, worst_r = 0;
+  for (std::size_t i = 0; i < a.samples.size(); ++i) {
+    const double yaw = b.samples[i].yaw;
+    CHECK(yaw == a.samples[i].yaw);
+    Eigen::Isometry3d pan = Eigen::Isometry3d::Identity();
+    pan.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    pan.translation() = p - pan.linear() * p;
+    const Eigen::Isometry3d want = isoOf(wMv(a.samples[i])) * pan * bMc0;
+    const Eigen::Isometry3d got = isoOf(wMv(b.samples[i]) * rig.vMc(yaw));
+    worst_t = std::max(worst_t, (got.translation() - want.translation()).norm());
+    worst_r = std::max(worst_r, rotationError(got.linear(), want.linear()));
+  }
+  CHECK(worst_t < 1e-9);
+  CHECK(worst_r < 1e-9);
+  // A zero axis is refused, naming the option.
+  o.joint_axis = {0, 0, 0};
+  CHECK_THROWS_WITH(importBag(o), Catch::Contains("--joint-axis"));
+}

@@ -5,6 +5,7 @@
 
 #include "readers.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -101,33 +102,29 @@ struct Stamped {
    rotation taking +Y to the axis). */
 vpHomogeneousMatrix panFrame(const std::array<double, 3> &axis, const std::array<double, 3> &origin)
 {
-  const vpColVector y({0.0, 1.0, 0.0});
-  vpColVector a({axis[0], axis[1], axis[2]});
-  a.normalize();
-  const vpColVector v = vpColVector::crossProd(y, a);
-  const double s = v.frobeniusNorm(), c = vpColVector::dotProd(y, a);
-  vpRotationMatrix R; // identity
-  if (s > 1e-12)
-    R.buildFrom(vpThetaUVector(v[0] / s * std::atan2(s, c), v[1] / s * std::atan2(s, c), v[2] / s * std::atan2(s, c)));
-  else if (c < 0)
-    R.buildFrom(vpThetaUVector(M_PI, 0.0, 0.0));
-  return vpHomogeneousMatrix(vpTranslationVector(origin[0], origin[1], origin[2]), R);
+  const Eigen::Matrix3d R =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), Eigen::Vector3d(axis[0], axis[1], axis[2]))
+          .toRotationMatrix();
+  vpHomogeneousMatrix M;
+  for (unsigned i = 0; i < 3; ++i) {
+    for (unsigned j = 0; j < 3; ++j)
+      M[i][j] = R(i, j);
+    M[i][3] = origin[i];
+  }
+  return M;
 }
 
-/* The mean axis the vision frame turns about, in its own frame, over a pose series (weighted by each
-   step's angle), and the total angle. */
-vpColVector turnAxis(const std::vector<Stamped> &motion, double &total)
+/* The axis the vision frame turns about, in its own frame, summed over a pose series (each step's
+   rotation vector, its sign aligned with the running sum), and the total angle turned. */
+Eigen::Vector3d turnAxis(const std::vector<Stamped> &motion, double &total)
 {
-  vpColVector sum(3, 0.0);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   total = 0;
   for (std::size_t i = 1; i < motion.size(); ++i) {
     const vpThetaUVector tu((motion[i - 1].M.inverse() * motion[i].M).getRotationMatrix());
-    const double angle = std::sqrt(tu[0] * tu[0] + tu[1] * tu[1] + tu[2] * tu[2]);
-    total += angle;
-    // The sign of the axis is arbitrary for the comparison: align with the running sum.
-    const double d = tu[0] * sum[0] + tu[1] * sum[1] + tu[2] * sum[2];
-    for (unsigned k = 0; k < 3; ++k)
-      sum[k] += d < 0 ? -tu[k] : tu[k];
+    const Eigen::Vector3d w(tu[0], tu[1], tu[2]);
+    total += w.norm();
+    sum += w.dot(sum) < 0 ? Eigen::Vector3d(-w) : w;
   }
   return sum;
 }
@@ -511,7 +508,7 @@ BagImportResult importBag(const BagImportOptions &o)
     if (motion_topic)
       ro.topics.push_back(motion_topic->name);
     if (tf_motion)
-      ro.topics.push_back(kTf);
+      ro.topics.emplace_back(kTf);
     if (joint_topic)
       ro.topics.push_back(joint_topic->name);
     ro.start = s_start;
@@ -691,14 +688,17 @@ BagImportResult importBag(const BagImportOptions &o)
     // A robot that turns about another axis than the pan's (REP 103's z-up base_link with the
     // default +Y): the data reveal it, so say so.
     double turned = 0;
-    const vpColVector axis = turnAxis(motion, turned);
+    const Eigen::Vector3d axis = turnAxis(motion, turned);
     constexpr double kMinTurn = 0.1;           // rad, over the window
     constexpr double kMaxAxisAngle = M_PI / 9; // 20 degrees
-    if (turned > kMinTurn && axis.frobeniusNorm() > 0.5 * turned &&
-        std::abs(axis[1]) / axis.frobeniusNorm() < std::cos(kMaxAxisAngle)) {
-      const vpColVector b = bMv.getRotationMatrix() * (axis / axis.frobeniusNorm());
+    if (turned > kMinTurn && axis.norm() > 0.5 * turned && std::abs(axis.y()) < std::cos(kMaxAxisAngle) * axis.norm()) {
+      Eigen::Matrix3d R;
+      for (unsigned i = 0; i < 3; ++i)
+        for (unsigned j = 0; j < 3; ++j)
+          R(i, j) = bMv[i][j];
+      const Eigen::Vector3d b = R * axis.normalized();
       char buf[160];
-      std::snprintf(buf, sizeof buf, "(%.2f, %.2f, %.2f)", b[0], b[1], b[2]);
+      std::snprintf(buf, sizeof buf, "(%.2f, %.2f, %.2f)", b.x(), b.y(), b.z());
       r.warnings.push_back(path + ": the body turns about " + buf + " in " + body_frame +
                            ", not about the pan axis --joint-axis gives: for REP 103's z-up base_link give "
                            "--joint-axis 0,0,1 and the joint's position as --joint-origin");
