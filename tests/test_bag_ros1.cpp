@@ -909,3 +909,44 @@ TEST_CASE("importBag: a pan joint about another axis than +Y (REP 103's z-up bas
   o.joint_axis = {0, 0, 0};
   CHECK_THROWS_WITH(importBag(o), Catch::Contains("--joint-axis"));
 }
+
+TEST_CASE("importBag: a camera whose mount moves in /tf (a pan joint from robot_state_publisher)", "[bag]")
+{
+  // tests/data/bags/writers/make_moving_mount_bag.py: REP 103's z-up base_link, the pan link on /tf.
+  TempDir dir;
+  BagImportOptions o;
+  o.bag = kDir + "/moving_mount.bag";
+  o.out_dir = dir.file("mm");
+  o.image_topic = "/camera/image_raw";
+  o.odom_topic = "/odom";
+  o.joint_topic = "/joint_states";
+  o.joint = "pan_joint";
+  const BagImportResult r = importBag(o);
+  REQUIRE(r.warnings.size() == 1);
+  CHECK(contains(r.warnings[0], "moves in /tf, which holds the pan: /joint_states is not used"));
+  CHECK(r.images_matched == 20);
+  // The camera is the vision frame: camera_pose identity, each row the camera's pose in odom.
+  CHECK(isoOf(vpHomogeneousMatrix(*readRigFile(r.rig_path).camera_pose)).isApprox(Eigen::Isometry3d::Identity()));
+  const MotionLog log = readMotionCsv(r.motion_path);
+  REQUIRE(log.samples.size() == 20);
+  Eigen::Isometry3d pMc = Eigen::Isometry3d::Identity();
+  pMc.translation() = Eigen::Vector3d(0.05, 0, 0.05);
+  pMc.linear() = Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5).toRotationMatrix();
+  double worst_t = 0, worst_r = 0;
+  for (std::size_t i = 0; i < log.samples.size(); ++i) {
+    const double tau = stampOf(log.images[i]) - T0;
+    Eigen::Isometry3d oMb = Eigen::Isometry3d::Identity(), bMp = Eigen::Isometry3d::Identity();
+    oMb.translation() = Eigen::Vector3d(0.5 * tau, 0.1 * std::sin(tau), 0);
+    oMb.linear() = Eigen::AngleAxisd(0.3 * tau, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    bMp.translation() = Eigen::Vector3d(0.1, 0, 0.4);
+    bMp.linear() = Eigen::AngleAxisd(0.4 * std::sin(M_PI * tau), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Isometry3d want = oMb * bMp * pMc;
+    const Eigen::Isometry3d got = isoOf(wMv(log.samples[i]));
+    worst_t = std::max(worst_t, (got.translation() - want.translation()).norm());
+    worst_r = std::max(worst_r, rotationError(got.linear(), want.linear()));
+  }
+  WARN("a moving mount: the camera at the image times " << worst_t << " m, " << worst_r << " rad from the truth");
+  // The pan on /tf at 50 Hz, interpolated by tf2 (slerp): its curvature, 0.4 pi^2 rad/s^2 over 20 ms.
+  CHECK(worst_t < 1e-3);
+  CHECK(worst_r < 1e-3);
+}

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -441,6 +442,9 @@ BagImportResult importBag(const BagImportOptions &o)
   const BagTopic *static_topic = bag->topic(kTfStatic);
   if (static_topic && static_topic->type != "tf2_msgs/TFMessage")
     throw Error(path + ": " + kTfStatic + " is " + static_topic->type + ", not tf2_msgs/TFMessage");
+  // /tf is read with any motion source: it may hold a moving mount (a pan joint's link).
+  const BagTopic *tf_topic = bag->topic(kTf);
+  const bool read_tf = tf_motion || (tf_topic && tf_topic->type == "tf2_msgs/TFMessage");
 #ifndef YAWDEPTH_BAG_TF2
   if (tf_motion)
     throw Error("--tf: this build was made without tf2 (Debian: libtf2-dev)");
@@ -507,7 +511,7 @@ BagImportResult importBag(const BagImportOptions &o)
     ro.topics = {info_topic.name};
     if (motion_topic)
       ro.topics.push_back(motion_topic->name);
-    if (tf_motion)
+    if (read_tf)
       ro.topics.emplace_back(kTf);
     if (joint_topic)
       ro.topics.push_back(joint_topic->name);
@@ -595,9 +599,12 @@ BagImportResult importBag(const BagImportOptions &o)
   if (camera_frame.empty())
     throw Error(image_topic.name + ": the images have no frame_id: give --camera-frame");
 
-  // The motion from /tf, and the camera mount from /tf_static.
+  // The motion from /tf, and the camera mount from /tf_static (or, when the mount moves, from /tf at
+  // each image's time: `moving`).
   vpHomogeneousMatrix bMc;
+  bool moving_mount = false;
 #ifdef YAWDEPTH_BAG_TF2
+  std::unique_ptr<tf2::BufferCore> moving;
   {
     std::int64_t lo = INT64_MAX, hi = INT64_MIN;
     for (const TransformMessage &t : dynamics) {
@@ -605,7 +612,8 @@ BagImportResult importBag(const BagImportOptions &o)
       hi = std::max(hi, t.header.stamp);
     }
     const double span = hi >= lo ? toSec(hi - lo) : 0.0;
-    tf2::BufferCore buffer(ros::Duration(std::min(span + 10.0, 4e6)));
+    moving = std::make_unique<tf2::BufferCore>(ros::Duration(std::min(span + 10.0, 4e6)));
+    tf2::BufferCore &buffer = *moving;
     tf2::BufferCore static_buffer(ros::Duration(10.0));
     for (const TransformMessage &t : statics) {
       const std::string what = path + ": " + kTfStatic + ": " + t.header.frame_id + " -> " + t.child_frame_id;
@@ -613,15 +621,15 @@ BagImportResult importBag(const BagImportOptions &o)
       buffer.setTransform(toRos(t), "bag", true);
       static_buffer.setTransform(toRos(t), "bag", true);
     }
+    std::vector<std::int64_t> stamps;
+    for (const TransformMessage &t : dynamics) {
+      poseOf(t.translation, t.rotation, path + ": /tf: " + t.header.frame_id + " -> " + t.child_frame_id);
+      buffer.setTransform(toRos(t), "bag", false);
+      stamps.push_back(t.header.stamp);
+    }
     if (tf_motion) {
       world_frame = o.tf_world;
       body_frame = o.tf_body;
-      std::vector<std::int64_t> stamps;
-      for (const TransformMessage &t : dynamics) {
-        poseOf(t.translation, t.rotation, path + ": /tf: " + t.header.frame_id + " -> " + t.child_frame_id);
-        buffer.setTransform(toRos(t), "bag", false);
-        stamps.push_back(t.header.stamp);
-      }
       std::string err;
       if (!buffer._frameExists(o.tf_world) || !buffer._frameExists(o.tf_body) ||
           !buffer.canTransform(o.tf_world, o.tf_body, ros::Time(0), &err))
@@ -660,11 +668,21 @@ BagImportResult importBag(const BagImportOptions &o)
       if (!static_topic)
         throw Error(path + ": no " + kTfStatic + " topic for the camera's mount " + body_frame + " -> " + camera_frame +
                     "; the bag has: " + bag->topicList());
-      if (!static_buffer._frameExists(body_frame) || !static_buffer._frameExists(camera_frame) ||
-          !static_buffer.canTransform(body_frame, camera_frame, ros::Time(0), &err))
+      if (static_buffer._frameExists(body_frame) && static_buffer._frameExists(camera_frame) &&
+          static_buffer.canTransform(body_frame, camera_frame, ros::Time(0), &err)) {
+        bMc = fromRos(static_buffer.lookupTransform(body_frame, camera_frame, ros::Time(0)), path + ": /tf_static");
+      } else if (!dynamics.empty() && buffer._frameExists(body_frame) && buffer._frameExists(camera_frame) &&
+                 buffer.canTransform(body_frame, camera_frame, ros::Time(0), &err)) {
+        // The chain passes through /tf's moving links (a pan joint published by robot_state_publisher):
+        // the camera's own pose is the motion, bMc looked up at each image's time.
+        moving_mount = true;
+        if (joint_topic)
+          r.warnings.push_back(path + ": the camera's mount " + body_frame + " -> " + camera_frame +
+                               " moves in /tf, which holds the pan: " + joint_topic->name + " is not used");
+      } else {
         throw Error(path + ": " + kTfStatic + ": no chain from " + body_frame + " to the camera frame " + camera_frame +
-                    " (frames: " + framesOf(static_buffer) + ")");
-      bMc = fromRos(static_buffer.lookupTransform(body_frame, camera_frame, ros::Time(0)), path + ": /tf_static");
+                    " (frames: " + framesOf(static_buffer) + "; with /tf: " + framesOf(buffer) + ")");
+      }
     }
   }
 #else
@@ -679,8 +697,9 @@ BagImportResult importBag(const BagImportOptions &o)
   std::stable_sort(motion.begin(), motion.end(), [](const Stamped &a, const Stamped &b) { return a.t < b.t; });
   motion.erase(std::unique(motion.begin(), motion.end(), [](const Stamped &a, const Stamped &b) { return a.t == b.t; }),
                motion.end());
+  const bool use_joint = joint_topic && !moving_mount;
   // With a pan joint, the vision frame on the joint's axis (see BagImportOptions::joint_axis).
-  if (joint_topic) {
+  if (use_joint) {
     const vpHomogeneousMatrix bMv = panFrame(o.joint_axis, o.joint_origin);
     for (Stamped &x : motion)
       x.M = x.M * bMv;
@@ -801,7 +820,30 @@ BagImportResult importBag(const BagImportOptions &o)
   r.skipped_after = a.after;
   r.skipped_gap = a.in_gap;
   MotionLog out = std::move(a.log);
-  if (joint_topic) {
+#ifdef YAWDEPTH_BAG_TF2
+  if (moving_mount) { // each image's camera pose: wMb bMc(t), the mount looked up at the image's time
+    MotionLog kept;
+    for (std::size_t i = 0; i < out.samples.size(); ++i) {
+      ros::Time t;
+      t.fromNSec(std::uint64_t(std::max<std::int64_t>(std::llround(out.times[i] * 1e9), 0)));
+      vpHomogeneousMatrix bMc_t;
+      try {
+        bMc_t = fromRos(moving->lookupTransform(body_frame, camera_frame, t), path + ": /tf");
+      } catch (const tf2::TransformException &) {
+        ++r.skipped_gap; // outside the moving links' readings: no mount there
+        continue;
+      }
+      kept.samples.push_back(MotionSample::fromPose(long(kept.samples.size()), wMv(out.samples[i]) * bMc_t, 0.0));
+      kept.images.push_back(out.images[i]);
+      kept.times.push_back(out.times[i]);
+    }
+    if (kept.samples.empty())
+      throw Error(path + ": /tf: no image has the mount " + body_frame + " -> " + camera_frame + " at its time");
+    kept.yaw_column = false;
+    out = std::move(kept);
+  }
+#endif
+  if (use_joint) {
     MotionLog kept;
     kept.yaw_column = true;
     for (std::size_t i = 0; i < out.samples.size(); ++i) {
