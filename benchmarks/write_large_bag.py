@@ -3,7 +3,8 @@
 robot's recording as a camera driver and odometry write it. /camera/image_raw mono8 640x480 at
 30 Hz (windows of a real photograph, ViSP's Solvay image, sliding 2 px per frame, so that PNG
 encoding meets real content), /camera/camera_info at 30 Hz, /odom at 100 Hz, /tf_static once.
-usage: write_large_bag.py OUT.bag SIZE_MB"""
+usage: write_large_bag.py OUT.bag SIZE_MB
+       write_large_bag.py --raw OUT.raw   (the photo's gray pixels, for write_large_mcap.mjs; prints W H)"""
 import math
 import sys
 
@@ -15,11 +16,15 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image
 from tf2_msgs.msg import TFMessage
 
-out, size_mb = sys.argv[1], float(sys.argv[2])
 photo = cv2.imread('/usr/share/visp-images-data/ViSP-images/Solvay/Solvay_conference_1927_Version2_1280x881.jpg',
                    cv2.IMREAD_GRAYSCALE)
 if photo is None:
     sys.exit('write_large_bag.py: the Solvay photo of visp-images-data is missing')
+if sys.argv[1] == '--raw':  # the photo's gray pixels for write_large_mcap.mjs, and its size
+    open(sys.argv[2], 'wb').write(photo.tobytes())
+    print(photo.shape[1], photo.shape[0])
+    sys.exit(0)
+out, size_mb = sys.argv[1], float(sys.argv[2])
 W, H, T0 = 640, 480, 1700000000.0
 
 
