@@ -48,7 +48,7 @@ struct BagTopic {
   /*! The message type, ROS 1 spelling ("sensor_msgs/Image"): a ROS 2 "sensor_msgs/msg/Image" is
       given without its "/msg". */
   std::string type;
-  BagEncoding encoding = BagEncoding::Ros1;
+  BagEncoding encoding = BagEncoding::Ros1; //!< how its messages are serialized
   std::uint64_t messages = 0; //!< count (from the bag's index or summary; 0 when it has none)
 };
 
@@ -57,7 +57,7 @@ struct BagMessage {
   const BagTopic *topic = nullptr; //!< its topic (one of BagReader::topics())
   std::int64_t log_time = 0;       //!< when the recorder received it (ns)
   const std::uint8_t *data = nullptr; //!< the serialized message
-  std::size_t size = 0;
+  std::size_t size = 0;               //!< its length (bytes)
 };
 
 /*! \brief Which messages to read. */
@@ -75,6 +75,7 @@ struct BagReadOptions {
 class BagReader {
 public:
   virtual ~BagReader() = default;
+  /*! \brief The container. */
   virtual BagFormat format() const = 0;
   /*! \brief The bag's path as given (folders: the folder). */
   virtual const std::string &path() const = 0;

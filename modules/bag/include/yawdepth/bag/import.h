@@ -29,7 +29,8 @@ struct BagImportOptions {
   /*! The motion, exactly one of: */
   std::string odom_topic;         //!< nav_msgs/Odometry
   std::string pose_topic;         //!< geometry_msgs/PoseStamped or PoseWithCovarianceStamped
-  std::string tf_world, tf_body;  //!< `--tf WORLD:BODY`: BODY's pose in WORLD from `/tf` (+ `/tf_static`)
+  std::string tf_world;           //!< `--tf WORLD:BODY`'s WORLD: BODY's pose in WORLD from `/tf` (+ `/tf_static`)
+  std::string tf_body;            //!< `--tf WORLD:BODY`'s BODY
   std::string camera_frame;       //!< empty: the images' `frame_id`
   std::string joint_topic;        //!< sensor_msgs/JointState with the pan joint, or empty
   std::string joint;              //!< the pan joint's name in joint_topic (required with it)
@@ -57,11 +58,18 @@ struct BagImportResult {
   std::string camera_path;   //!< `camera.yaml`: the ROS camera_info YAML of the first `camera_info`
   std::string rig_path;      //!< `rig.yaml`: `camera_pose` (bMc, or vMc with a joint, from /tf_static; identity when camera frame = body)
   std::vector<std::string> topics_used; //!< "topic (type): N messages" for each topic read
-  std::size_t images_read = 0, images_kept = 0, images_matched = 0;
-  std::size_t skipped_before = 0, skipped_after = 0, skipped_gap = 0;
-  std::size_t poses = 0, joint_readings = 0;
-  double image_first = 0, image_last = 0;   //!< the images' stamps (s)
-  double motion_first = 0, motion_last = 0; //!< the motion samples' stamps (s)
+  std::size_t images_read = 0;    //!< images in the window
+  std::size_t images_kept = 0;    //!< kept by `--every`
+  std::size_t images_matched = 0; //!< given a pose (and a joint reading): written
+  std::size_t skipped_before = 0; //!< before the motion's (or the joint's) first sample
+  std::size_t skipped_after = 0;  //!< after its last
+  std::size_t skipped_gap = 0;    //!< in a gap over max_pose_gap (or outside a moving mount's readings)
+  std::size_t poses = 0;          //!< motion samples read
+  std::size_t joint_readings = 0; //!< pan joint readings read
+  double image_first = 0;         //!< the first image's stamp (s)
+  double image_last = 0;          //!< the last image's stamp (s)
+  double motion_first = 0;        //!< the first motion sample's stamp (s)
+  double motion_last = 0;         //!< the last motion sample's stamp (s)
   std::vector<std::string> warnings;        //!< e.g. camera_info changing during the bag
   /*! \brief The summary import-bag prints: topics used, message counts, time spans, images matched and skipped. */
   std::string summary() const;
