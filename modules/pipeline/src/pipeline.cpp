@@ -34,6 +34,17 @@ bool unusableObservation(const CameraModel &camera, const Observation &ob)
   return !camera.undistort(Eigen::Vector2d(ob.u, ob.v), m);
 }
 
+/* The tracks without the observations no method can use (a track left with none is kept empty). */
+std::vector<Track> usableTracks(const CameraModel &camera, const std::vector<Track> &tracks)
+{
+  std::vector<Track> out = tracks;
+  for (Track &t : out)
+    t.observations.erase(std::remove_if(t.observations.begin(), t.observations.end(),
+                                        [&](const Observation &ob) { return unusableObservation(camera, ob); }),
+                         t.observations.end());
+  return out;
+}
+
 /* WindowOptions or RefineOptions with what the pipeline's options share with them. */
 template <class Options> Options jointOptions(const PipelineOptions &p)
 {
@@ -310,7 +321,8 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
                          "pixel noise, or let the residual check scale them)");
   }
   if (whole_track)
-    for (const pipeline_detail::RigDoubt &d : pipeline_detail::rigDoubts(camera, rig, motion, tracks, options))
+    for (const pipeline_detail::RigDoubt &d :
+         pipeline_detail::rigDoubts(camera, rig, motion, usableTracks(camera, tracks), options))
       r.warnings.push_back("with " + d.what + " flipped the tracks fit better (residuals " + figure(d.s0_alternative) +
                            (std::isfinite(d.s0_given) ? " instead of " + figure(d.s0_given) + " times the noise model"
                                                       : " times the noise model, where as given most tracks do not fit") +
