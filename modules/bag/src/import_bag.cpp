@@ -8,6 +8,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <stdlib.h> // mkdtemp
+#include <cstring>
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -15,7 +18,6 @@
 #include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <random>
 #include <set>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpQuaternionVector.h>
@@ -50,12 +52,6 @@ std::string sec(double s)
   return t;
 }
 double toSec(std::int64_t ns) { return double(ns) * 1e-9; }
-std::string stampText(std::int64_t ns)
-{
-  char t[64];
-  std::snprintf(t, sizeof t, "%.9f", toSec(ns));
-  return t;
-}
 
 /* The pose of a position and quaternion; throws for a quaternion that is not one. */
 vpHomogeneousMatrix poseOf(const std::array<double, 3> &p, const std::array<double, 4> &q, const std::string &what)
@@ -223,13 +219,6 @@ struct TempDir {
   }
 };
 
-std::string randomSuffix()
-{
-  std::random_device rd;
-  char s[16];
-  std::snprintf(s, sizeof s, "%08x", unsigned(rd()));
-  return s;
-}
 
 #ifdef YAWDEPTH_BAG_TF2
 geometry_msgs::TransformStamped toRos(const TransformMessage &t)
@@ -298,11 +287,11 @@ DecodedImage decodeRaw(const BagMessage &m)
     throw Error(m.topic->name + ": image encoding '" + e +
                 "' (import-bag reads mono8, rgb8, bgr8, mono16 and CompressedImage jpeg or png)");
   if (im.width == 0 || im.height == 0 || im.width > 65535 || im.height > 65535)
-    throw Error(m.topic->name + ": message at t = " + stampText(m.log_time) + " s: an image of " +
+    throw Error(bag_detail::messageWhere(m) + "an image of " +
                 std::to_string(im.width) + " x " + std::to_string(im.height) + " pixels");
   if (std::uint64_t(im.step) < std::uint64_t(im.width) * bytes_per_pixel ||
       std::uint64_t(im.step) * im.height > im.data.size())
-    throw Error(m.topic->name + ": message at t = " + stampText(m.log_time) + " s: " + std::to_string(im.data.size()) +
+    throw Error(bag_detail::messageWhere(m) + std::to_string(im.data.size()) +
                 " bytes of data for " + std::to_string(im.height) + " rows of " + std::to_string(im.step) +
                 " bytes (step) and " + std::to_string(im.width) + " " + e + " pixels");
   cv::Mat view(int(im.height), int(im.width), type, im.data.data(), im.step);
@@ -326,7 +315,7 @@ DecodedImage decodeCompressed(const BagMessage &m)
   d.stamp = cm.header.stamp;
   d.frame_id = cm.header.frame_id;
   const std::vector<std::uint8_t> &b = cm.data;
-  const std::string where = m.topic->name + ": message at t = " + stampText(m.log_time) + " s: ";
+  const std::string where = bag_detail::messageWhere(m);
   if (b.size() >= 8 && b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G')
     d.ext = ".png";
   else if (b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF)
@@ -591,7 +580,7 @@ BagImportResult importBag(const BagImportOptions &o)
   const CameraModel camera = cameraOf(*info, info_topic.name);
   if (info_changed)
     r.warnings.push_back(info_topic.name + ": camera_info changes during the bag (first at t = " +
-                         stampText(info_changed_at) + " s): camera.yaml is the first one's");
+                         bag_detail::secondsText(info_changed_at) + " s): camera.yaml is the first one's");
   if (!o.pose_topic.empty() && world_frame.empty())
     world_frame = "?";
 
@@ -745,8 +734,13 @@ BagImportResult importBag(const BagImportOptions &o)
         fs::remove(dir, e);
     }
   } out_guard{o.out_dir, !out_existed};
-  TempDir stage;
-  stage.path = fs::path(o.out_dir) / (".import-bag." + randomSuffix());
+  TempDir stage; // created by mkdtemp: unique, never another run's
+  {
+    std::string templ = (fs::path(o.out_dir) / ".import-bag.XXXXXX").string();
+    if (!::mkdtemp(templ.data()))
+      throw Error("--out-dir " + o.out_dir + ": cannot create a staging folder in it: " + std::strerror(errno));
+    stage.path = templ;
+  }
   const fs::path stage_images = stage.path / "images";
   fs::create_directories(stage_images, ec);
   if (ec)
@@ -769,18 +763,18 @@ BagImportResult importBag(const BagImportOptions &o)
         return true;
       DecodedImage d = compressed ? decodeCompressed(m) : decodeRaw(m);
       if (d.width != int(info->width) || d.height != int(info->height))
-        throw Error(image_topic.name + ": the image at t = " + stampText(d.stamp) + " s is " + std::to_string(d.width) +
+        throw Error(image_topic.name + ": the image at t = " + bag_detail::secondsText(d.stamp) + " s is " + std::to_string(d.width) +
                     " x " + std::to_string(d.height) + " pixels, " + info_topic.name + " says " +
                     std::to_string(info->width) + " x " + std::to_string(info->height));
       if (o.camera_frame.empty() && d.frame_id != image_frame)
-        throw Error(image_topic.name + ": the image at t = " + stampText(d.stamp) + " s is in frame " + d.frame_id +
+        throw Error(image_topic.name + ": the image at t = " + bag_detail::secondsText(d.stamp) + " s is in frame " + d.frame_id +
                     ", the first one in " + image_frame + ": give --camera-frame");
       if (d.stamp <= 0)
-        throw Error(image_topic.name + ": the image logged at t = " + stampText(m.log_time) + " s has no stamp");
+        throw Error(image_topic.name + ": the image logged at t = " + bag_detail::secondsText(m.log_time) + " s has no stamp");
       const std::string name = std::to_string(d.stamp) + d.ext;
       const fs::path file = stage_images / name;
       if (fs::exists(file))
-        throw Error(image_topic.name + ": two images with the stamp " + stampText(d.stamp) + " s");
+        throw Error(image_topic.name + ": two images with the stamp " + bag_detail::secondsText(d.stamp) + " s");
       if (compressed) {
         writeFileAtomically(file.string(), std::string(d.bytes.begin(), d.bytes.end()));
       } else {

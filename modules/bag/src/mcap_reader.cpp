@@ -54,12 +54,6 @@ std::string opName(std::uint8_t op)
   return s;
 }
 
-std::string seconds(std::int64_t ns)
-{
-  char t[64];
-  std::snprintf(t, sizeof t, "%.9f", double(ns) * 1e-9);
-  return t;
-}
 
 /* MCAP's CRC-32 is zlib's (the IEEE polynomial). */
 std::uint32_t crc32(std::uint32_t crc, const std::uint8_t *p, std::size_t n)
@@ -347,7 +341,7 @@ private:
   [[noreturn]] void truncated(const McapFile &f, std::uint64_t needed, const std::string &in) const
   {
     throw Error(f.path + ": truncated at byte " + std::to_string(f.size) + " of " + std::to_string(needed) + " (in " +
-                in + "); " + (have_last_ ? "last message read at t = " + seconds(last_) + " s" : "no message read"));
+                in + "); " + (have_last_ ? "last message read at t = " + secondsText(last_) + " s" : "no message read"));
   }
 
   /* Schema, Channel and Message records (in the data section or a chunk). Returns false to stop. */

@@ -7,11 +7,16 @@
 namespace yawdepth {
 namespace bag_detail {
 
-std::string messageWhere(const BagMessage &m)
+std::string secondsText(std::int64_t ns)
 {
   char t[64];
-  std::snprintf(t, sizeof t, "%.9f", double(m.log_time) * 1e-9);
-  return (m.topic ? m.topic->name : std::string("?")) + ": message at t = " + t + " s: ";
+  std::snprintf(t, sizeof t, "%.9f", double(ns) * 1e-9);
+  return t;
+}
+
+std::string messageWhere(const BagMessage &m)
+{
+  return (m.topic ? m.topic->name : std::string("?")) + ": message at t = " + secondsText(m.log_time) + " s: ";
 }
 
 void requireType(const BagMessage &m, std::initializer_list<const char *> types)

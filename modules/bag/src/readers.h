@@ -16,6 +16,8 @@ std::unique_ptr<BagReader> openRos1(const std::string &path);
 std::unique_ptr<BagReader> openMcap(const std::string &path, const std::vector<std::string> &files);
 std::unique_ptr<BagReader> openDb3(const std::string &path, const std::vector<std::string> &files);
 
+/*! A ROS time (ns) as seconds with nine decimals, for the messages. */
+std::string secondsText(std::int64_t ns);
 /*! "<topic>: message at t = <log time> s: " for the decoders' messages. */
 std::string messageWhere(const BagMessage &m);
 /*! Throws unless the message's topic has one of `types` (ROS 1 spelling). */

@@ -34,12 +34,6 @@ constexpr std::uint64_t kMaxChunk = std::uint64_t(256) << 20; // a chunk, uncomp
 
 enum Op : std::uint8_t { kMsgData = 0x02, kBagHeader = 0x03, kIndexData = 0x04, kChunk = 0x05, kChunkInfo = 0x06, kConnection = 0x07 };
 
-std::string seconds(std::int64_t ns)
-{
-  char t[64];
-  std::snprintf(t, sizeof t, "%.9f", double(ns) * 1e-9);
-  return t;
-}
 
 std::uint32_t le32(const std::uint8_t *p) { return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24; }
 std::uint64_t le64(const std::uint8_t *p) { return std::uint64_t(le32(p)) | std::uint64_t(le32(p + 4)) << 32; }
@@ -406,7 +400,7 @@ public:
       if (in_visit)
         throw;
       throw Error(path_ + ": truncated or corrupt: " + e.what() + " (after " + std::to_string(visited) + " messages" +
-                  (last_good == INT64_MIN ? std::string() : ", last good message at t = " + seconds(last_good) + " s") +
+                  (last_good == INT64_MIN ? std::string() : ", last good message at t = " + secondsText(last_good) + " s") +
                   ")");
     }
   }
