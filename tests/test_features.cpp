@@ -145,6 +145,45 @@ TEST_CASE("renderer: exact coverage, background and determinism", "[render]") {
   CHECK_THROWS_AS(renderBoard(CameraModel::brown(800, 800, 320, 240, {}), rig, s, b, wMb), yawdepth::Error);
 }
 
+TEST_CASE("renderer: the textured wall around the board, fixed to its plane", "[render]") {
+  constexpr int kMinWallContrast = 30; // gray levels: the texture's standard deviation at least this
+  constexpr int kShiftPx = 10;         // a 10 mm sideways step at 0.8 m and f = 800 px
+  const CameraModel cam = CameraModel::brown(800, 800, 320, 240, {}, 640, 480);
+  const YawRig rig;
+  MotionSample s;
+  BoardLayout b;
+  b.pattern = PatternSpec::parse("chessboard:5x4:0.02");
+  Eigen::Isometry3d wMb = Eigen::Isometry3d::Identity();
+  wMb.translation() = Eigen::Vector3d(-19.75 * 0.001, -19.5 * 0.001, 0.8);
+  RenderOptions plain, walled;
+  walled.wall_texel = 0.02;
+  walled.wall_seed = 5;
+  const cv::Mat a = renderBoard(cam, rig, s, b, wMb, plain), w = renderBoard(cam, rig, s, b, wMb, walled);
+  // The board is unchanged (away from its outline, where the wall is mixed in).
+  cv::Mat board_mask;
+  cv::erode(a != 110, board_mask, cv::Mat::ones(5, 5, CV_8U));
+  REQUIRE(cv::countNonZero(board_mask) > 10000);
+  CHECK(cv::countNonZero((a != w) & board_mask) == 0);
+  // Beyond it, a texture with contrast.
+  cv::Mat mean, sd;
+  cv::meanStdDev(w, mean, sd, a == 110);
+  CHECK(sd.at<double>(0) > kMinWallContrast);
+  // Fixed to the wall: a sideways step shifts the image by exactly kShiftPx; another seed, another wall.
+  MotionSample moved = s;
+  moved.x = kShiftPx * 0.8 / 800;
+  const cv::Mat w2 = renderBoard(cam, rig, moved, b, wMb, walled);
+  cv::Mat diff;
+  cv::absdiff(w2(cv::Rect(0, 0, 640 - kShiftPx, 480)), w(cv::Rect(kShiftPx, 0, 640 - kShiftPx, 480)), diff);
+  double worst = 0;
+  cv::minMaxLoc(diff, nullptr, &worst);
+  CHECK(worst <= 1);
+  walled.wall_seed = 6;
+  CHECK(cv::countNonZero(renderBoard(cam, rig, s, b, wMb, walled) != w) > 100000);
+  RenderOptions bad;
+  bad.wall_texel = -1;
+  CHECK_THROWS_AS(checkRenderOptions(cam, bad), yawdepth::Error);
+}
+
 namespace {
 
 /*! Detect the board in `img` as frame `frame`, requiring it found with `expected` features (a failure

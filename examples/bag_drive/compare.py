@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """One table row: a `yawdepth measure` result of the drive against the rendering's truth.
 
-    compare.py NAME MOTION_CSV POINTS_CSV REPORT_DIR MEASURE_STDERR SIM_DIR STAMPS_CSV
+    compare.py NAME MOTION_CSV POINTS_CSV REPORT_DIR MEASURE_STDERR SIM_DIR STAMPS_CSV [wall]
 
 MOTION_CSV is the frame-based log measure read (simulate's own, or import-bag's); its image column
 names each frame's image, either simulate's frame_NNNN.png or import-bag's <stamp ns>.png, which
@@ -11,6 +11,11 @@ moved through the true poses (motion_truth.csv, the rig of the truth: camera_off
 SIM_DIR's first camera frame in truth.csv). Prints: input, images in the log, images where the board
 was found, points ok, depth RMSE (mm), median |depth error| / sigma_zc, the RMS distance of the board's corners from
 their true places in the world (mm), block length median (mm).
+With `wall` the points are natural features (`measure --features klt`) on the textured wall the
+board hangs on: each ok point's true depth is where its ray (from the true camera, through the
+measured point) meets the board's plane (fitted exactly through the true corners). Prints: input,
+images in the log, points, points ok, depth RMSE (mm), median |depth error| / sigma_zc, the share
+of ok points within 2 sigma_zc, the largest |depth error| / depth (%), the warnings measure printed.
 Standard library only.
 """
 import csv
@@ -79,6 +84,9 @@ def main():
         if offset is None:  # v = R_y(yaw) (c + t0)
             offset = [a - b for a, b in zip(mtv(roty(yaw), v), c)]
 
+    if len(sys.argv) > 8 and sys.argv[8] == "wall":
+        wall_row(name, points, err, world, offset, pose, frame_of, n_images)
+        return
     errors, ratios, ok = [], [], 0
     for r in csv.DictReader(open(points)):
         if r["status"] != "ok":
@@ -113,6 +121,47 @@ def main():
     rmse = math.sqrt(sum(e * e for e in errors) / len(errors)) * 1000 if errors else float("nan")
     med = statistics.median(ratios) if ratios else float("nan")
     print(f"| {name} | {n_images} | {found} | {ok} | {rmse:.3f} | {med:.2f} | {wrms:.2f} | {block} |")
+
+
+def sub(a, b):
+    return [x - y for x, y in zip(a, b)]
+
+
+def dot(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def wall_row(name, points, err, world, offset, pose, frame_of, n_images):
+    """The natural features' row: each ok point against the wall plane through the true corners."""
+    ids = sorted(world)
+    q = world[ids[0]]
+    normal = max((cross(sub(world[a], q), sub(world[b], q)) for a in ids for b in ids),
+                 key=lambda n: dot(n, n))  # the two corners spanning the largest triangle with the first
+    errors, ratios, rel, total, ok = [], [], [], 0, 0
+    for r in csv.DictReader(open(points)):
+        total += 1
+        if r["status"] != "ok":
+            continue
+        ok += 1
+        R, p, yaw = pose(frame_of[int(r["frame"])])
+        c = [float(r[k]) for k in ("xc", "yc", "zc")]
+        to_world = lambda cam: [a + b for a, b in zip(mv(R, mv(roty(yaw), [x + t for x, t in zip(cam, offset)])), p)]
+        centre, through = to_world([0, 0, 0]), to_world(c)
+        s = dot(normal, sub(q, centre)) / dot(normal, sub(through, centre))  # the ray meets the wall at s
+        e = c[2] - s * c[2]
+        errors.append(e)
+        ratios.append(abs(e) / float(r["sigma_zc"]) if float(r["sigma_zc"]) > 0 else float("inf"))
+        rel.append(abs(e) / (s * c[2]))
+    warnings = sum(1 for line in open(err) if "warning:" in line)
+    rmse = math.sqrt(sum(e * e for e in errors) / len(errors)) * 1000 if errors else float("nan")
+    med = statistics.median(ratios) if ratios else float("nan")
+    within = sum(1 for x in ratios if x <= 2) / len(ratios) if ratios else float("nan")
+    worst = max(rel) * 100 if rel else float("nan")
+    print(f"| {name} | {n_images} | {total} | {ok} | {rmse:.3f} | {med:.2f} | {within:.2f} | {worst:.2f} | {warnings} |")
 
 
 if __name__ == "__main__":

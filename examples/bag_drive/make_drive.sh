@@ -37,7 +37,7 @@ rm -rf "$out"
 mkdir -p "$out"
 "$y" simulate --camera "$cam" --rig "$rig" --out-dir "$out/sim" --frames "$frames" \
   --step "$(per 0.35)" --yaw 1.36 --yaw-rate "$(per 0.35)" --turn-rate "$(per 0.07)" \
-  --pattern chessboard:5x4:0.02 --board-distance 0.62 --board-offset-x -0.06 --blur 0.7 --image-noise 2 \
+  --pattern chessboard:5x4:0.02 --board-distance 0.62 --board-offset-x -0.06 --wall 0.03 --blur 0.7 --image-noise 2 \
   --sigma-odom 0.0002 --seed 3 >/dev/null
 /usr/bin/python3 "$here/drive_plan.py" "$out/sim" "$cam" "$rig" "$out/plan"
 status=0

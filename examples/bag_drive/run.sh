@@ -18,9 +18,11 @@
 # corners from their true places in the odometry's world (mm: at constant velocity a wrong time
 # offset leaves the depths but moves the board, 4 mm for the 40 ms latency), median block length
 # (mm; 20 is the board's). A last row imports the ROS 1 bag without --time-offset, which must come
-# out worse (the latency is in the bag). Exit status 1 when a bag's depth RMSE or world RMS exceeds
-# the 6-DoF direct files' by more than 10 %, it has fewer points ok, or the last row is not worse;
-# 77 when a writer's prerequisites (make_drive.sh) or `yawdepth import-bag` are missing.
+# out worse (the latency is in the bag). A second table measures the textured wall the board hangs on
+# by natural features (measure --features klt) from the same inputs, against the wall's plane
+# (compare.py wall): each bag within 10 % of the direct files' depth RMSE, and no warning.
+# Exit status 1 when a bag's depth RMSE or world RMS exceeds the 6-DoF direct files' by more than
+# 10 %, it has fewer points ok, the last row is not worse, or the wall's check fails; 77 when a writer's prerequisites (make_drive.sh) or `yawdepth import-bag` are missing.
 set -uo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 y=${1:?usage: run.sh YAWDEPTH [WORKDIR] [FRAMES]}
@@ -66,8 +68,23 @@ measure() { # NAME CAMERA RIG MOTION
   fi
   rows+=("$(python3 "$here/compare.py" "$name" "$4" "$f.points.csv" "$f.report" "$f.measure.log" "$sim" "$stamps")")
 }
+# The textured wall around the board, measured by natural features (`measure --features klt`, the
+# defaults: fused, the residual check on) from the same images.
+wall_rows=()
+measure_wall() { # NAME CAMERA RIG MOTION
+  local name=$1 f
+  f=$(slug "$name")
+  if ! "$y" measure --camera "$2" --rig "$3" --motion "$4" --features klt "${noise[@]}" \
+    --out "$f.klt.csv" >"$f.klt.log" 2>&1; then
+    echo "run.sh: $name: measure --features klt failed:" >&2; tail -3 "$f.klt.log" >&2
+    failed=1; return 1
+  fi
+  wall_rows+=("$(python3 "$here/compare.py" "$name" "$4" "$f.klt.csv" "$f.report" "$f.klt.log" "$sim" "$stamps" wall)")
+}
 measure "simulate's files (planar)" "$here/../../calib/paper_camera.xml" "$here/../../calib/paper_rig.yaml" "$sim/motion.csv"
 measure "simulate's files (6-DoF)" "$here/../../calib/paper_camera.xml" "$here/../../calib/paper_rig.yaml" "$sim/motion_6dof.csv"
+measure_wall "simulate's files (planar)" "$here/../../calib/paper_camera.xml" "$here/../../calib/paper_rig.yaml" "$sim/motion.csv"
+measure_wall "simulate's files (6-DoF)" "$here/../../calib/paper_camera.xml" "$here/../../calib/paper_rig.yaml" "$sim/motion_6dof.csv"
 
 bag_input() { # NAME BAG IMAGE_TOPIC POSE_ARGS...
   local name=$1 bag=$2 topic=$3; shift 3
@@ -80,6 +97,7 @@ bag_input() { # NAME BAG IMAGE_TOPIC POSE_ARGS...
     failed=1; return 1
   fi
   measure "$name" "$d/camera.yaml" "$d/rig.yaml" "$d/motion.csv"
+  [ -n "${offset:-}" ] || measure_wall "$name" "$d/camera.yaml" "$d/rig.yaml" "$d/motion.csv"
 }
 bag_input "ROS 1 bag, image_raw" "$w/drive/drive.bag" /camera/image_raw --odom-topic /odom
 bag_input "ROS 1 bag, compressed" "$w/drive/drive.bag" /camera/image_raw/compressed --odom-topic /odom
@@ -112,5 +130,28 @@ printf '%s\n' "${rows[@]}" | awk -F'|' '
   }
   END { if (!lat) { print "run.sh: FAIL: the import without --time-offset did not run"; bad = 1 }
         if (n != 5) { print "run.sh: FAIL: " n " of 5 bag inputs measured"; bad = 1 } exit bad }' || failed=1
-[ "$failed" -eq 0 ] && echo "run.sh: every bag within 10 % of the direct files' depth and world RMS, and worse without the time offset ($w)"
+echo
+echo "The wall, natural features (measure --features klt):"
+echo
+echo "| input | images | points | points ok | depth RMSE (mm) | median abs(error)/sigma | within 2 sigma | worst abs(error)/depth (%) | warnings |"
+echo "|---|---|---|---|---|---|---|---|---|"
+printf '%s\n' "${wall_rows[@]}"
+# The check: each bag against the 6-DoF direct row (columns: 5 points ok, 6 depth RMSE, 10
+# warnings): at least 98 % of its points ok, the depth RMSE within 10 %, no warning on any row (the
+# rig and log are right).
+printf '%s\n' "${wall_rows[@]}" | awk -F'|' '
+  function trim(s) { gsub(/^ +| +$/, "", s); return s }
+  function num(s) { s = trim(s); return s ~ /^[0-9.]+$/ ? s + 0 : -1 }
+  { name = trim($2); ok = $5 + 0; rmse = num($6); warned = $10 + 0 }
+  warned > 0 { bad = 1; print "run.sh: FAIL: " name ": measure --features klt warned on a right rig and log" }
+  name == "simulate'"'"'s files (6-DoF)" { ref_ok = ok; ref = rmse; have = 1; next }
+  name ~ /^(ROS|MCAP)/ {
+    n++
+    if (!have || ref < 0 || rmse < 0 || ok < 0.98 * ref_ok || rmse > 1.1 * ref + 0.01) {
+      bad = 1
+      print "run.sh: FAIL: wall: " name ": " ok " points ok, depth RMSE " rmse " mm; the 6-DoF direct files: " ref_ok ", " ref " mm"
+    }
+  }
+  END { if (n != 5) { print "run.sh: FAIL: wall: " n " of 5 bag inputs measured"; bad = 1 } exit bad }' || failed=1
+[ "$failed" -eq 0 ] && echo "run.sh: every bag within 10 % of the direct files' depth and world RMS (the board) and depth RMSE (the wall's natural features), and worse without the time offset ($w)"
 exit "$failed"

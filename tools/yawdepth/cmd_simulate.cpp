@@ -128,6 +128,11 @@ void addSimulateBoardOptions(CLI::App *sub, SimulateArgs &a)
   sub->add_option("--image-noise", a.render.noise_sigma, "Sensor noise, Gaussian sigma (gray levels)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option("--wall", a.render.wall_texel,
+                  "The board hangs on a textured wall in its plane (smooth random texture, blobs about WALL m across, "
+                  "seeded by --seed), for natural-feature tracking; 0 = a uniform background")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
   sub->add_option("--outer-square", a.outer_square, "Chessboard: width of the outer squares (m; default a full square)")
       ->check(FiniteNonNegative);
   sub->add_flag("--photo", a.photo,
@@ -225,6 +230,7 @@ void renderBoardImages(const CameraModel &camera, const YawRig &rig, const Scene
   for (std::size_t k = 0; k < scene.truth.size(); ++k) {
     RenderOptions ro = a.render;
     ro.seed = a.scene.seed * 1000003ULL + k;
+    ro.wall_seed = a.scene.seed;
     const cv::Mat img = renderBoard(camera, rig, scene.truth[k], board, wMb, ro);
     char name[32];
     std::snprintf(name, sizeof name, "frame_%04zu.png", k);

@@ -1,5 +1,7 @@
 #include <yawdepth/pipeline/residual_check.h>
 
+#include "variance_factor.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -407,6 +409,33 @@ TrackResidual trackResidual(const CameraModel &camera, const YawRig &rig, const 
   return fitOf(camera, motion, CameraPoses(rig, motion), track, outliers, point, noise).summary;
 }
 
+namespace pipeline_detail {
+
+int varianceFactor(const std::vector<TrackResidual> &tracks, const std::vector<bool> &use, int min_tracks,
+                   double &factor, double &sigma)
+{
+  std::vector<double> ratios;
+  double inv_dof_sum = 0;
+  for (std::size_t i = 0; i < tracks.size(); ++i)
+    if (tracks[i].dof >= 1 && (use.empty() || (i < use.size() && use[i]))) {
+      ratios.push_back(tracks[i].chi2 / chiSquareMedian(tracks[i].dof));
+      inv_dof_sum += 1.0 / tracks[i].dof;
+    }
+  const int used = static_cast<int>(ratios.size());
+  factor = 1.0;
+  sigma = 0;
+  if (used >= min_tracks && used > 0) {
+    const auto mid = ratios.begin() + static_cast<long>(ratios.size() / 2);
+    std::nth_element(ratios.begin(), mid, ratios.end());
+    factor = *mid;
+    const double n = static_cast<double>(ratios.size());
+    sigma = factor * std::sqrt(M_PI / 2 * 2 * inv_dof_sum / n / n);
+  }
+  return used;
+}
+
+} // namespace pipeline_detail
+
 ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
                                    const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
                                    const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
@@ -421,8 +450,7 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
   const CameraPoses poses(rig, motion);
   const std::vector<bool> none;
   std::vector<TrackFit> fits(tracks.size());
-  std::vector<double> ratios;
-  double share_sum = 0, inv_dof_sum = 0;
+  double share_sum = 0;
   std::size_t observations = 0;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     if (!points[i].ok())
@@ -430,24 +458,14 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     fits[i] = fitOf(camera, motion, poses, tracks[i], i < outliers.size() ? outliers[i] : none, points[i], noise);
     out.tracks[i] = fits[i].summary;
     if (out.tracks[i].dof >= 1) {
-      ratios.push_back(out.tracks[i].chi2 / chiSquareMedian(out.tracks[i].dof));
-      inv_dof_sum += 1.0 / out.tracks[i].dof;
-      ++out.tracks_used;
       share_sum += fits[i].pixel_share_sum;
       observations += fits[i].J.size();
     }
   }
   if (observations > 0)
     out.pixel_share = share_sum / static_cast<double>(observations);
-  if (out.tracks_used >= options.min_tracks) {
-    const auto mid = ratios.begin() + static_cast<long>(ratios.size() / 2);
-    std::nth_element(ratios.begin(), mid, ratios.end());
-    out.variance_factor = *mid;
-    // chi2 / nu has the relative variance 2 / nu; the median of n such ratios sqrt(pi / 2) times
-    // their spread over sqrt(n).
-    const double n = static_cast<double>(ratios.size());
-    out.variance_factor_sigma = out.variance_factor * std::sqrt(M_PI / 2 * 2 * inv_dof_sum / n / n);
-  }
+  out.tracks_used = pipeline_detail::varianceFactor(out.tracks, {}, options.min_tracks, out.variance_factor,
+                                                    out.variance_factor_sigma);
   const double factor = std::max(1.0, out.variance_factor);
   if (options.scale_sigma)
     out.sigma_scale = std::sqrt(factor);

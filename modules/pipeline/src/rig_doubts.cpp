@@ -1,5 +1,7 @@
 #include "rig_doubts.h"
 
+#include "variance_factor.h"
+
 #include <algorithm>
 #include <cmath>
 #include <yawdepth/estimation/track_estimator.h>
@@ -14,10 +16,13 @@ constexpr double kBetter = 1.21;     // s0^2 lower by this factor (s0 by 1.1)
 constexpr double kEvidence = 3;      // and by this many standard errors
 constexpr double kMinLever = 0.01;   // m
 constexpr double kMinYawSpan = 0.05; // rad
+constexpr double kMinTrackShare = 0.99; // an alternative that explains fewer tracks than this share...
+constexpr double kDecisive = 4;         // ...must lower s0^2 by this factor (s0 by 2)
 
 struct Fit {
   double f2 = 0, f2_sigma = 0;
   bool measured = false;
+  std::vector<TrackResidual> tracks; // per track; dof 0 where the check did not use it
 };
 
 Fit fit(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
@@ -37,7 +42,14 @@ Fit fit(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSa
   f.measured = c.tracks_used >= options.residual_check.min_tracks;
   f.f2 = c.variance_factor;
   f.f2_sigma = c.variance_factor_sigma;
+  f.tracks = c.tracks;
   return f;
+}
+
+/* The tracks a fit's residual check used. */
+int used(const Fit &f)
+{
+  return static_cast<int>(std::count_if(f.tracks.begin(), f.tracks.end(), [](const TrackResidual &t) { return t.dof >= 1; }));
 }
 
 YawRig leverNegated(const YawRig &rig)
@@ -75,9 +87,26 @@ std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, co
   auto compare = [&](const std::string &what, const Fit &alt) {
     if (!alt.measured || !std::isfinite(alt.f2))
       return;
-    if (!given_fits || (alt.f2 * kBetter < given.f2 &&
-                        alt.f2 + kEvidence * std::hypot(alt.f2_sigma, given.f2_sigma) < given.f2))
-      out.push_back({what, given_fits ? std::sqrt(given.f2) : HUGE_VAL, std::sqrt(alt.f2)});
+    if (!given_fits) {
+      out.push_back({what, HUGE_VAL, std::sqrt(alt.f2)});
+      return;
+    }
+    // Judged on the tracks both models explain: the gates drop what a model cannot explain, so a
+    // wrong model can fit what it keeps better (a wall beside the drive under a flipped yaw keeps
+    // the short tracks, which any rotation fits, and loses the long ones).
+    std::vector<bool> both(tracks.size());
+    for (std::size_t i = 0; i < tracks.size(); ++i)
+      both[i] = given.tracks[i].dof >= 1 && alt.tracks[i].dof >= 1;
+    double f2_given = 0, sigma_given = 0, f2_alt = 0, sigma_alt = 0;
+    const int min_tracks = options.residual_check.min_tracks;
+    if (varianceFactor(given.tracks, both, min_tracks, f2_given, sigma_given) < min_tracks ||
+        varianceFactor(alt.tracks, both, min_tracks, f2_alt, sigma_alt) < min_tracks)
+      return;
+    // And an alternative that explains fewer tracks (more lost to the gates) must be decisively better.
+    if (used(alt) < kMinTrackShare * used(given) && !(f2_alt * kDecisive < f2_given))
+      return;
+    if (f2_alt * kBetter < f2_given && f2_alt + kEvidence * std::hypot(sigma_alt, sigma_given) < f2_given)
+      out.push_back({what, std::sqrt(f2_given), std::sqrt(f2_alt)});
   };
   if (lever_matters)
     compare("the lever arm's sign (the rig file's camera_offset, or camera_pose's translation)",

@@ -20,7 +20,10 @@ struct RigDoubt {
   tracks re-estimated by `fused` and the whole log's s0 compared with the one of the model given
   (both with fused and the same residual check, so that the check's stand-in for the motion's
   variance, which overstates it, cancels in the comparison). A mistake is reported when undoing it
-  lowers s0^2 by more than kBetter and by more than kEvidence standard errors of the two (or when,
+  lowers s0^2, over the tracks both models explain (the gates drop what a model cannot explain, so a
+  wrong model can fit the rest better), by more than kBetter and by more than kEvidence standard
+  errors of the two; when the alternative explains fewer than kMinTrackShare of the tracks the model
+  given explains, by kDecisive at least (losing tracks to the gates is evidence against it) (or when,
   as given, too few tracks fit to measure it). Only the
   alternatives the motion can tell apart are tried: a lever arm of at least kMinLever with the yaw or
   the body turning by at least kMinYawSpan, the yaw's sign when it turns, or

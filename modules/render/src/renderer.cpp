@@ -140,6 +140,41 @@ double radicalInverse(unsigned i) {
   return r;
 }
 
+/*! \brief splitmix64: a well-mixed 64-bit hash of a lattice cell and the seed. */
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+/*!
+  \brief The wall's texture at board-plane point (x, y) (m): value noise (uniform lattice values
+  blended by the quintic fade, so the texture is twice differentiable) of three octaves, cells of
+  `texel`, `texel` / 2 and `texel` / 4 with weights 1, 1/2, 1/4, contrast-stretched to 0..1.
+*/
+double wallReflectance(double x, double y, double texel, std::uint64_t seed) {
+  double sum = 0, weight = 1, cell = texel;
+  for (int octave = 0; octave < 3; ++octave, weight *= 0.5, cell *= 0.5) {
+    const double X = x / cell, Y = y / cell;
+    if (!(std::abs(X) < 1e15 && std::abs(Y) < 1e15))
+      return 0.5;
+    const double fx = std::floor(X), fy = std::floor(Y);
+    const auto ix = static_cast<std::int64_t>(fx), iy = static_cast<std::int64_t>(fy);
+    auto lattice = [&](std::int64_t i, std::int64_t j) {
+      const std::uint64_t h = mix(mix(mix(seed + static_cast<std::uint64_t>(octave)) + static_cast<std::uint64_t>(i)) +
+                                  static_cast<std::uint64_t>(j));
+      return static_cast<double>(h >> 11) * 0x1.0p-53;
+    };
+    auto fade = [](double t) { return t * t * t * (t * (6 * t - 15) + 10); };
+    const double a = fade(X - fx), b = fade(Y - fy);
+    const double v0 = lattice(ix, iy) + a * (lattice(ix + 1, iy) - lattice(ix, iy));
+    const double v1 = lattice(ix, iy + 1) + a * (lattice(ix + 1, iy + 1) - lattice(ix, iy + 1));
+    sum += weight * (v0 + b * (v1 - v0));
+  }
+  return std::clamp(0.5 + 2.0 * (sum / 1.75 - 0.5), 0.0, 1.0);
+}
+
 } // namespace
 
 void checkRenderOptions(const CameraModel &camera, const RenderOptions &o) {
@@ -171,6 +206,8 @@ void checkRenderOptions(const CameraModel &camera, const RenderOptions &o) {
     throw Error("render: gamma must be 0.1 to 10");
   if (o.jpeg_quality < 0 || o.jpeg_quality > 100)
     throw Error("render: JPEG quality must be 0 (none) to 100");
+  if (!(o.wall_texel >= 0 && o.wall_texel <= 1000))
+    throw Error("render: the wall texel must be 0 (no wall) to 1000 m");
 }
 
 RenderOptions photoLikeRenderOptions(double focus_distance) {
@@ -341,7 +378,15 @@ cv::Mat renderBoard(const CameraModel &camera, const YawRig &rig, const MotionSa
         Eigen::Vector2d((i + 0.5) / n - 0.5, std::fmod(radicalInverse(static_cast<unsigned>(i)) + 0.5 / n, 1.0) - 0.5);
 
   const double black = options.black, white = options.white, bg = options.background;
-  auto gray = [&](double rho) { return rho < 0 ? bg : black + (white - black) * rho; };
+  const double texel = options.wall_texel;
+  const bool wall = texel > 0;
+  // The gray level at board-plane point (x, y): the board, else the wall or the background.
+  auto gray = [&](double x, double y) {
+    double rho = board.reflectance(x, y);
+    if (rho < 0 && wall)
+      rho = wallReflectance(x, y, texel, options.wall_seed);
+    return rho < 0 ? bg : black + (white - black) * rho;
+  };
 
   cv::Mat img(H, W, CV_32F);
   cv::Mat depth(H, W, CV_32F, cv::Scalar(0)); // camera Z of the board at each pixel; 0 = background
@@ -376,14 +421,18 @@ cv::Mat renderBoard(const CameraModel &camera, const YawRig &rig, const MotionSa
         const double hy = 0.55 * (std::abs(A(1, 0)) + std::abs(A(1, 1)));
         if (!std::isfinite(hx) || !std::isfinite(hy))
           continue;
-        if (grid.uniform(P.x() - hx, P.x() + hx, P.y() - hy, P.y() + hy)) {
-          row[u] = static_cast<float>(gray(board.reflectance(P.x(), P.y())));
+        // One sample where the reflectance is constant over the footprint: no edge crossed, and
+        // not on the wall unless the footprint is small against its finest blobs.
+        const bool on_wall = wall && board.reflectance(P.x(), P.y()) < 0;
+        if (grid.uniform(P.x() - hx, P.x() + hx, P.y() - hy, P.y() + hy) &&
+            (!on_wall || std::max(hx, hy) < texel / 16)) {
+          row[u] = static_cast<float>(gray(P.x(), P.y()));
           continue;
         }
         double acc = 0;
         for (const Eigen::Vector2d &d : samples) {
           const Eigen::Vector2d Q = P + A * d;
-          acc += gray(board.reflectance(Q.x(), Q.y()));
+          acc += gray(Q.x(), Q.y());
         }
         row[u] = static_cast<float>(acc / n);
       }

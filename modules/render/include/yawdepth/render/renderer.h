@@ -12,7 +12,9 @@
   crosses a line where the reflectance may change (square or bitmap-cell edges, the board outline)
   the pixel averages k x k samples of the footprint (a Hammersley set: stratified in both axes, so
   an axis-aligned edge is resolved to 1/k^2 of a pixel, not 1/k); else one sample. Pixels whose ray
-  misses the board, hits it behind the camera, or cannot be undistorted get `background`. Then the
+  misses the board, hits it behind the camera, or cannot be undistorted get `background`; with a
+  wall (RenderOptions::wall_texel) the board's plane beyond the outline is textured instead, and its
+  pixels average the k x k samples wherever the footprint is wider than a sixteenth of the texel. Then the
   optional blur (cv::GaussianBlur, the discrete Gaussian on the pixel grid, replicated border) and
   noise (std::mt19937_64 seeded by `seed`, row-major order), rounding and clamping to 0..255.
   The undistortion of every pixel is cached for the last four cameras (thread-safe): the first
@@ -37,6 +39,12 @@ struct RenderOptions {
   double white = 230;          //!< gray level of the board's white parts
   double background = 110;     //!< gray level around the board
   std::uint64_t seed = 1;      //!< noise seed
+  /*! The board hangs on a wall: with `wall_texel` > 0 the board's plane beyond its outline carries a
+      smooth random texture instead of `background` (value noise of three octaves, blobs about
+      `wall_texel` m across down to a quarter of it, seeded by `wall_seed`, gray levels between
+      `black` and `white`), which natural-feature trackers follow. 0 = no wall. */
+  double wall_texel = 0;
+  std::uint64_t wall_seed = 1; //!< the wall's texture (one per scene, unlike `seed`)
 
   /*! \name What makes a render look like a photograph (all off by default)
       Applied in this order, the gray levels above taken as linear light (0..255):
@@ -66,7 +74,8 @@ RenderOptions photoLikeRenderOptions(double focus_distance);
   \brief Throws yawdepth::Error when renderBoard() would refuse `camera` or `options` (no image size,
   an image over 20000 px a side, supersampling outside 1..64, blur or defocus outside 0..1000 px,
   negative or non-finite noise or gray levels, light gradient or vignetting outside 0..1, gamma
-  outside 0.1..10, JPEG quality outside 0..100, defocus without a focus distance): for a check
+  outside 0.1..10, JPEG quality outside 0..100, defocus without a focus distance, a wall texel
+  negative, non-finite or over 1000 m): for a check
   before any file is written.
   \param camera The camera. \param options The options.
 */

@@ -1,0 +1,19 @@
+#pragma once
+// Private to the pipeline: the whole log's s0^2 from the tracks' residuals, the one formula
+// checkResiduals() reports and rigDoubts() compares two models with.
+#include <vector>
+#include <yawdepth/pipeline/residual_check.h>
+
+namespace yawdepth {
+namespace pipeline_detail {
+
+/* s0^2 over the tracks with dof >= 1 and use[i] (every track when `use` is empty): the median of
+   chi2 / chiSquareMedian(dof), robust to the few tracks that are not one point; `sigma` its
+   standard error (chi2 / nu has the relative variance 2 / nu; the median of n such ratios has
+   sqrt(pi / 2) times their spread over sqrt(n)). Returns the number of tracks it used; with fewer
+   than `min_tracks` the factor is 1 and the sigma 0. */
+int varianceFactor(const std::vector<TrackResidual> &tracks, const std::vector<bool> &use, int min_tracks,
+                   double &factor, double &sigma);
+
+} // namespace pipeline_detail
+} // namespace yawdepth
