@@ -2,7 +2,7 @@
   bench_klt: what natural-feature depth costs per frame at 640x480 with up to 300 tracks, against the
   tracking alone.
 
-    bench_klt [--frames N] [--repeat R] [--max-features N] [--no-accuracy] [--method fused|window|refine]
+    bench_klt [--frames N] [--repeat R] [--max-features N] [--no-accuracy] [--no-cost] [--method fused|window|refine]
 
   Scene: a textured wall 2 m in front of the first camera (smoothed uniform noise, seeded; each
   frame made photo-like: blur 0.8 px, vignetting 30 %, noise 2 gray levels, a gamma 2.2 response
@@ -16,8 +16,9 @@
     backward, re-detection, the gate);
   - tracking + fused / + window: the same, and every frame's features into a
     yawdepth::StreamEstimator (the servo's and a live program's entry point).
-  Targets (issue 14): tracking at 30 frames per second or more; tracking + estimation within 1.2 x
-  the tracking alone.
+  Targets (issue 14), checked (exit 1 when one is missed): tracking at 30 frames per second or more;
+  tracking + fused within 1.2 x the tracking alone. (window at 300 tracks is the natural-features
+  issue's; its cost is printed, not checked here: bench_window checks it.)
 
   Then (unless --no-accuracy) the depths `measure --features klt` would report on the same sequence
   (trackSequence, then estimatePoints as `measure --features klt` by default: fused, or --method; the
@@ -213,16 +214,56 @@ void accuracyTable(const Sequence &s, const CameraModel &camera, const KltOption
   }
 }
 
+/* The cost table: each stage's median per frame over `repeat` passes after a warm-up; prints the
+   targets and whether they are met (false when one is missed). */
+bool costTable(const Sequence &s, const CameraModel &camera, const KltOptions &ko, int repeat)
+{
+  constexpr double kMinFps = 30.0, kMaxFusedRatio = 1.2;
+  const Method fused = Method::Fused, window = Method::Window;
+  const struct {
+    const char *name;
+    const Method *method;
+  } stages[] = {{"tracking alone", nullptr}, {"tracking + fused", &fused}, {"tracking + window", &window}};
+  std::printf("| stage | features per frame | tracking ms | estimation ms | frames per second | (tracking + "
+              "estimation) / tracking |\n|---|---|---|---|---|---|\n");
+  runPass(s, camera, ko, nullptr); // warm-up: allocations, OpenCV's first calls
+  double alone = 0, fused_ratio = 0;
+  for (const auto &stage : stages) {
+    std::vector<double> track_ms, est_ms;
+    double features = 0;
+    for (int r = 0; r < repeat; ++r) {
+      const Pass p = runPass(s, camera, ko, stage.method);
+      track_ms.push_back(p.track_ms);
+      est_ms.push_back(p.estimate_ms);
+      features = p.features;
+    }
+    const double t = bench::median(track_ms), e = stage.method ? bench::median(est_ms) : 0.0;
+    if (!stage.method)
+      alone = t;
+    if (stage.method == &fused)
+      fused_ratio = (alone + e) / alone;
+    // The ratio against the tracking alone's median: every stage tracks the same images the same way.
+    std::printf("| %s | %.0f | %.2f | %.2f | %.0f | %.3f |\n", stage.name, features, t, e, 1000.0 / (alone + e),
+                (alone + e) / alone);
+  }
+  const bool fps_ok = 1000.0 / alone >= kMinFps, ratio_ok = fused_ratio <= kMaxFusedRatio;
+  std::printf("target: tracking at %.0f frames per second or more (%.0f): %s\n", kMinFps, 1000.0 / alone,
+              fps_ok ? "met" : "MISSED");
+  std::printf("target: tracking + fused within %.1f x the tracking alone (%.3f): %s\n", kMaxFusedRatio, fused_ratio,
+              ratio_ok ? "met" : "MISSED");
+  return fps_ok && ratio_ok;
+}
+
 } // namespace
 
 int main(int argc, char **argv)
 {
   int frames = 60, repeat = 5, max_features = 300;
-  bool no_accuracy = false;
+  bool no_accuracy = false, no_cost = false;
   std::string method = "fused";
-  bench::CommandLine cli("[--frames N (>= 2)] [--repeat R] [--max-features N] [--no-accuracy] [--method M]");
+  bench::CommandLine cli("[--frames N (>= 2)] [--repeat R] [--max-features N] [--no-accuracy] [--no-cost] [--method M]");
   cli.option("--frames", frames).option("--repeat", repeat).option("--max-features", max_features);
-  cli.flag("--no-accuracy", no_accuracy).option("--method", method);
+  cli.flag("--no-accuracy", no_accuracy).flag("--no-cost", no_cost).option("--method", method);
   if (!cli.parse(argc, argv))
     return 2;
   if (frames < 2 || repeat < 1 || max_features < 1) {
@@ -235,40 +276,19 @@ int main(int argc, char **argv)
     const Sequence s = renderSequence(frames);
     KltOptions ko;
     ko.max_features = max_features;
-    const Method fused = Method::Fused, window = Method::Window;
-    const struct {
-      const char *name;
-      const Method *method;
-    } stages[] = {{"tracking alone", nullptr}, {"tracking + fused", &fused}, {"tracking + window", &window}};
     std::printf("bench_klt: KLT tracking and depth per frame, 640x480, a textured wall 2 m away (our render), "
                 "one core\n");
-    std::printf("Reproduce: build/benchmarks/bench_klt --frames %d --repeat %d --max-features %d --method %s\n", frames,
-                repeat, max_features, method.c_str());
-    std::printf("| stage | features per frame | tracking ms | estimation ms | frames per second | (tracking + "
-                "estimation) / tracking |\n|---|---|---|---|---|---|\n");
-    runPass(s, camera, ko, nullptr); // warm-up: allocations, OpenCV's first calls
-    double alone = 0;
-    for (const auto &stage : stages) {
-      std::vector<double> track_ms, est_ms;
-      double features = 0;
-      for (int r = 0; r < repeat; ++r) {
-        const Pass p = runPass(s, camera, ko, stage.method);
-        track_ms.push_back(p.track_ms);
-        est_ms.push_back(p.estimate_ms);
-        features = p.features;
-      }
-      const double t = bench::median(track_ms), e = stage.method ? bench::median(est_ms) : 0.0;
-      if (!stage.method)
-        alone = t;
-      // The ratio against the tracking alone's median: every stage tracks the same images the same way.
-      std::printf("| %s | %.0f | %.2f | %.2f | %.0f | %.3f |\n", stage.name, features, t, e, 1000.0 / (alone + e),
-                  (alone + e) / alone);
-    }
+    std::printf("Reproduce: build/benchmarks/bench_klt --frames %d --repeat %d --max-features %d --method %s%s%s\n",
+                frames, repeat, max_features, method.c_str(), no_cost ? " --no-cost" : "",
+                no_accuracy ? " --no-accuracy" : "");
+    bool met = true;
+    if (!no_cost)
+      met = costTable(s, camera, ko, repeat);
     if (!no_accuracy)
       accuracyTable(s, camera, ko, methodFromString(method));
+    return met ? 0 : 1;
   } catch (const Error &e) {
     std::fprintf(stderr, "bench_klt: %s\n", e.what());
     return 1;
   }
-  return 0;
 }
