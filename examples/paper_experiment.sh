@@ -55,3 +55,13 @@ largest distance to plane (mm)  8.0                  $p2 (target 1.2)      $p10 
 depth zc of the corners (mm)    616 .. 636           $z0 .. $z1         $y0 .. $y1
 Reports and figures: $out/two/report/figure.png, $out/ten/report/figure.png
 EOT
+# The "(target ...)" figures of the table are asserted: a miss is named and the script exits 1.
+missed=$(awk -v w2="$w2" -v p2="$p2" -v w10="$w10" -v p10="$p10" 'BEGIN {
+  if (w2 + 0 > 0.3) printf " 2-image block error %s > 0.3 mm;", w2
+  if (p2 + 0 > 1.2) printf " 2-image plane distance %s > 1.2 mm;", p2
+  if (w10 + 0 > 0.15) printf " 10-frame block error %s > 0.15 mm;", w10
+  if (p10 + 0 > 0.6) printf " 10-frame plane distance %s > 0.6 mm;", p10 }')
+if [ -n "$missed" ]; then
+  echo "paper_experiment.sh: target missed:$missed" >&2
+  exit 1
+fi
