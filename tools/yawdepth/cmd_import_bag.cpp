@@ -124,7 +124,7 @@ Runner addImportBag(CLI::App &app)
                   "An image between two poses (or joint readings) further apart than this is skipped (s)")
       ->check(CLI::PositiveNumber & Finite)
       ->capture_default_str();
-  sub->add_flag("--quiet", a->quiet, "No summary on standard output");
+  addVerbosityOptions(sub, a->quiet, "No summary on standard output");
   return [a]() { return runImportBag(*a); };
 }
 
