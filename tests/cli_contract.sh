@@ -1078,6 +1078,12 @@ printf 'no-gate = maybe\n' >"$S/switch.toml"
 usage config_switch "yawdepth track: error: $S/switch.toml:1: 'no-gate' is a switch: true or false, not 'maybe' (see yawdepth track --help)" \
   track --camera "$YML" --motion "$X/motion.csv" --out "$S/t.csv" --config "$S/switch.toml"
 
+# A negative number, or a list of them, is a value, not an unknown option.
+run "$S/negative" calibrate-rig --camera "$YML" --motion "$X/motion.csv" --pattern chessboard:5x4:0.03 --out "$S/r.yaml" \
+  --estimate-time-offset --time-offset-range -0.2,0.1 --initial-yaw-offset -0.5 --print-config
+[ "$(rc_of "$S/negative")" -eq 0 ] && grep -q '^time-offset-range = \[-0.2, 0.1\]$' "$S/negative.out" &&
+  grep -q '^initial-yaw-offset = -0.5$' "$S/negative.out" && pass ||
+  fail "negative values: exit $(rc_of "$S/negative"): $(first "$S/negative.err")"
 # --verbose: each stage's time on stderr; --quiet: nothing but warnings.
 run "$S/verbose" "${EST[@]}" --verbose
 [ "$(rc_of "$S/verbose")" -eq 0 ] && grep -q '^yawdepth estimate: done (' "$S/verbose.err" &&

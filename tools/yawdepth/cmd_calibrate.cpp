@@ -129,7 +129,14 @@ CalibrationDetections detectCameraViews(const CameraArgs &a, const BoardLayout &
     }
   }
   stage("calibrate-camera", std::to_string(images.size()) + " images read");
-  CalibrationDetections det = detectCalibrationViews(board, a.images, images);
+  CalibrationDetections det;
+  {
+    ProgressLine progress;
+    det = detectCalibrationViews(board, a.images, images, DetectorOptions(), [&](std::size_t done, std::size_t total) {
+      progress.count("calibrate-camera", done, total, "images searched for the board");
+    });
+    progress.count("calibrate-camera", images.size(), images.size(), "images searched for the board");
+  }
   stage("calibrate-camera", "board searched in " + std::to_string(det.detections.size()) + " images");
   for (const std::string &f : det.failures)
     std::cerr << "calibrate-camera: " << f << " (image skipped)\n";

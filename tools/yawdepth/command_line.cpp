@@ -3,6 +3,7 @@
 #include "commands.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -11,14 +12,12 @@ namespace yawdepth::cli {
 
 namespace {
 
-/* A value that looks like an option but is a number (--yaw -0.5), or standard input/output ("-"). */
+/* A word that is a value although it begins with a dash: a number or a list of them (--yaw -0.5,
+   --time-offset-range -0.1,0.1: a digit or a point after the dash, as CLI11 takes it), or standard
+   input/output ("-"). */
 bool isValue(const std::string &word)
 {
-  if (word.size() < 2 || word[0] != '-')
-    return true;
-  char *end = nullptr;
-  std::strtod(word.c_str(), &end);
-  return end != word.c_str() && *end == '\0';
+  return word.size() < 2 || word[0] != '-' || std::isdigit(static_cast<unsigned char>(word[1])) || word[1] == '.';
 }
 
 /* The option named by a word (--name=value: --name). */

@@ -64,7 +64,7 @@ void ProgressLine::count(const std::string &what, std::size_t done, std::size_t 
   const bool last = done == total && printed_; // the final count, once a line is up
   if (!last && (secondsBetween(start_, now) < 1.0 || secondsBetween(last_, now) < 0.2))
     return;
-  show(what + ": " + std::to_string(done) + "/" + std::to_string(total) + " " + unit);
+  show(what + ": " + std::to_string(done) + (total > 0 ? "/" + std::to_string(total) : std::string()) + " " + unit);
 }
 
 std::function<void(const RefineProgress &)> ProgressLine::refineCallback()

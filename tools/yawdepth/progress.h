@@ -36,7 +36,8 @@ public:
   ProgressLine(const ProgressLine &) = delete;
   ProgressLine &operator=(const ProgressLine &) = delete;
 
-  /*! \brief `WHAT: DONE/TOTAL UNIT` (e.g. `simulate: 12/40 images`), rate-limited; the last one always. */
+  /*! \brief `WHAT: DONE/TOTAL UNIT` (e.g. `simulate: 12/40 images`; `WHAT: DONE UNIT` when TOTAL is 0,
+      unknown), rate-limited; the last one (DONE == TOTAL) always once a line is shown. */
   void count(const std::string &what, std::size_t done, std::size_t total, const std::string &unit);
   /*! \brief Ends the line (a newline if one was shown) before other messages; nothing more is shown. */
   void finish();
