@@ -1060,6 +1060,11 @@ run "$S/est" estimate --config "$S/robot.toml" --motion "$S/sim/motion.csv" --tr
 run "$S/worked" "${EST[@]}" --sigma-px 0.3 --sigma-odom 0.001 --sigma-heading 0.00087266 --sigma-yaw 0.00087266
 [ "$(rc_of "$S/est")" -eq 0 ] && cmp -s "$S/sim/truth.csv" "$X/truth.csv" && cmp -s "$S/est.out" "$S/worked.out" && pass ||
   fail "one robot file for simulate and estimate (the README's worked example): $(first "$S/sim.err") $(first "$S/est.err")"
+# INI as well (';' comments, no quotes), a switch set to true.
+printf '; the robot\ncamera=%s\nrig=%s\n[estimate]\nmethod=fused\nsigma-px=0.5\nquiet=true\n' "$YML" "$RIG" >"$S/robot.ini"
+run "$S/ini" estimate --config "$S/robot.ini" --motion "$X/motion.csv" --tracks "$X/tracks.csv"
+[ "$(rc_of "$S/ini")" -eq 0 ] && cmp -s "$S/direct.out" "$S/ini.out" && [ ! -s "$S/ini.err" ] && pass ||
+  fail "estimate --config FILE.ini: $(first "$S/ini.err")"
 printf 'sigma-px = 0.3\nsigma-pxx = 1\n' >"$S/typo.toml"
 usage config_typo "yawdepth estimate: error: $S/typo.toml:2: unknown key 'sigma-pxx' for yawdepth estimate (did you mean sigma-px?) (see yawdepth estimate --help)" \
   "${EST[@]}" --config "$S/typo.toml"

@@ -289,6 +289,7 @@ int runCalibrateCamera(const CameraArgs &a, const CLI::App &sub)
   const CalibrationDetections det = detectCameraViews(a, board);
   const CameraCalibrationOptions opt = cameraCalibrationOptions(a);
   const CameraCalibration cal = calibrateCamera(board, det.views, det.width, det.height, opt);
+  stage("calibrate-camera", "fitted on " + std::to_string(det.views.size()) + " views");
   if (!cal.visp_fitted) {
     std::string why;
     for (const auto &n : cal.notes)
@@ -407,6 +408,7 @@ int runHandEye(const RigArgs &a, const CameraModel &camera, const BoardLayout &b
                const std::vector<HandEyeView> &views)
 {
   const HandEyeCalibration cal = calibrateHandEye(camera, board, views, handEyeOptions(a));
+  stage("calibrate-rig", "hand-eye fitted on " + std::to_string(views.size()) + " views");
   writeFileAtomically(a.out, handEyeRigYaml(cal));
   printHandEye(a, cal);
   return 0;
@@ -590,6 +592,7 @@ int runCalibrateRig(const RigArgs &a)
   if (!a.hand_eye.empty())
     return runHandEye(a, camera, board, hand_eye_views);
   const RigCalibration rig = calibrateRig(camera, board, views, rigCalibrationOptions(a));
+  stage("calibrate-rig", "rig fitted on " + std::to_string(views.size()) + " views");
   writeFileAtomically(a.out, rigCalibrationYaml(rig));
   printRigCalibration(a, rig);
   return 0;
