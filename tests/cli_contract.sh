@@ -1060,6 +1060,12 @@ run "$S/est" estimate --config "$S/robot.toml" --motion "$S/sim/motion.csv" --tr
 run "$S/worked" "${EST[@]}" --sigma-px 0.3 --sigma-odom 0.001 --sigma-heading 0.00087266 --sigma-yaw 0.00087266
 [ "$(rc_of "$S/est")" -eq 0 ] && cmp -s "$S/sim/truth.csv" "$X/truth.csv" && cmp -s "$S/est.out" "$S/worked.out" && pass ||
   fail "one robot file for simulate and estimate (the README's worked example): $(first "$S/sim.err") $(first "$S/est.err")"
+# The command line overrides the file also by an option that excludes the file's (--yaw, --view).
+printf 'view = "side"\ndepth = 1\n' >"$S/view.toml"
+run "$S/view_line" error-analysis --config "$S/view.toml" --yaw 0.3
+run "$S/view_direct" error-analysis --depth 1 --yaw 0.3
+[ "$(rc_of "$S/view_line")" -eq 0 ] && cmp -s "$S/view_line.out" "$S/view_direct.out" && pass ||
+  fail "error-analysis --config (view) --yaw: exit $(rc_of "$S/view_line"): $(first "$S/view_line.err")"
 # INI as well (';' comments, no quotes), a switch set to true.
 printf '; the robot\ncamera=%s\nrig=%s\n[estimate]\nmethod=fused\nsigma-px=0.5\nquiet=true\n' "$YML" "$RIG" >"$S/robot.ini"
 run "$S/ini" estimate --config "$S/robot.ini" --motion "$X/motion.csv" --tracks "$X/tracks.csv"

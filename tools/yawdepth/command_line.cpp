@@ -212,6 +212,15 @@ const CLI::Option *settingOption(CLI::App &app, const CLI::App &sub, const CLI::
   return target == &sub ? o : nullptr;
 }
 
+/* Whether `o` excludes an option the command line gives (--view in the file, --yaw on the line). */
+bool excludesGiven(const CLI::Option &o, const std::set<const CLI::Option *> &given)
+{
+  for (const CLI::Option *x : o.get_excludes())
+    if (given.count(x) > 0)
+      return true;
+  return false;
+}
+
 /* --config's value among `args` (empty when not given). */
 std::string configFile(const std::vector<std::string> &args)
 {
@@ -248,8 +257,8 @@ ConfigApplied applyConfigFile(CLI::App &app, const CLI::App &sub, std::vector<st
     std::string key = item.name;
     std::replace(key.begin(), key.end(), '_', '-');
     const CLI::Option *o = settingOption(app, sub, item, key, file);
-    if (o == nullptr || given.count(o) > 0)
-      continue;
+    if (o == nullptr || given.count(o) > 0 || excludesGiven(*o, given))
+      continue; // the command line overrides the file, also by giving an option this one excludes
     for (std::string &w : settingWords(*o, item.name, item.inputs, file))
       words.push_back(std::move(w));
     applied.options.insert("--" + o->get_lnames().front());
