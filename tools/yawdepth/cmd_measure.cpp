@@ -245,6 +245,7 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
   } else {
     tracks = patternTracks(a, pattern, camera, motion, found, gray);
   }
+  stage("measure", std::to_string(tracks.size()) + " tracks from " + std::to_string(n) + " images");
   if (sub.count("--tracks-out") > 0)
     writeTracksCsv(a.tracks_out, tracks);
 

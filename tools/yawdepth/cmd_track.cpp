@@ -168,6 +168,7 @@ Runner addTrack(CLI::App &app)
     const bool six_dof = !motion.samples.empty() && motion.samples.front().six_dof;
     const NoiseModel noise = noiseForLog(a->method, six_dof, motion.yaw_column);
     const std::vector<Track> tracks = kltTracks(camera, rig, motion, noise, a->klt, a->quiet);
+    stage("track", std::to_string(tracks.size()) + " tracks");
     writeTracksCsv(a->out, tracks);
     return 0;
   };
