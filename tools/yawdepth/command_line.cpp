@@ -98,8 +98,7 @@ std::string unknownOption(const CLI::App &sub, const std::vector<std::string> &a
     if (sub.get_option_no_throw(name) != nullptr)
       continue;
     std::string text = "unknown option '" + name + "'";
-    const std::string typed = name.substr(name.find_first_not_of('-') == std::string::npos ? name.size()
-                                                                                            : name.find_first_not_of('-'));
+    const std::string typed = name.substr(std::min(name.find_first_not_of('-'), name.size())); // without dashes
     const std::string suggestion = closest(typed, longNames(sub));
     if (!suggestion.empty())
       text += " (did you mean --" + suggestion + "?)";
