@@ -986,6 +986,7 @@ usage required "yawdepth estimate: error: --camera is required (see yawdepth est
 usage bad_value "yawdepth estimate: error: --method: foo not in {paper,exact,fused,window,refine} (see yawdepth estimate --help)" \
   estimate --camera "$YML" --rig "$RIG" --motion m --tracks t --method foo
 usage top_option "yawdepth: error: unknown option '--bogus' (see yawdepth --help)" --bogus
+usage no_command "yawdepth: error: no command given (one of estimate, measure, track, error-analysis, simulate, calibrate-camera, calibrate-rig, import, import-bag) (see yawdepth --help)"
 usage equals "yawdepth simulate: error: unknown option '--frame' (did you mean --frames?) (see yawdepth simulate --help)" \
   simulate --frame=3
 for c in estimate measure track error-analysis simulate calibrate-camera calibrate-rig import import-bag; do

@@ -206,20 +206,25 @@ static std::vector<Command> addCommands(CLI::App &app)
   return commands;
 }
 
+/* The commands' names, for messages: "estimate, measure, ...". */
+static std::string commandNames(const std::vector<Command> &commands)
+{
+  std::string names;
+  for (const auto &c : commands)
+    names += (names.empty() ? "" : ", ") + c.first->get_name();
+  return names;
+}
+
 /* An unknown command named (instead of CLI11's generic "A subcommand is required"): false, after the
    message on stderr, when `word` (the first argument, not an option) is no command's name. */
 static bool knownCommand(const std::vector<Command> &commands, const char *word)
 {
-  bool known = false;
-  std::string names;
-  for (const auto &c : commands) {
-    known = known || c.first->get_name() == word;
-    names += (names.empty() ? "" : ", ") + c.first->get_name();
-  }
-  if (!known)
-    std::cerr << "yawdepth: error: unknown command '" << oneLine(word) << "' (expected one of " << names
-              << ") (see yawdepth --help)\n";
-  return known;
+  for (const auto &c : commands)
+    if (c.first->get_name() == word)
+      return true;
+  std::cerr << "yawdepth: error: unknown command '" << oneLine(word) << "' (expected one of "
+            << commandNames(commands) << ") (see yawdepth --help)\n";
+  return false;
 }
 
 /* Run the parsed subcommand `sub`: its status, or 1 with one line on stderr for an error (standard
@@ -318,7 +323,9 @@ int main(int argc, char **argv)
     std::cout << bashCompletion(app); // hidden: the build writes the installed completion with it
     return 0;
   }
-  if (argc > 1 && argv[1][0] != '-' && !knownCommand(commands, argv[1]))
+  if (argc == 1)
+    return usageError("", "no command given (one of " + commandNames(commands) + ")");
+  if (argv[1][0] != '-' && !knownCommand(commands, argv[1]))
     return 2;
 
   const CLI::App *chosen = nullptr;
