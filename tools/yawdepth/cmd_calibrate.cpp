@@ -609,8 +609,7 @@ Runner addCalibrateRig(CLI::App &app)
       "axis (Lb), yaw axis direction, zero of the yaw reading, with uncertainties; writes the rig file. With "
       "--hand-eye: the camera's pose on a robot arm (eMc, or rMc for eye-to-hand) from a 6-DoF motion log of the "
       "hand's poses, written as the rig file's camera_pose.");
-  sub->add_option("--camera", a->camera, "Calibrated camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
+  addCameraOptions(sub, a->camera, a->camera_name, true, "calibrated (calibrate-camera)");
   addMotionOptions(sub, a->motion,
                    "Motion log with the yaw readings and an image column (frame,x,y,z,heading,yaw,image); with "
                    "--hand-eye, the hand's pose in the robot base per image (frame,tx,ty,tz,tux,tuy,tuz,image, or "

@@ -50,13 +50,8 @@ void printRow(const std::string &view, const ErrorAnalysisCase &c, int mc, unsig
 void addErrorAnalysisCameraOptions(CLI::App *sub, ErrorArgs &a)
 {
   CLI::Option *kx = sub->add_option("--kx", a.c.kx, "Focal length (px)")->check(Finite)->capture_default_str();
-  sub->add_option("--camera", a.camera, "Camera file (ViSP XML or OpenCV YAML/XML): kx is its px, instead of --kx")
-      ->type_name("FILE")
-      ->excludes(kx);
-  sub->add_option("--camera-name", a.camera_name,
-                  "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr "
-                  "camchain (default cam0)")
-      ->needs("--camera");
+  addCameraOptions(sub, a.camera, a.camera_name, false, "kx is its px, instead of --kx")->excludes(kx);
+  sub->get_option("--camera-name")->needs("--camera");
 }
 
 } // namespace

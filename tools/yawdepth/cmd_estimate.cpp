@@ -25,8 +25,7 @@ Runner addEstimate(CLI::App &app)
 {
   auto args = std::make_shared<EstimateArgs>();
   CLI::App *sub = app.add_subcommand("estimate", "Estimate each feature's 3D point from a motion log and feature tracks.");
-  sub->add_option("--camera", args->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", args->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
+  addCameraOptions(sub, args->camera, args->camera_name, true);
   addRigOption(sub, args->rig, true);
   addMotionOptions(sub, args->motion, "Motion log (frame,x,y,z,heading,yaw or 6-DoF)");
   sub->add_option("--tracks", args->tracks, "Feature tracks CSV (frame,id,u,v)")->required();

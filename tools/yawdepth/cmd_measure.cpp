@@ -317,8 +317,8 @@ Runner addMeasure(CLI::App &app)
   CLI::App *sub = app.add_subcommand(
       "measure", "Detect a chessboard or AprilTags (or track natural corners) in the images of a motion log and "
                  "measure their 3D points.");
-  sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML (with --bag: default the bag's camera_info)");
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
+  addCameraOptions(sub, a->camera, a->camera_name, false,
+                   "required without --bag; with --bag the default is the bag's camera_info");
   addRigOption(sub, a->rig, false, "required without --bag (the rig changes every point); with --bag the default is "
                                    "the mount from /tf_static");
   addMotionOptions(sub, a->motion,

@@ -60,8 +60,7 @@ Eigen::Isometry3d boardPose(const YawRig &rig, const MotionSample &first, const 
 /* The scene's options: files, the planar robot's path or --arm's, the points, the noise, the seed. */
 void addSimulateSceneOptions(CLI::App *sub, SimulateArgs &a)
 {
-  sub->add_option("--camera", a.camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", a.camera_name, "Camera name in a ViSP XML file, or cam0, cam1, ... in a Kalibr camchain (default cam0)");
+  addCameraOptions(sub, a.camera, a.camera_name, true, "with the image size to render a board");
   addRigOption(sub, a.rig, true);
   sub->add_option("--out-dir", a.out_dir, "Output folder (created if missing)")->required();
   SceneOptions &s = a.scene;

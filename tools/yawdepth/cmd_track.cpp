@@ -132,8 +132,7 @@ Runner addTrack(CLI::App &app)
   auto a = std::make_shared<TrackArgs>();
   CLI::App *sub = app.add_subcommand(
       "track", "Track natural corners (KLT) through the images of a motion log, gated by the known motion.");
-  sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML (with the image size)")->required();
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
+  addCameraOptions(sub, a->camera, a->camera_name, true, "with the image size");
   // Optional (scripts ran without it): the tracks are pixel positions, which the rig does not change.
   addRigOption(sub, a->rig, false,
                "the tracks written are pixel positions; the rig only places the epipolar gate (and gives a "

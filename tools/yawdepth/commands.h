@@ -112,6 +112,12 @@ inline const char *const kDefaultTags = "1x1";
 /*! \brief --tags COLSxROWS (AprilTag grid), the same name, default and help in every command. */
 CLI::Option *addTagsOption(CLI::App *sub, std::string &tags);
 /*!
+  \brief --camera FILE and --camera-name NAME (the camera read from a file), the same names and help in
+  every command; `note` adds what the camera is for in this command. Returns --camera.
+*/
+CLI::Option *addCameraOptions(CLI::App *sub, std::string &camera, std::string &camera_name, bool required,
+                              const std::string &note = "");
+/*!
   \brief --rig FILE. `required` wherever the rig changes the numbers written; `optional_because` (when
   not required) says in the help what happens without it.
 */

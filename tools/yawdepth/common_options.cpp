@@ -41,6 +41,21 @@ CLI::Option *addTagsOption(CLI::App *sub, std::string &tags)
       ->type_name("COLSxROWS");
 }
 
+CLI::Option *addCameraOptions(CLI::App *sub, std::string &camera, std::string &camera_name, bool required,
+                              const std::string &note)
+{
+  CLI::Option *o = sub->add_option("--camera", camera,
+                                   "Camera file: ViSP XML or OpenCV YAML/XML (docs/formats.md, \"Camera file\")" +
+                                       (note.empty() ? std::string() : "; " + note))
+                       ->type_name("FILE");
+  if (required)
+    o->required();
+  sub->add_option("--camera-name", camera_name,
+                  "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr "
+                  "camchain (default cam0)");
+  return o;
+}
+
 CLI::Option *addRigOption(CLI::App *sub, std::string &rig, bool required, const std::string &optional_because)
 {
   std::string help = "Rig file (YAML): camera_offset (or camera_pose), yaw_offset, yaw_axis, time_offset";
