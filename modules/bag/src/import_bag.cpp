@@ -760,6 +760,8 @@ BagImportResult importBag(const BagImportOptions &o)
     ro.end = w_end;
     bag->read(ro, [&](const BagMessage &m) {
       const std::size_t k = read_count++;
+      if (o.progress)
+        o.progress(read_count, std::size_t(image_topic.messages));
       if (k % std::size_t(o.every) != 0)
         return true;
       DecodedImage d = compressed ? decodeCompressed(m) : decodeRaw(m);
