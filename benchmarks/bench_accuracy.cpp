@@ -393,7 +393,7 @@ void printHeader(const BenchArgs &args, bool refine_ok)
               "  heading 0.05 deg per increment, yaw reading 0.05 deg.\n");
   std::printf("Arm scenes (6-DoF motion log): camera fx 601.7, fy 602.1, u0 324.4, v0 239.6, Brown distortion,\n"
               "  640x480; camera_pose (0.0577, -0.0339, -0.0423 m; theta-u 0.0018, 0.0092, 1.5818 rad); 10 frames of\n"
-              "  armTrajectory (approach: 30 %% of 0.6 m toward the target; orbit: 40 deg around it at 0.6 m; random:\n"
+              "  armTrajectory (approach: 30 %% of 0.6 m toward the point it looks at; orbit: 40 deg around it at 0.6 m; random:\n"
               "  poses within 9 cm and 17 deg of roll), 30 points at 0.4 to 0.8 m; noise 0.3 px, 1 mm and 0.05 deg per\n"
               "  increment per axis, no yaw joint.\n");
   std::printf("Bound: CRLB of zc from depthCramerRao at the truth; joint = all points + motion (the bound\n"

@@ -222,10 +222,10 @@ int main(int argc, char **argv)
   const std::vector<Policy> policies = {{"front (0 deg)", false, 0.0},     {"30 deg toward", false, 30 * kDeg},
                                         {"60 deg toward", false, 60 * kDeg}, {"90 deg toward", false, 90 * kDeg},
                                         {"no exploring", true, 0.0, false}, {"steered (helper)", true, 0.0}};
-  std::printf("yawdepth active yaw: seconds until every target's depth sigma < 2 %% of its depth (window estimator)\n");
+  std::printf("yawdepth active yaw: seconds until every goal point's depth sigma < 2 %% of its depth (window estimator)\n");
   std::printf("Reproduce: build/benchmarks/bench_active_yaw --seeds %d --seed %llu --frames %d\n", seeds,
               static_cast<unsigned long long>(seed), frames);
-  std::printf("12 targets per layout in a box (+-0.2 to 0.4 m, +-0.1 m high); 0.2 m/s, 10 frames/s, run of %.0f s; median\n"
+  std::printf("12 goal points per layout in a box (+-0.2 to 0.4 m, +-0.1 m high); 0.2 m/s, 10 frames/s, run of %.0f s; median\n"
               "(and worst) over %d seeds; fixed yaws look toward the layout's side (right or left).\n",
               frames * kDt, seeds);
   std::printf("%s\n", std::string(127, '-').c_str());
