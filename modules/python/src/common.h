@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 #include <visp3/core/vpHomogeneousMatrix.h>
@@ -34,8 +35,11 @@ template <typename M> Array fromEigen(const M &m)
       r(i, j) = m(i, j);
   return a;
 }
-/*! \brief An integer held in a float64 cell (frame numbers, ids); throws unless it is one. */
-long integerOf(double v, const std::string &what);
+/*! \brief Whether a float64 cell holds an integer (frame numbers, ids). */
+inline bool isInteger(double v) { return std::isfinite(v) && v == std::floor(v) && std::fabs(v) <= 9007199254740992.0; }
+/*! \brief An integer held in a float64 cell; throws naming `what` (row `row`) unless it is one. The
+    message is built only on failure: this runs once per array row. */
+long integerOf(double v, const char *what, py::ssize_t row, const char *column);
 
 /*! \brief Motion samples as (N, 6) planar [frame, x, y, z, heading, yaw] or (N, 8) 6-DoF
     [frame, tx, ty, tz, tux, tuy, tuz, yaw]. */

@@ -139,7 +139,11 @@ What estimatePoints() returns.
   m.def("_estimatePoints",
         [](const CameraModel &camera, const YawRig &rig, const py::object &motion, const py::object &tracks,
            PipelineOptions options, bool sigma_yaw_given) {
-          const MotionLog log = motionLogOf(motion);
+          MotionLog converted; // an array given: its log; a MotionLog: used where it is, not copied
+          const bool is_log = py::isinstance<MotionLog>(motion);
+          if (!is_log)
+            converted = motionLogOf(motion);
+          const MotionLog &log = is_log ? motion.cast<const MotionLog &>() : converted;
           const std::vector<Track> t = tracksOf(tracks);
           options.noise = noiseForMotionLog(options.noise, !log.samples.empty() && log.samples.front().six_dof,
                                             log.yaw_column, sigma_yaw_given);

@@ -3,7 +3,7 @@
 #include "common.h"
 
 #include <cmath>
-#include <map>
+#include <algorithm>
 #include <sstream>
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
@@ -54,10 +54,11 @@ Array fromPose(const vpHomogeneousMatrix &M)
   return a;
 }
 
-long integerOf(double v, const std::string &what)
+long integerOf(double v, const char *what, py::ssize_t row, const char *column)
 {
-  if (!std::isfinite(v) || v != std::floor(v) || std::fabs(v) > 9007199254740992.0)
-    throw Error(what + ": not an integer: " + py::str(py::float_(v)).cast<std::string>());
+  if (!isInteger(v))
+    throw Error(std::string(what) + ": row " + std::to_string(row) + ", " + column + ": not an integer: " +
+                py::str(py::float_(v)).cast<std::string>());
   return static_cast<long>(v);
 }
 
@@ -97,7 +98,7 @@ std::vector<MotionSample> motionSamples(const py::handle &a)
   std::vector<MotionSample> out(static_cast<std::size_t>(arr.shape(0)));
   for (py::ssize_t k = 0; k < arr.shape(0); ++k) {
     MotionSample &s = out[static_cast<std::size_t>(k)];
-    s.frame = integerOf(r(k, 0), "motion: row " + std::to_string(k) + ", frame");
+    s.frame = integerOf(r(k, 0), "motion", k, "frame");
     s.x = r(k, 1);
     s.y = r(k, 2);
     s.z = r(k, 3);
@@ -146,23 +147,25 @@ std::vector<Track> tracksOf(const py::handle &a)
 {
   Array arr = asRows(a, 4, "tracks [frame, id, u, v]");
   auto r = arr.unchecked<2>();
-  std::map<long, std::map<long, Observation>> byId;
-  for (py::ssize_t k = 0; k < arr.shape(0); ++k) {
-    const std::string row = "tracks: row " + std::to_string(k);
-    const long frame = integerOf(r(k, 0), row + ", frame");
-    const long id = integerOf(r(k, 1), row + ", id");
-    if (!byId[id].emplace(frame, Observation{frame, r(k, 2), r(k, 3)}).second)
-      throw Error(row + ": frame " + std::to_string(frame) + " and id " + std::to_string(id) + " repeated");
-  }
+  struct Row {
+    long id;
+    Observation o;
+  };
+  std::vector<Row> rows(static_cast<std::size_t>(arr.shape(0)));
+  for (py::ssize_t k = 0; k < arr.shape(0); ++k)
+    rows[static_cast<std::size_t>(k)] = {integerOf(r(k, 1), "tracks", k, "id"),
+                                         {integerOf(r(k, 0), "tracks", k, "frame"), r(k, 2), r(k, 3)}};
+  std::stable_sort(rows.begin(), rows.end(), [](const Row &x, const Row &y) {
+    return x.id != y.id ? x.id < y.id : x.o.frame < y.o.frame;
+  });
   std::vector<Track> tracks;
-  tracks.reserve(byId.size());
-  for (auto &[id, obs] : byId) {
-    Track t;
-    t.id = id;
-    t.observations.reserve(obs.size());
-    for (auto &fo : obs)
-      t.observations.push_back(fo.second);
-    tracks.push_back(std::move(t));
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (i > 0 && rows[i].id == rows[i - 1].id && rows[i].o.frame == rows[i - 1].o.frame)
+      throw Error("tracks: frame " + std::to_string(rows[i].o.frame) + " and id " + std::to_string(rows[i].id) +
+                  " repeated");
+    if (tracks.empty() || tracks.back().id != rows[i].id)
+      tracks.push_back(Track{rows[i].id, {}});
+    tracks.back().observations.push_back(rows[i].o);
   }
   return tracks;
 }

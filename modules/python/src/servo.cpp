@@ -29,7 +29,7 @@ std::vector<FeatureObservation> featuresOf(const py::handle &points)
   auto r = a.unchecked<2>();
   out.reserve(static_cast<std::size_t>(a.shape(0)));
   for (py::ssize_t k = 0; k < a.shape(0); ++k)
-    out.push_back({integerOf(r(k, 0), "features: row " + std::to_string(k) + ", id"), r(k, 1), r(k, 2)});
+    out.push_back({integerOf(r(k, 0), "features", k, "id"), r(k, 1), r(k, 2)});
   return out;
 }
 
