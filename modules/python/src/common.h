@@ -61,5 +61,6 @@ py::array pointsArray(const std::vector<PointRow> &rows);
 void bindIo(py::module_ &m);
 void bindEstimation(py::module_ &m);
 void bindServo(py::module_ &m);
+void bindFeatures(py::module_ &m);
 
 } // namespace yawdepth::python

@@ -450,8 +450,11 @@ PYBIND11_MODULE(_yawdepth, m)
 {
   using namespace yawdepth::python;
   m.doc() = "yawdepth's C++ bindings; import `yawdepth`, not this module.";
-  py::register_exception<yawdepth::Error>(m, "Error", PyExc_ValueError);
+  auto error = py::register_exception<yawdepth::Error>(m, "Error", PyExc_ValueError);
+  error.attr("__doc__") = "yawdepth::Error: bad input (unreadable or malformed files, invalid parameters); "
+                          "str(e) is the C++ one-line message. A subclass of ValueError.";
   bindIo(m);
   bindEstimation(m);
   bindServo(m);
+  bindFeatures(m);
 }

@@ -17,16 +17,8 @@ or from numbers: CameraModel.brown(fx, fy, u0, v0, coeffs, width, height), YawRi
 or YawRig(camera_pose=vMc0), motion as an (N, 6) / (N, 8) array. The streaming form:
 DepthProvider (servo) and StreamEstimator.
 """
-from ._yawdepth import (  # noqa: F401
-    Error,
-    CameraModel, loadCameraFile, checkCameraPlausible, saveCameraYaml, saveRosCameraInfoYaml,
-    YawRig, RigFile, readRigFile, writeRigFile, rigWarnings,
-    MotionLog, readMotionCsv, loadMotion, checkMotionSteps, motionWarnings, applyRigFile, writeMotionCsv,
-    readTracksCsv, writeTracksCsv, checkTracksAgainstMotion, readPointsCsv,
-    NoiseModel, GateOptions, ResidualCheckOptions, PipelineOptions, Estimate,
-    methodAvailable, bestMethod, noiseForMotionLog,
-    PointEstimate, FeatureDepth, DepthProviderOptions, DepthProvider, StreamOptions, StreamEstimator,
-)
+from ._yawdepth import *  # noqa: F401,F403 (every public C++ binding)
+from ._yawdepth import Error, Estimate, PipelineOptions
 from . import _yawdepth
 import copy as _copy
 

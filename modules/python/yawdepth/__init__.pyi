@@ -258,3 +258,100 @@ class StreamEstimator:
     def forget(self, id: int) -> None: ...
     @property
     def method(self) -> str: ...
+
+Image = npt.NDArray[np.uint8]
+
+def readGrayImage(path: str, camera: Optional[CameraModel] = None) -> Image: ...
+
+class DetectorOptions:
+    subpixel: bool
+    subpixel_window: int
+    apriltag_decimate: float
+    threads: int
+    def __init__(self) -> None: ...
+
+class FrameDetection:
+    @property
+    def frame(self) -> int: ...
+    @property
+    def found(self) -> bool: ...
+    @property
+    def reason(self) -> str: ...
+    @property
+    def features(self) -> Array: ...
+    @property
+    def warnings(self) -> List[str]: ...
+
+class PatternDetector:
+    def __init__(self, pattern: str, options: DetectorOptions = ...) -> None: ...
+    def setCamera(self, camera: CameraModel) -> None: ...
+    def detect(self, image: Image, frame: int) -> FrameDetection: ...
+    @staticmethod
+    def toTracks(detections: Sequence[FrameDetection]) -> Array: ...
+
+class KltOptions:
+    max_features: int
+    min_distance: float
+    quality: float
+    block_size: int
+    window: int
+    pyramid_levels: int
+    forward_backward_px: float
+    redetect_fraction: float
+    border_px: float
+    gate_sigmas: float
+    sigma_px: float
+    min_depth: float
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+
+class KltTracker:
+    def __init__(self, camera: CameraModel, options: KltOptions = ...) -> None: ...
+    def track(self, image: Image, cMp: Optional[ArrayLike] = None, sigma_rot: float = 0.0,
+              sigma_trans: float = 0.0) -> Array: ...
+    @property
+    def lastStats(self) -> Dict[str, int]: ...
+
+def trackSequence(camera: CameraModel, rig: YawRig, motion: MotionLog, noise: NoiseModel,
+                  options: KltOptions = ..., gate: bool = True,
+                  images: Optional[Sequence[str]] = None) -> Tuple[Array, Dict[str, int]]: ...
+
+class ErrorAnalysisCase:
+    yaw: float
+    depth: float
+    u_offset: float
+    dz: float
+    kx: float
+    delta_dz: float
+    delta_yaw: float
+    delta_u: float
+    delta_du: float
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+
+class DepthErrorTerms:
+    parallax_px: float
+    odometry: float
+    yaw: float
+    pixel: float
+    parallax: float
+    total: float
+
+class MonteCarloDepthError:
+    rms_relative: float
+    median_abs_relative: float
+    bias_relative: float
+    samples: int
+
+class PaperErrorRow:
+    view: str
+    input: ErrorAnalysisCase
+    lateral_depth_error: float
+
+def firstOrderDepthError(c: ErrorAnalysisCase) -> DepthErrorTerms: ...
+def firstOrderDepthSigma(c: ErrorAnalysisCase) -> float: ...
+def lateralRelativeError(delta_u: float, kx: float, u_offset: float, depth_relative_error: float) -> float: ...
+def monteCarloDepthError(c: ErrorAnalysisCase, samples: int, seed: int = 1) -> MonteCarloDepthError: ...
+def paperErrorCases() -> List[PaperErrorRow]: ...
+def formatPaperTerm(v: float) -> str: ...
+def formatPercent(v: float) -> str: ...

@@ -1,0 +1,224 @@
+// Detection and tracking on numpy images (uint8, 2-D, as OpenCV's Python API gives them), and the
+// error analysis of eqs. (9)-(17).
+#include "common.h"
+
+#include <cstring>
+#include <opencv2/core.hpp>
+#include <yawdepth/error.h>
+#include <yawdepth/estimation/error_analysis.h>
+#include <yawdepth/features/detector.h>
+#include <yawdepth/features/klt_tracker.h>
+#include <yawdepth/features/pattern.h>
+
+namespace yawdepth::python {
+
+namespace {
+
+using Image = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>;
+
+/*! A cv::Mat over the numpy image's pixels (no copy; valid while `image` lives). */
+cv::Mat matOf(const Image &image)
+{
+  if (image.ndim() != 2)
+    throw Error("image: expected a 2-D uint8 array (gray), got " + std::to_string(image.ndim()) + " dimensions");
+  return cv::Mat(static_cast<int>(image.shape(0)), static_cast<int>(image.shape(1)), CV_8UC1,
+                 const_cast<std::uint8_t *>(image.data()));
+}
+
+/*! An 8-bit gray cv::Mat as a (rows, cols) uint8 array (copied). */
+py::array_t<std::uint8_t> imageOf(const cv::Mat &m)
+{
+  if (m.type() != CV_8UC1)
+    throw Error("image: not 8-bit gray");
+  py::array_t<std::uint8_t> a({static_cast<py::ssize_t>(m.rows), static_cast<py::ssize_t>(m.cols)});
+  for (int r = 0; r < m.rows; ++r)
+    std::memcpy(a.mutable_data(r, 0), m.ptr(r), static_cast<std::size_t>(m.cols));
+  return a;
+}
+
+Array featuresArray(const std::vector<FeatureObservation> &f)
+{
+  Array a = newArray(static_cast<py::ssize_t>(f.size()), 3);
+  auto r = a.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const py::ssize_t k = static_cast<py::ssize_t>(i);
+    r(k, 0) = static_cast<double>(f[i].id);
+    r(k, 1) = f[i].u;
+    r(k, 2) = f[i].v;
+  }
+  return a;
+}
+
+py::dict statsOf(const KltStats &s)
+{
+  py::dict d;
+  d["tracked"] = s.tracked;
+  d["lost_flow"] = s.lost_flow;
+  d["lost_fb"] = s.lost_fb;
+  d["lost_border"] = s.lost_border;
+  d["lost_epipolar"] = s.lost_epipolar;
+  d["detected"] = s.detected;
+  return d;
+}
+
+} // namespace
+
+void bindFeatures(py::module_ &m)
+{
+  m.def("readGrayImage", [](const std::string &path, const std::optional<CameraModel> &camera) {
+          return imageOf(camera ? readGrayImage(path, *camera) : readGrayImage(path));
+        }, py::arg("path"), py::arg("camera") = py::none(),
+        "Read an image file as (rows, cols) uint8 gray; with `camera`, its size must be the camera's.");
+
+  py::class_<DetectorOptions>(m, "DetectorOptions", "Options of PatternDetector (C++ DetectorOptions, its defaults): "
+                              "subpixel, subpixel_window (px, 0: per corner), apriltag_decimate, threads.")
+      .def(py::init<>())
+      .def_readwrite("subpixel", &DetectorOptions::subpixel)
+      .def_readwrite("subpixel_window", &DetectorOptions::subpixel_window)
+      .def_readwrite("apriltag_decimate", &DetectorOptions::apriltag_decimate)
+      .def_readwrite("threads", &DetectorOptions::threads);
+
+  py::class_<FrameDetection>(m, "FrameDetection", R"doc(
+One image's detection: frame, found (bool), reason (str, why not found), features (K, 3) float64
+[id, u (px), v (px)] (observed pixels), warnings (list of str).)doc")
+      .def_readonly("frame", &FrameDetection::frame)
+      .def_readonly("found", &FrameDetection::found)
+      .def_readonly("reason", &FrameDetection::reason)
+      .def_property_readonly("features", [](const FrameDetection &d) { return featuresArray(d.features); })
+      .def_readonly("warnings", &FrameDetection::warnings);
+
+  py::class_<PatternDetector>(m, "PatternDetector", R"doc(
+Detects a pattern in gray images with stable feature ids (what `yawdepth measure --pattern` runs).
+PatternDetector(pattern, options=DetectorOptions()): pattern as the CLI's --pattern,
+'chessboard:COLSxROWS:SQUARE' or 'apriltag:FAMILY:SIZE' (m).)doc")
+      .def(py::init([](const std::string &pattern, const DetectorOptions &o) {
+             return PatternDetector(PatternSpec::parse(pattern), o);
+           }),
+           py::arg("pattern"), py::arg("options") = DetectorOptions())
+      .def("setCamera", &PatternDetector::setCamera, py::arg("camera"),
+           "The camera (lens-aware corner search), as the CLI sets it.")
+      .def("detect",
+           [](PatternDetector &d, const Image &image, long frame) {
+             const cv::Mat mat = matOf(image);
+             py::gil_scoped_release release;
+             return d.detect(mat, frame);
+           },
+           py::arg("image"), py::arg("frame"), "Detect in `image` ((rows, cols) uint8); returns a FrameDetection.")
+      .def_static("toTracks", [](const std::vector<FrameDetection> &frames) {
+             return tracksArray(PatternDetector::toTracks(frames));
+           }, py::arg("detections"), "Tracks (M, 4) [frame, id, u, v] of a list of FrameDetection.");
+
+  py::class_<KltOptions>(m, "KltOptions", R"doc(
+Options of KltTracker (C++ KltOptions, its defaults): max_features, min_distance (px), quality,
+block_size (px), window (px), pyramid_levels, forward_backward_px, redetect_fraction, border_px,
+gate_sigmas, sigma_px (px), min_depth (m).)doc")
+      .def(py::init<>())
+      .def_readwrite("max_features", &KltOptions::max_features)
+      .def_readwrite("min_distance", &KltOptions::min_distance)
+      .def_readwrite("quality", &KltOptions::quality)
+      .def_readwrite("block_size", &KltOptions::block_size)
+      .def_readwrite("window", &KltOptions::window)
+      .def_readwrite("pyramid_levels", &KltOptions::pyramid_levels)
+      .def_readwrite("forward_backward_px", &KltOptions::forward_backward_px)
+      .def_readwrite("redetect_fraction", &KltOptions::redetect_fraction)
+      .def_readwrite("border_px", &KltOptions::border_px)
+      .def_readwrite("gate_sigmas", &KltOptions::gate_sigmas)
+      .def_readwrite("sigma_px", &KltOptions::sigma_px)
+      .def_readwrite("min_depth", &KltOptions::min_depth)
+      .def("validate", &KltOptions::validate);
+
+  py::class_<KltTracker>(m, "KltTracker", R"doc(
+Pyramidal Lucas-Kanade tracks with stable ids (C++ KltTracker). KltTracker(camera, options=KltOptions());
+the camera must have its image size.)doc")
+      .def(py::init<const CameraModel &, const KltOptions &>(), py::arg("camera"), py::arg("options") = KltOptions())
+      .def("track",
+           [](KltTracker &t, const Image &image, const py::object &cMp, double sigma_rot, double sigma_trans) {
+             const cv::Mat mat = matOf(image);
+             KltMotion motion;
+             const bool gated = !cMp.is_none();
+             if (gated) {
+               motion.cMp = toPose(cMp, "cMp");
+               motion.sigma_rot = sigma_rot;
+               motion.sigma_trans = sigma_trans;
+             }
+             std::vector<FeatureObservation> out;
+             {
+               py::gil_scoped_release release;
+               out = t.track(mat, gated ? &motion : nullptr);
+             }
+             return featuresArray(out);
+           },
+           py::arg("image"), py::arg("cMp") = py::none(), py::arg("sigma_rot") = 0.0, py::arg("sigma_trans") = 0.0,
+           R"doc(Track into the next image ((rows, cols) uint8, the camera's size). cMp: (4, 4) pose of the
+previous camera in the current one, for the epipolar gate, with its 1-sigma rotation (rad) and
+translation (m, per axis); None: no gate. Returns (K, 3) float64 [id, u (px), v (px)].)doc")
+      .def_property_readonly("lastStats", [](const KltTracker &t) { return statsOf(t.lastStats()); },
+                             "What the last track() did: dict of tracked, lost_flow, lost_fb, lost_border, "
+                             "lost_epipolar, detected.");
+
+  m.def("trackSequence",
+        [](const CameraModel &camera, const YawRig &rig, const MotionLog &motion, const NoiseModel &noise,
+           const KltOptions &options, bool gate, const std::optional<std::vector<std::string>> &images) {
+          const std::vector<std::string> &files = images ? *images : motion.images;
+          SequenceTracks seq;
+          {
+            py::gil_scoped_release release;
+            seq = trackSequence(camera, rig, motion.samples, files, noise, options, gate);
+          }
+          return py::make_tuple(tracksArray(seq.tracks), statsOf(seq.totals));
+        },
+        py::arg("camera"), py::arg("rig"), py::arg("motion"), py::arg("noise"), py::arg("options") = KltOptions(),
+        py::arg("gate") = true, py::arg("images") = py::none(),
+        R"doc(KLT tracks through the images of a motion log (what `yawdepth track` runs): one image per
+row (`images`, default motion.images), each step gated by the motion and `noise` unless gate is
+False. Returns (tracks (M, 4) [frame, id, u, v] of the features seen in 2 frames or more, totals dict).)doc");
+
+  // ---------------------------------------------------------------- error analysis
+  py::class_<ErrorAnalysisCase>(m, "ErrorAnalysisCase", R"doc(
+One case of the error analysis (m, rad, px; C++ defaults): yaw (rad, 0 front view), depth (m),
+u_offset (px), dz (m), kx (px), delta_dz (m), delta_yaw (rad), delta_u (px), delta_du (px).)doc")
+      .def(py::init<>())
+      .def_readwrite("yaw", &ErrorAnalysisCase::yaw)
+      .def_readwrite("depth", &ErrorAnalysisCase::depth)
+      .def_readwrite("u_offset", &ErrorAnalysisCase::u_offset)
+      .def_readwrite("dz", &ErrorAnalysisCase::dz)
+      .def_readwrite("kx", &ErrorAnalysisCase::kx)
+      .def_readwrite("delta_dz", &ErrorAnalysisCase::delta_dz)
+      .def_readwrite("delta_yaw", &ErrorAnalysisCase::delta_yaw)
+      .def_readwrite("delta_u", &ErrorAnalysisCase::delta_u)
+      .def_readwrite("delta_du", &ErrorAnalysisCase::delta_du)
+      .def("validate", &ErrorAnalysisCase::validate);
+  py::class_<DepthErrorTerms>(m, "DepthErrorTerms", "First-order relative depth error terms (dimensionless; "
+                              "parallax_px in px): parallax_px, odometry, yaw, pixel, parallax, total.")
+      .def_readonly("parallax_px", &DepthErrorTerms::parallax_px)
+      .def_readonly("odometry", &DepthErrorTerms::odometry)
+      .def_readonly("yaw", &DepthErrorTerms::yaw)
+      .def_readonly("pixel", &DepthErrorTerms::pixel)
+      .def_readonly("parallax", &DepthErrorTerms::parallax)
+      .def_readonly("total", &DepthErrorTerms::total);
+  py::class_<MonteCarloDepthError>(m, "MonteCarloDepthError", "rms_relative, median_abs_relative, bias_relative, samples.")
+      .def_readonly("rms_relative", &MonteCarloDepthError::rms_relative)
+      .def_readonly("median_abs_relative", &MonteCarloDepthError::median_abs_relative)
+      .def_readonly("bias_relative", &MonteCarloDepthError::bias_relative)
+      .def_readonly("samples", &MonteCarloDepthError::samples);
+  py::class_<PaperErrorRow>(m, "PaperErrorRow", "A row of the paper's Section 4 table: view, input, lateral_depth_error.")
+      .def_readonly("view", &PaperErrorRow::view)
+      .def_readonly("input", &PaperErrorRow::input)
+      .def_readonly("lateral_depth_error", &PaperErrorRow::lateral_depth_error);
+  m.def("firstOrderDepthError", &firstOrderDepthError, py::arg("c"), "First-order terms of eqs. (9)-(14).");
+  m.def("firstOrderDepthSigma", &firstOrderDepthSigma, py::arg("c"),
+        "Statistical first-order relative depth error (1 sigma).");
+  m.def("lateralRelativeError", &lateralRelativeError, py::arg("delta_u"), py::arg("kx"), py::arg("u_offset"),
+        py::arg("depth_relative_error"), "Lateral error, eq. (17).");
+  m.def("monteCarloDepthError",
+        [](const ErrorAnalysisCase &c, int samples, std::uint64_t seed) {
+          py::gil_scoped_release release;
+          return monteCarloDepthError(c, samples, seed);
+        },
+        py::arg("c"), py::arg("samples"), py::arg("seed") = 1, "Monte Carlo of eq. (9) (reproducible by seed).");
+  m.def("paperErrorCases", &paperErrorCases, "The cases of the paper's Section 4 table.");
+  m.def("formatPaperTerm", &formatPaperTerm, py::arg("v"), "A term as the paper prints it.");
+  m.def("formatPercent", &formatPercent, py::arg("v"), "A relative error as a percentage with two decimals.");
+}
+
+} // namespace yawdepth::python

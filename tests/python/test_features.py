@@ -1,0 +1,111 @@
+"""Detection, KLT tracking and the error analysis against the command line (`measure --tracks-out`,
+`track`, `error-analysis`) on the same rendered images: the same tracks files, byte for byte."""
+import math
+import os
+
+import numpy as np
+import pytest
+
+import yawdepth
+from conftest import CALIB, run_cli, simulate
+
+PATTERN = "chessboard:7x5:0.02"
+
+
+@pytest.fixture(scope="module")
+def images(tmp_path_factory):
+    """6 rendered frames of a chessboard on a textured wall (for both detection and KLT)."""
+    d = str(tmp_path_factory.mktemp("images"))
+    return simulate(d, "--frames", 6, "--pattern", PATTERN, "--wall", 0.05, "--supersampling", 2, "--step", 0.01)
+
+
+def load(scene):
+    camera = yawdepth.loadCameraFile(scene["camera"])
+    rig_file = yawdepth.readRigFile(scene["rig"])
+    motion = yawdepth.loadMotion(scene["motion"], rig_file)
+    yawdepth.checkMotionSteps(motion, scene["motion"])
+    yawdepth.applyRigFile(rig_file, motion)
+    return camera, rig_file.rig(), motion
+
+
+def test_detection_as_measure(images, tmp_path):
+    run_cli("measure", "--camera", images["camera"], "--rig", images["rig"], "--motion", images["motion"],
+            "--pattern", PATTERN, "--tracks-out", tmp_path / "cli.csv", "--out", tmp_path / "points.csv", "--quiet")
+    camera, rig, motion = load(images)
+    detector = yawdepth.PatternDetector(PATTERN)
+    detector.setCamera(camera)
+    detections = []
+    for row, path in zip(motion.samples, motion.images):
+        image = yawdepth.readGrayImage(path, camera)
+        assert image.dtype == np.uint8 and image.shape == (camera.height, camera.width)
+        d = detector.detect(image, int(row[0]))
+        assert d.found, d.reason
+        assert d.features.shape == (35, 3)
+        detections.append(d)
+    tracks = yawdepth.PatternDetector.toTracks(detections)
+    yawdepth.writeTracksCsv(str(tmp_path / "py.csv"), tracks)
+    assert (tmp_path / "py.csv").read_text() == (tmp_path / "cli.csv").read_text()
+    # a numpy image that is not C-contiguous (a view) gives the same features
+    image = yawdepth.readGrayImage(motion.images[0], camera)
+    flipped = np.ascontiguousarray(image[:, ::-1])[:, ::-1]
+    again = yawdepth.PatternDetector(PATTERN)
+    again.setCamera(camera)
+    np.testing.assert_array_equal(again.detect(flipped, 0).features, detections[0].features)
+    nothing = yawdepth.PatternDetector(PATTERN).detect(np.zeros((480, 640), np.uint8), 9)
+    assert not nothing.found and nothing.reason and nothing.features.shape == (0, 3)
+    with pytest.raises(yawdepth.Error):
+        yawdepth.PatternDetector("chessboard:7x5")
+    with pytest.raises(yawdepth.Error, match="2-D"):
+        detector.detect(np.zeros((4, 4, 3), np.uint8), 0)
+
+
+def test_klt_as_track(images, tmp_path):
+    run_cli("track", "--camera", images["camera"], "--rig", images["rig"], "--motion", images["motion"],
+            "--out", tmp_path / "cli.csv", "--quiet")
+    camera, rig, motion = load(images)
+    noise = yawdepth.noiseForMotionLog(yawdepth.NoiseModel(), motion.six_dof, motion.yaw_column, False)
+    tracks, totals = yawdepth.trackSequence(camera, rig, motion, noise, yawdepth.KltOptions())
+    yawdepth.writeTracksCsv(str(tmp_path / "py.csv"), tracks)
+    assert (tmp_path / "py.csv").read_text() == (tmp_path / "cli.csv").read_text()
+    assert len(tracks) > 100 and totals["detected"] > 100
+    # frame by frame, ungated: the same as the sequence without the gate
+    tracker = yawdepth.KltTracker(camera)
+    seen = []
+    for row, path in zip(motion.samples, motion.images):
+        f = tracker.track(yawdepth.readGrayImage(path))
+        seen.append(np.column_stack([np.full(len(f), row[0]), f]))
+        assert tracker.lastStats["tracked"] + tracker.lastStats["detected"] == len(f)
+    rows = np.vstack(seen)
+    ungated, _ = yawdepth.trackSequence(camera, rig, motion, noise, gate=False)
+    ids, counts = np.unique(rows[:, 1], return_counts=True)
+    kept = rows[np.isin(rows[:, 1], ids[counts >= 2])]
+    kept = kept[np.lexsort((kept[:, 0], kept[:, 1]))]
+    np.testing.assert_array_equal(kept, ungated)
+    with pytest.raises(yawdepth.Error):
+        tracker.track(np.zeros((10, 10), np.uint8))  # not the camera's size
+
+
+def test_error_analysis_as_cli():
+    out = run_cli("error-analysis", "--depth", 0.6, "--monte-carlo", 1000, "--seed", 3).stdout.split("\n")
+    header, values = out[0].split(), out[1].split()
+    cells = dict(zip(header[1:], [v for v in " ".join(values[1:]).replace(" %", "%").split()]))
+    c = yawdepth.ErrorAnalysisCase()
+    c.depth = 0.6
+    t = yawdepth.firstOrderDepthError(c)
+    assert yawdepth.formatPaperTerm(t.odometry) == cells["odometry"]
+    assert yawdepth.formatPaperTerm(t.yaw) == cells["yaw"]
+    assert yawdepth.formatPaperTerm(t.pixel) == cells["pixel"]
+    assert yawdepth.formatPaperTerm(t.parallax) == cells["parallax"]
+    assert yawdepth.formatPercent(t.total).replace(" ", "") == cells["total"]
+    assert yawdepth.formatPercent(yawdepth.firstOrderDepthSigma(c)).replace(" ", "") == cells["1sigma_fo"]
+    mc = yawdepth.monteCarloDepthError(c, 1000, 3)
+    assert mc.samples == 1000
+    assert yawdepth.formatPercent(mc.rms_relative).replace(" ", "") == cells["mc_rms"]
+    assert yawdepth.formatPercent(mc.median_abs_relative).replace(" ", "") == cells["mc_median"]
+    rows = yawdepth.paperErrorCases()
+    assert [r.view for r in rows][:2] == ["front", "side"] or len(rows) >= 2
+    assert math.isclose(yawdepth.lateralRelativeError(0.1, 1700, 10, 0.05), 0.1 / 1700 + 10 / 1700 * 0.05)
+    bad = yawdepth.ErrorAnalysisCase()
+    bad.depth = -1
+    with pytest.raises(yawdepth.Error):
+        bad.validate()
