@@ -109,3 +109,29 @@ def test_error_analysis_as_cli():
     bad.depth = -1
     with pytest.raises(yawdepth.Error):
         bad.validate()
+
+
+def test_camera_calibration_as_cli(tmp_path):
+    """calibrate-camera on the 8 real photographs of tests/data/franka-eye-in-hand: the same camera
+    file (OpenCV YAML and ViSP XML) and RMS."""
+    folder = os.path.join(os.path.dirname(CALIB), "tests", "data", "franka-eye-in-hand")
+    paths = [os.path.join(folder, f"franka_image-{i}.png") for i in range(1, 9)]
+    out = run_cli("calibrate-camera", "--pattern", "chessboard:9x6:0.0236", "--out", tmp_path / "cli", "--quiet",
+                  *paths).stdout
+    board = yawdepth.BoardLayout("chessboard:9x6:0.0236")
+    assert board.features().shape == (54, 4)
+    det = yawdepth.detectCalibrationViews(board, paths, [yawdepth.readGrayImage(p) for p in paths])
+    assert len(det.views) == 8 and det.failures == [] and det.width > 0
+    cal = yawdepth.calibrateCamera(board, det.views, det.width, det.height, yawdepth.CameraCalibrationOptions())
+    yawdepth.saveCameraYaml(str(tmp_path / "py.yaml"), cal.camera)
+    assert (tmp_path / "py.yaml").read_text() == (tmp_path / "cli.yaml").read_text()
+    assert f"RMS reprojection error: {cal.rms_px:.4f} px (8 views, 432 points)" in out
+    assert cal.views_used == 8 and len(cal.view_rms_px) == 8 and cal.intrinsics_covariance.shape == (12, 12)
+    assert cal.uncertainty_grid.shape == (6, 8) and any(chosen for _, _, chosen in cal.models)
+    assert yawdepth.projectionUncertainty(cal, cal.camera.u0, cal.camera.v0) > 0
+    yawdepth.saveVispCameraXml(str(tmp_path / "py.xml"), cal)
+    assert yawdepth.loadCameraFile(str(tmp_path / "py.xml")).kx == yawdepth.loadCameraFile(str(tmp_path / "cli.xml")).kx
+    view = yawdepth.CalibrationView("again", det.views[0].features)
+    np.testing.assert_array_equal(view.features, det.views[0].features)
+    with pytest.raises(yawdepth.Error, match="too few views"):
+        yawdepth.calibrateCamera(board, det.views[:2], det.width, det.height)

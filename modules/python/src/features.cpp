@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <opencv2/core.hpp>
+#include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/error_analysis.h>
 #include <yawdepth/features/detector.h>
@@ -172,6 +173,166 @@ translation (m, per axis); None: no gate. Returns (K, 3) float64 [id, u (px), v 
         R"doc(KLT tracks through the images of a motion log (what `yawdepth track` runs): one image per
 row (`images`, default motion.images), each step gated by the motion and `noise` unless gate is
 False. Returns (tracks (M, 4) [frame, id, u, v] of the features seen in 2 frames or more, totals dict).)doc");
+
+  // ---------------------------------------------------------------- camera calibration
+  py::class_<BoardLayout>(m, "BoardLayout", R"doc(
+A calibration board: BoardLayout(pattern) with pattern as the CLI's --pattern
+('chessboard:COLSxROWS:SQUARE', inner corners, m; or 'apriltag:FAMILY:SIZE'); for an AprilTag grid
+set tags_x, tags_y, gap (m) and first_tag_id (C++ defaults: 1, 1, 0, 0; `calibrate-camera`'s
+--tag-gap default is a quarter tag: give it here). features() gives (F, 4) [id, X, Y, Z] (m, board frame).)doc")
+      .def(py::init([](const std::string &pattern) {
+             BoardLayout b;
+             b.pattern = PatternSpec::parse(pattern);
+             return b;
+           }),
+           py::arg("pattern"))
+      .def_readwrite("tags_x", &BoardLayout::tags_x)
+      .def_readwrite("tags_y", &BoardLayout::tags_y)
+      .def_readwrite("gap", &BoardLayout::gap)
+      .def_readwrite("first_tag_id", &BoardLayout::first_tag_id)
+      .def_readwrite("margin", &BoardLayout::margin)
+      .def_readwrite("outer_square", &BoardLayout::outer_square)
+      .def("features", [](const BoardLayout &b) {
+        const auto f = b.features();
+        Array a = newArray(static_cast<py::ssize_t>(f.size()), 4);
+        auto r = a.mutable_unchecked<2>();
+        for (std::size_t i = 0; i < f.size(); ++i) {
+          const py::ssize_t k = static_cast<py::ssize_t>(i);
+          r(k, 0) = static_cast<double>(f[i].first);
+          r(k, 1) = f[i].second.x();
+          r(k, 2) = f[i].second.y();
+          r(k, 3) = f[i].second.z();
+        }
+        return a;
+      });
+
+  py::class_<CalibrationView>(m, "CalibrationView", "One calibration image's features: name, features (K, 3) "
+                              "[id, u (px), v (px)].")
+      .def(py::init([](const std::string &name, const py::object &features) {
+             CalibrationView v;
+             v.name = name;
+             const Array a = asRows(features, 3, "features [id, u, v]");
+             auto r = a.unchecked<2>();
+             for (py::ssize_t k = 0; k < a.shape(0); ++k)
+               v.features.push_back({integerOf(r(k, 0), "features", k, "id"), r(k, 1), r(k, 2)});
+             return v;
+           }),
+           py::arg("name"), py::arg("features"))
+      .def_readonly("name", &CalibrationView::name)
+      .def_property_readonly("features", [](const CalibrationView &v) { return featuresArray(v.features); });
+
+  py::class_<CalibrationDetections>(m, "CalibrationDetections", "detectCalibrationViews()'s result: width, height "
+                                    "(px), views (list of CalibrationView), failures, warnings (list of str).")
+      .def_readonly("width", &CalibrationDetections::width)
+      .def_readonly("height", &CalibrationDetections::height)
+      .def_readonly("views", &CalibrationDetections::views)
+      .def_readonly("failures", &CalibrationDetections::failures)
+      .def_readonly("warnings", &CalibrationDetections::warnings);
+  m.def("detectCalibrationViews",
+        [](const BoardLayout &board, const std::vector<std::string> &names, const std::vector<Image> &images,
+           const DetectorOptions &options) {
+          std::vector<cv::Mat> mats;
+          for (const Image &i : images)
+            mats.push_back(matOf(i));
+          py::gil_scoped_release release;
+          return detectCalibrationViews(board, names, mats, options);
+        },
+        py::arg("board"), py::arg("names"), py::arg("images"), py::arg("options") = DetectorOptions(),
+        "Detect the board in each image ((rows, cols) uint8; what `calibrate-camera` runs). Raises yawdepth.Error "
+        "when the pattern is found in no image or the sizes differ.");
+
+  using Cal = CameraCalibrationOptions;
+  py::class_<Cal>(m, "CameraCalibrationOptions", R"doc(
+Options of calibrateCamera() (C++ CameraCalibrationOptions, its defaults): fix_aspect_ratio,
+fix_principal_point, distortion ('auto', 'k4', 'k5', 'k8', 'fisheye'), try_fisheye, cv_folds,
+simpler_within, zero_tangential, drop_outliers, outlier_ratio, outlier_min_px (px), min_views,
+min_points_per_view, min_orientation_spread (rad), fit_visp.)doc")
+      .def(py::init<>())
+      .def_readwrite("fix_aspect_ratio", &Cal::fix_aspect_ratio)
+      .def_readwrite("fix_principal_point", &Cal::fix_principal_point)
+      .def_property("distortion",
+                    [](const Cal &o) -> std::string {
+                      switch (o.distortion) {
+                      case Cal::Distortion::K4: return "k4";
+                      case Cal::Distortion::K5: return "k5";
+                      case Cal::Distortion::K8: return "k8";
+                      case Cal::Distortion::Fisheye: return "fisheye";
+                      default: return "auto";
+                      }
+                    },
+                    [](Cal &o, const std::string &w) {
+                      if (w == "auto") o.distortion = Cal::Distortion::Auto;
+                      else if (w == "k4") o.distortion = Cal::Distortion::K4;
+                      else if (w == "k5") o.distortion = Cal::Distortion::K5;
+                      else if (w == "k8") o.distortion = Cal::Distortion::K8;
+                      else if (w == "fisheye") o.distortion = Cal::Distortion::Fisheye;
+                      else throw Error("distortion '" + w + "': expected auto, k4, k5, k8 or fisheye");
+                    })
+      .def_readwrite("try_fisheye", &Cal::try_fisheye)
+      .def_readwrite("cv_folds", &Cal::cv_folds)
+      .def_readwrite("simpler_within", &Cal::simpler_within)
+      .def_readwrite("zero_tangential", &Cal::zero_tangential)
+      .def_readwrite("drop_outliers", &Cal::drop_outliers)
+      .def_readwrite("outlier_ratio", &Cal::outlier_ratio)
+      .def_readwrite("outlier_min_px", &Cal::outlier_min_px)
+      .def_readwrite("min_views", &Cal::min_views)
+      .def_readwrite("min_points_per_view", &Cal::min_points_per_view)
+      .def_readwrite("min_orientation_spread", &Cal::min_orientation_spread)
+      .def_readwrite("fit_visp", &Cal::fit_visp);
+
+  py::class_<CameraCalibration>(m, "CameraCalibration", R"doc(
+calibrateCamera()'s result: camera (CameraModel), rms_px (px), std_devs (12: fx fy u0 v0 k1 k2 p1 p2
+k3 k4 k5 k6, px and unitless), intrinsics_covariance (12, 12), views_used, view_rms_px (per view, px),
+orientation_spread (rad), coverage (0..1), notes, model_reason, models (list of (name, score_px,
+chosen)), uncertainty_grid (6, 8) px; visp_rms_without, visp_rms_with (px).)doc")
+      .def_readonly("camera", &CameraCalibration::camera)
+      .def_readonly("rms_px", &CameraCalibration::rms_px)
+      .def_readonly("std_devs", &CameraCalibration::std_devs)
+      .def_property_readonly("intrinsics_covariance",
+                             [](const CameraCalibration &c) { return fromEigen(c.intrinsics_covariance); })
+      .def_readonly("views_used", &CameraCalibration::views_used)
+      .def_property_readonly("view_rms_px", [](const CameraCalibration &c) {
+        std::vector<double> v;
+        for (const auto &r : c.views)
+          v.push_back(r.rms_px);
+        return v;
+      })
+      .def_readonly("orientation_spread", &CameraCalibration::orientation_spread)
+      .def_readonly("coverage", &CameraCalibration::coverage)
+      .def_readonly("notes", &CameraCalibration::notes)
+      .def_readonly("model_reason", &CameraCalibration::model_reason)
+      .def_property_readonly("models", [](const CameraCalibration &c) {
+        py::list l;
+        for (const auto &s : c.models)
+          l.append(py::make_tuple(s.name, s.score_px, s.chosen));
+        return l;
+      })
+      .def_property_readonly("uncertainty_grid", [](const CameraCalibration &c) {
+        Array a = newArray(6, 8);
+        for (std::size_t i = 0; i < c.uncertainty_grid.size() && i < 48; ++i)
+          a.mutable_data()[i] = c.uncertainty_grid[i];
+        return a;
+      })
+      .def_readonly("visp_rms_without", &CameraCalibration::visp_rms_without)
+      .def_readonly("visp_rms_with", &CameraCalibration::visp_rms_with);
+  m.def("calibrateCamera",
+        [](const BoardLayout &board, const std::vector<CalibrationView> &views, int width, int height,
+           const Cal &options) {
+          py::gil_scoped_release release;
+          return calibrateCamera(board, views, width, height, options);
+        },
+        py::arg("board"), py::arg("views"), py::arg("width"), py::arg("height"), py::arg("options") = Cal(),
+        "Calibrate from detected views (what `calibrate-camera` runs); raises yawdepth.Error for too few or "
+        "degenerate views.");
+  m.def("projectionUncertainty", &projectionUncertainty, py::arg("calibration"), py::arg("u"), py::arg("v"),
+        "How uncertain the calibrated projection of pixel (u, v)'s ray is (px, 1 sigma).");
+  m.def("saveVispCameraXml", [](const std::string &path, const CameraCalibration &c, const std::optional<std::string> &name) {
+          if (name)
+            saveVispCameraXml(path, c, *name);
+          else
+            saveVispCameraXml(path, c); // the C++ default name
+        }, py::arg("path"), py::arg("calibration"), py::arg("camera_name") = py::none(),
+        "Write the ViSP camera XML (models without and with distortion) of a calibration.");
 
   // ---------------------------------------------------------------- error analysis
   py::class_<ErrorAnalysisCase>(m, "ErrorAnalysisCase", R"doc(

@@ -355,3 +355,68 @@ def monteCarloDepthError(c: ErrorAnalysisCase, samples: int, seed: int = 1) -> M
 def paperErrorCases() -> List[PaperErrorRow]: ...
 def formatPaperTerm(v: float) -> str: ...
 def formatPercent(v: float) -> str: ...
+
+class BoardLayout:
+    tags_x: int
+    tags_y: int
+    gap: float
+    first_tag_id: int
+    margin: float
+    outer_square: float
+    def __init__(self, pattern: str) -> None: ...
+    def features(self) -> Array: ...
+
+class CalibrationView:
+    def __init__(self, name: str, features: ArrayLike) -> None: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def features(self) -> Array: ...
+
+class CalibrationDetections:
+    width: int
+    height: int
+    views: List[CalibrationView]
+    failures: List[str]
+    warnings: List[str]
+
+def detectCalibrationViews(board: BoardLayout, names: Sequence[str], images: Sequence[Image],
+                           options: DetectorOptions = ...) -> CalibrationDetections: ...
+
+class CameraCalibrationOptions:
+    fix_aspect_ratio: bool
+    fix_principal_point: bool
+    distortion: str
+    try_fisheye: bool
+    cv_folds: int
+    simpler_within: float
+    zero_tangential: bool
+    drop_outliers: bool
+    outlier_ratio: float
+    outlier_min_px: float
+    min_views: int
+    min_points_per_view: int
+    min_orientation_spread: float
+    fit_visp: bool
+    def __init__(self) -> None: ...
+
+class CameraCalibration:
+    camera: CameraModel
+    rms_px: float
+    std_devs: List[float]
+    intrinsics_covariance: Array
+    views_used: int
+    view_rms_px: List[float]
+    orientation_spread: float
+    coverage: float
+    notes: List[str]
+    model_reason: str
+    models: List[Tuple[str, float, bool]]
+    uncertainty_grid: Array
+    visp_rms_without: float
+    visp_rms_with: float
+
+def calibrateCamera(board: BoardLayout, views: Sequence[CalibrationView], width: int, height: int,
+                    options: CameraCalibrationOptions = ...) -> CameraCalibration: ...
+def projectionUncertainty(calibration: CameraCalibration, u: float, v: float) -> float: ...
+def saveVispCameraXml(path: str, calibration: CameraCalibration, camera_name: Optional[str] = None) -> None: ...
