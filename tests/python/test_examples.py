@@ -29,3 +29,16 @@ def test_servo_loop():
     truth = [float(x) for x in last.split("truth")[1].split()]
     assert len(depths) == 4, last  # every depth converged
     assert all(abs(d - t) < 0.02 for d, t in zip(depths, truth)), last
+
+
+def test_measure_folder(tmp_path):
+    """The folder of rendered images measured by the example gives `yawdepth measure`'s points file."""
+    from conftest import CALIB, run_cli, simulate
+    scene = simulate(str(tmp_path / "scene"), "--frames", 6, "--pattern", "chessboard:7x5:0.02", "--supersampling", 2,
+                     "--step", 0.01)
+    out = run("measure_folder.py", scene["camera"], scene["rig"], scene["motion"], "chessboard:7x5:0.02",
+              tmp_path / "py.csv", "exact")
+    assert "210 observations of 35 features in 6 images" in out, out
+    run_cli("measure", "--camera", scene["camera"], "--rig", scene["rig"], "--motion", scene["motion"], "--pattern",
+            "chessboard:7x5:0.02", "--method", "exact", "--out", tmp_path / "cli.csv", "--quiet")
+    assert (tmp_path / "py.csv").read_text() == (tmp_path / "cli.csv").read_text()
