@@ -135,3 +135,45 @@ def test_camera_calibration_as_cli(tmp_path):
     np.testing.assert_array_equal(view.features, det.views[0].features)
     with pytest.raises(yawdepth.Error, match="too few views"):
         yawdepth.calibrateCamera(board, det.views[:2], det.width, det.height)
+
+
+def test_hand_eye_as_cli(tmp_path):
+    """calibrate-rig --hand-eye eye-in-hand on the franka photographs: the same rig file."""
+    folder = os.path.join(os.path.dirname(CALIB), "tests", "data", "franka-eye-in-hand")
+    paths = [os.path.join(folder, f"franka_image-{i}.png") for i in range(1, 9)]
+    run_cli("calibrate-camera", "--pattern", "chessboard:9x6:0.0236", "--out", tmp_path / "cam", "--quiet", *paths)
+    motion_path = os.path.join(folder, "motion.csv")
+    run_cli("calibrate-rig", "--hand-eye", "eye-in-hand", "--camera", tmp_path / "cam.yaml", "--motion", motion_path,
+            "--pattern", "chessboard:9x6:0.0236", "--out", tmp_path / "cli.yaml")
+    camera = yawdepth.loadCameraFile(str(tmp_path / "cam.yaml"))
+    board = yawdepth.BoardLayout("chessboard:9x6:0.0236")
+    motion = yawdepth.loadMotion(motion_path)
+    detector = yawdepth.PatternDetector("chessboard:9x6:0.0236")
+    detector.setCamera(camera)
+    views = []
+    for row, path in zip(motion.samples, motion.images):
+        d = detector.detect(yawdepth.readGrayImage(path, camera), int(row[0]))
+        if d.found:
+            views.append(yawdepth.HandEyeView(yawdepth.wMv(row), d.features, path))
+    options = yawdepth.HandEyeOptions()
+    options.setup = "eye-in-hand"
+    cal = yawdepth.calibrateHandEye(camera, board, views, options)
+    assert yawdepth.handEyeRigYaml(cal) == (tmp_path / "cli.yaml").read_text()
+    assert cal.camera_pose.shape == (4, 4) and cal.views == len(views) and cal.rms_px > 0
+    np.testing.assert_allclose(cal.camera_pose[:3, 3], [0.0577148, -0.0339261, -0.0422745], atol=0.005)
+    assert views[0].rMe.shape == (4, 4) and views[0].features.shape[1] == 3 and views[0].name == motion.images[0]
+    assert cal.camera_pose_sigma.shape == (6,) and cal.target_pose.shape == (4, 4) and cal.target_pose_sigma[0] >= 0
+    assert cal.initial_rms_px > 0 and cal.points > 0 and len(cal.view_rms_px) == len(cal.view_names)
+    assert isinstance(cal, yawdepth.HandEyeCalibration) and isinstance(cal.skipped, list)
+    assert cal.pose_correction_mm >= 0 and cal.pose_correction_deg >= 0
+    o = yawdepth.HandEyeOptions()
+    o.min_points_per_view, o.max_rms_px, o.sigma_px, o.sigma_pose_translation = 6, 20.0, 0.3, 1e-3
+    o.sigma_pose_rotation, o.max_pose_correction_sigmas, o.check_board_scale = 0.002, 10.0, True
+    with pytest.raises(yawdepth.Error):
+        o.setup = "eye-on-foot"
+    with pytest.raises(yawdepth.Error):
+        yawdepth.calibrateHandEye(camera, board, views[:1], o)
+    rig = yawdepth.YawRig(camera_pose=cal.camera_pose)
+    a, b = motion.samples[0], motion.samples[1]
+    np.testing.assert_allclose(yawdepth.curMprev(rig, a, b),
+                               np.linalg.inv(yawdepth.wMc(rig, b)) @ yawdepth.wMc(rig, a), atol=1e-12)

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <opencv2/core.hpp>
 #include <yawdepth/calibration/camera_calibration.h>
+#include <yawdepth/calibration/hand_eye.h>
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/error_analysis.h>
 #include <yawdepth/features/detector.h>
@@ -333,6 +334,73 @@ chosen)), uncertainty_grid (6, 8) px; visp_rms_without, visp_rms_with (px).)doc"
             saveVispCameraXml(path, c); // the C++ default name
         }, py::arg("path"), py::arg("calibration"), py::arg("camera_name") = py::none(),
         "Write the ViSP camera XML (models without and with distortion) of a calibration.");
+
+  // ---------------------------------------------------------------- hand-eye calibration
+  py::class_<HandEyeView>(m, "HandEyeView", R"doc(
+One hand-eye image: HandEyeView(rMe, features, name): rMe (4, 4) the hand's pose in the robot base
+when the image was taken (m); features (K, 3) [id, u (px), v (px)] of the board; name for messages.)doc")
+      .def(py::init([](const py::object &rMe, const py::object &features, const std::string &name) {
+             HandEyeView v;
+             v.rMe = toPose(rMe, "rMe");
+             const Array a = asRows(features, 3, "features [id, u, v]");
+             auto r = a.unchecked<2>();
+             for (py::ssize_t k = 0; k < a.shape(0); ++k)
+               v.features.push_back({integerOf(r(k, 0), "features", k, "id"), r(k, 1), r(k, 2)});
+             v.name = name;
+             return v;
+           }),
+           py::arg("rMe"), py::arg("features"), py::arg("name") = std::string())
+      .def_property_readonly("rMe", [](const HandEyeView &v) { return fromPose(v.rMe); })
+      .def_property_readonly("features", [](const HandEyeView &v) { return featuresArray(v.features); })
+      .def_readonly("name", &HandEyeView::name);
+  py::class_<HandEyeOptions>(m, "HandEyeOptions", R"doc(
+Options of calibrateHandEye() (C++ HandEyeOptions, its defaults): setup ('eye-in-hand' or
+'eye-to-hand'), min_points_per_view, max_rms_px (px), sigma_px (px), sigma_pose_translation (m),
+sigma_pose_rotation (rad), max_pose_correction_sigmas, check_board_scale.)doc")
+      .def(py::init<>())
+      .def_property("setup",
+                    [](const HandEyeOptions &o) {
+                      return std::string(o.setup == HandEyeSetup::EyeInHand ? "eye-in-hand" : "eye-to-hand");
+                    },
+                    [](HandEyeOptions &o, const std::string &w) { o.setup = handEyeSetupFromString(w); })
+      .def_readwrite("min_points_per_view", &HandEyeOptions::min_points_per_view)
+      .def_readwrite("max_rms_px", &HandEyeOptions::max_rms_px)
+      .def_readwrite("sigma_px", &HandEyeOptions::sigma_px)
+      .def_readwrite("sigma_pose_translation", &HandEyeOptions::sigma_pose_translation)
+      .def_readwrite("sigma_pose_rotation", &HandEyeOptions::sigma_pose_rotation)
+      .def_readwrite("max_pose_correction_sigmas", &HandEyeOptions::max_pose_correction_sigmas)
+      .def_readwrite("check_board_scale", &HandEyeOptions::check_board_scale);
+  py::class_<HandEyeCalibration>(m, "HandEyeCalibration", R"doc(
+calibrateHandEye()'s result: camera_pose (4, 4) eMc (eye-in-hand) or rMc (eye-to-hand), target_pose
+(4, 4) rMo or eMo, camera_pose_sigma and target_pose_sigma (6,) [tx, ty, tz (m), tux, tuy, tuz (rad)],
+rms_px, initial_rms_px (px), views, points, view_rms_px, view_names, skipped,
+pose_correction_mm, pose_correction_deg. handEyeRigYaml() gives its rig file.)doc")
+      .def_property_readonly("camera_pose", [](const HandEyeCalibration &c) { return fromPose(c.camera_pose); })
+      .def_property_readonly("target_pose", [](const HandEyeCalibration &c) { return fromPose(c.target_pose); })
+      .def_property_readonly("camera_pose_sigma",
+                             [](const HandEyeCalibration &c) { return fromEigen(c.camera_pose_sigma).reshape({6}); })
+      .def_property_readonly("target_pose_sigma",
+                             [](const HandEyeCalibration &c) { return fromEigen(c.target_pose_sigma).reshape({6}); })
+      .def_readonly("rms_px", &HandEyeCalibration::rms_px)
+      .def_readonly("initial_rms_px", &HandEyeCalibration::initial_rms_px)
+      .def_readonly("views", &HandEyeCalibration::views)
+      .def_readonly("points", &HandEyeCalibration::points)
+      .def_readonly("view_rms_px", &HandEyeCalibration::view_rms_px)
+      .def_readonly("view_names", &HandEyeCalibration::view_names)
+      .def_readonly("skipped", &HandEyeCalibration::skipped)
+      .def_readonly("pose_correction_mm", &HandEyeCalibration::pose_correction_mm)
+      .def_readonly("pose_correction_deg", &HandEyeCalibration::pose_correction_deg);
+  m.def("calibrateHandEye",
+        [](const CameraModel &camera, const BoardLayout &board, const std::vector<HandEyeView> &views,
+           const HandEyeOptions &options) {
+          py::gil_scoped_release release;
+          return calibrateHandEye(camera, board, views, options);
+        },
+        py::arg("camera"), py::arg("board"), py::arg("views"), py::arg("options") = HandEyeOptions(),
+        "Hand-eye calibration (what `calibrate-rig --hand-eye` runs); raises yawdepth.Error for too few usable "
+        "views, degenerate rotations or a failed fit.");
+  m.def("handEyeRigYaml", &handEyeRigYaml, py::arg("calibration"),
+        "The rig file text (YAML, camera_pose and its sigma) of a hand-eye calibration, as calibrate-rig writes it.");
 
   // ---------------------------------------------------------------- error analysis
   py::class_<ErrorAnalysisCase>(m, "ErrorAnalysisCase", R"doc(

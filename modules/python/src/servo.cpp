@@ -56,6 +56,15 @@ MotionSample sampleOf(const py::handle &row)
 
 void bindServo(py::module_ &m)
 {
+  m.def("wMv", [](const py::object &row) { return fromPose(wMv(sampleOf(row))); }, py::arg("row"),
+        "(4, 4) float64: the vision frame's pose in the world for a motion row (6 or 8 numbers, as MotionLog.samples).");
+  m.def("wMc", [](const YawRig &rig, const py::object &row) { return fromPose(wMc(rig, sampleOf(row))); },
+        py::arg("rig"), py::arg("row"), "(4, 4) float64: the camera's pose in the world for a motion row.");
+  m.def("curMprev", [](const YawRig &rig, const py::object &prev, const py::object &cur) {
+          return fromPose(curMprev(rig, sampleOf(prev), sampleOf(cur)));
+        }, py::arg("rig"), py::arg("prev"), py::arg("cur"),
+        "(4, 4) float64: the camera motion between two motion rows, cur_P = curMprev @ prev_P.");
+
   py::class_<PointEstimate>(m, "PointEstimate", R"doc(
 One feature's estimate: status (str), frame, c_P (3,) float64 (m, camera frame at `frame`), v_P (3,)
 (m, vision frame at `frame`), c_cov (3, 3) (m^2), sigmaZ (m), parallax_px (px); numbers NaN unless ok.)doc")

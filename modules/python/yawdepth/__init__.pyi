@@ -420,3 +420,46 @@ def calibrateCamera(board: BoardLayout, views: Sequence[CalibrationView], width:
                     options: CameraCalibrationOptions = ...) -> CameraCalibration: ...
 def projectionUncertainty(calibration: CameraCalibration, u: float, v: float) -> float: ...
 def saveVispCameraXml(path: str, calibration: CameraCalibration, camera_name: Optional[str] = None) -> None: ...
+
+def wMv(row: ArrayLike) -> Array: ...
+def wMc(rig: YawRig, row: ArrayLike) -> Array: ...
+def curMprev(rig: YawRig, prev: ArrayLike, cur: ArrayLike) -> Array: ...
+
+class HandEyeView:
+    def __init__(self, rMe: ArrayLike, features: ArrayLike, name: str = "") -> None: ...
+    @property
+    def rMe(self) -> Array: ...
+    @property
+    def features(self) -> Array: ...
+    @property
+    def name(self) -> str: ...
+
+class HandEyeOptions:
+    setup: str
+    min_points_per_view: int
+    max_rms_px: float
+    sigma_px: float
+    sigma_pose_translation: float
+    sigma_pose_rotation: float
+    max_pose_correction_sigmas: float
+    check_board_scale: bool
+    def __init__(self) -> None: ...
+
+class HandEyeCalibration:
+    camera_pose: Array
+    target_pose: Array
+    camera_pose_sigma: Array
+    target_pose_sigma: Array
+    rms_px: float
+    initial_rms_px: float
+    views: int
+    points: int
+    view_rms_px: List[float]
+    view_names: List[str]
+    skipped: List[str]
+    pose_correction_mm: float
+    pose_correction_deg: float
+
+def calibrateHandEye(camera: CameraModel, board: BoardLayout, views: Sequence[HandEyeView],
+                     options: HandEyeOptions = ...) -> HandEyeCalibration: ...
+def handEyeRigYaml(calibration: HandEyeCalibration) -> str: ...
