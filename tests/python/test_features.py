@@ -177,3 +177,43 @@ def test_hand_eye_as_cli(tmp_path):
     a, b = motion.samples[0], motion.samples[1]
     np.testing.assert_allclose(yawdepth.curMprev(rig, a, b),
                                np.linalg.inv(yawdepth.wMc(rig, b)) @ yawdepth.wMc(rig, a), atol=1e-12)
+
+
+def test_rig_calibration_as_cli(tmp_path):
+    """calibrate-rig on 7 rendered views of a board while the camera pans 24 degrees: the same rig file."""
+    camera_path = str(tmp_path / "wide.yaml")
+    yawdepth.saveCameraYaml(camera_path, yawdepth.CameraModel.brown(400, 400, 320, 240, [], 640, 480))
+    run_cli("simulate", "--camera", camera_path, "--rig", os.path.join(CALIB, "paper_rig.yaml"), "--out-dir",
+            tmp_path / "rig", "--frames", 7, "--pattern", "chessboard:7x5:0.04", "--board-distance", 1.0,
+            "--board-offset-x", 0.18, "--supersampling", 2, "--step", 0.03, "--yaw", -0.2, "--yaw-rate", 0.07)
+    motion_path = str(tmp_path / "rig" / "motion.csv")
+    run_cli("calibrate-rig", "--camera", camera_path, "--motion", motion_path, "--pattern", "chessboard:7x5:0.04",
+            "--out", tmp_path / "cli.yaml")
+    camera = yawdepth.loadCameraFile(camera_path)
+    board = yawdepth.BoardLayout("chessboard:7x5:0.04")
+    motion = yawdepth.loadMotion(motion_path)
+    detector = yawdepth.PatternDetector("chessboard:7x5:0.04")
+    detector.setCamera(camera)
+    views = []
+    for row, path in zip(motion.samples, motion.images):
+        d = detector.detect(yawdepth.readGrayImage(path, camera), int(row[0]))
+        if d.found:
+            views.append(yawdepth.RigView(row, d.features))
+    cal = yawdepth.calibrateRig(camera, board, views, yawdepth.RigCalibrationOptions())
+    text = yawdepth.rigCalibrationYaml(cal)
+    assert text == (tmp_path / "cli.yaml").read_text()
+    (tmp_path / "py.yaml").write_text(text)
+    assert abs(yawdepth.readRigFile(str(tmp_path / "py.yaml")).camera_offset[0, 0] + 0.1503) < 0.005
+    np.testing.assert_array_equal(views[0].row, motion.samples[0])
+    assert views[0].features.shape == (35, 3) and cal.views == 7 and cal.points == 245 and cal.distinct_yaws == 7
+    assert cal.rms_px < 0.5 and len(cal.view_rms_px) == 7 and cal.yaw_span > 0.35 and cal.baseline > 0.1
+    assert cal.camera_offset.shape == (3,) and cal.camera_offset_sigma[0] > 0 and abs(cal.yaw_axis[1]) > 0.99
+    assert cal.yaw_axis_sigma.shape == (3,) and cal.yaw_offset_sigma > 0 and abs(cal.yaw_offset) < 0.05
+    o = yawdepth.RigCalibrationOptions()
+    o.initial_offset, o.use_initial_offset, o.initial_yaw_offset, o.board_square = [-0.15, 0, 0], True, 0.0, False
+    o.estimate_axis, o.min_yaw_span, o.min_distinct_yaws, o.min_baseline = False, 0.7, 3, 0.02
+    o.min_points_per_view, o.max_rms_px, o.max_offset, o.max_offset_sigma = 4, 3.0, 2.0, 0.05
+    o.check_board_scale = True
+    np.testing.assert_array_equal(o.initial_offset.ravel(), [-0.15, 0, 0])
+    with pytest.raises(yawdepth.Error, match="span"):
+        yawdepth.calibrateRig(camera, board, views, o)  # 24 degrees < the 40 asked

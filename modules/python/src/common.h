@@ -46,6 +46,8 @@ long integerOf(double v, const char *what, py::ssize_t row, const char *column);
 Array motionArray(const std::vector<MotionSample> &samples);
 /*! \brief The inverse of motionArray() (the width tells the form). */
 std::vector<MotionSample> motionSamples(const py::handle &a);
+/*! \brief One motion row (6 or 8 numbers, as a MotionLog.samples row) as a MotionSample. */
+MotionSample sampleOf(const py::handle &row);
 /*! \brief A MotionLog, or an array as motionSamples() reads it (a `yaw` column). */
 MotionLog motionLogOf(const py::handle &motion);
 

@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 #include <yawdepth/calibration/camera_calibration.h>
 #include <yawdepth/calibration/hand_eye.h>
+#include <yawdepth/calibration/rig_calibration.h>
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/error_analysis.h>
 #include <yawdepth/features/detector.h>
@@ -334,6 +335,78 @@ chosen)), uncertainty_grid (6, 8) px; visp_rms_without, visp_rms_with (px).)doc"
             saveVispCameraXml(path, c); // the C++ default name
         }, py::arg("path"), py::arg("calibration"), py::arg("camera_name") = py::none(),
         "Write the ViSP camera XML (models without and with distortion) of a calibration.");
+
+  // ---------------------------------------------------------------- yaw rig calibration
+  py::class_<RigView>(m, "RigView", R"doc(
+One image of the yaw-rig calibration: RigView(row, features): row, its motion row (6 or 8 numbers,
+as MotionLog.samples; yaw = the reading); features (K, 3) [id, u (px), v (px)] of the board.)doc")
+      .def(py::init([](const py::object &row, const py::object &features) {
+             RigView v;
+             v.sample = sampleOf(row);
+             const Array a = asRows(features, 3, "features [id, u, v]");
+             auto r = a.unchecked<2>();
+             for (py::ssize_t k = 0; k < a.shape(0); ++k)
+               v.features.push_back({integerOf(r(k, 0), "features", k, "id"), r(k, 1), r(k, 2)});
+             return v;
+           }),
+           py::arg("row"), py::arg("features"))
+      .def_property_readonly("row", [](const RigView &v) { return motionArray({v.sample}).reshape({-1}); })
+      .def_property_readonly("features", [](const RigView &v) { return featuresArray(v.features); });
+  py::class_<RigCalibrationOptions>(m, "RigCalibrationOptions", R"doc(
+Options of calibrateRig() (C++ RigCalibrationOptions, its defaults): initial_offset (3,) m with
+use_initial_offset, initial_yaw_offset (rad), board_square, estimate_axis, min_yaw_span (rad),
+min_distinct_yaws, min_baseline (m), min_points_per_view, max_rms_px (px), max_offset (m),
+max_offset_sigma (m), check_board_scale.)doc")
+      .def(py::init<>())
+      .def_property("initial_offset", [](const RigCalibrationOptions &o) { return fromEigen(o.initial_offset); },
+                    [](RigCalibrationOptions &o, const py::object &v) {
+                      const Array a = Array::ensure(v);
+                      if (!a || a.size() != 3)
+                        throw Error("initial_offset: expected 3 numbers (m)");
+                      o.initial_offset = Eigen::Vector3d(a.data()[0], a.data()[1], a.data()[2]);
+                    })
+      .def_readwrite("use_initial_offset", &RigCalibrationOptions::use_initial_offset)
+      .def_readwrite("initial_yaw_offset", &RigCalibrationOptions::initial_yaw_offset)
+      .def_readwrite("board_square", &RigCalibrationOptions::board_square)
+      .def_readwrite("estimate_axis", &RigCalibrationOptions::estimate_axis)
+      .def_readwrite("min_yaw_span", &RigCalibrationOptions::min_yaw_span)
+      .def_readwrite("min_distinct_yaws", &RigCalibrationOptions::min_distinct_yaws)
+      .def_readwrite("min_baseline", &RigCalibrationOptions::min_baseline)
+      .def_readwrite("min_points_per_view", &RigCalibrationOptions::min_points_per_view)
+      .def_readwrite("max_rms_px", &RigCalibrationOptions::max_rms_px)
+      .def_readwrite("max_offset", &RigCalibrationOptions::max_offset)
+      .def_readwrite("max_offset_sigma", &RigCalibrationOptions::max_offset_sigma)
+      .def_readwrite("check_board_scale", &RigCalibrationOptions::check_board_scale);
+  py::class_<RigCalibration>(m, "RigCalibration", R"doc(
+calibrateRig()'s result: camera_offset (3,) m and camera_offset_sigma, yaw_axis (3,) and
+yaw_axis_sigma, yaw_offset (rad, true yaw = reading + yaw_offset) and yaw_offset_sigma, rms_px (px),
+view_rms_px, views, points, yaw_span (rad), distinct_yaws, baseline (m). rigCalibrationYaml() gives
+its rig file.)doc")
+      .def_property_readonly("camera_offset", [](const RigCalibration &c) { return fromEigen(c.camera_offset).reshape({3}); })
+      .def_property_readonly("camera_offset_sigma",
+                             [](const RigCalibration &c) { return fromEigen(c.camera_offset_sigma).reshape({3}); })
+      .def_property_readonly("yaw_axis", [](const RigCalibration &c) { return fromEigen(c.yaw_axis).reshape({3}); })
+      .def_property_readonly("yaw_axis_sigma", [](const RigCalibration &c) { return fromEigen(c.yaw_axis_sigma).reshape({3}); })
+      .def_readonly("yaw_offset", &RigCalibration::yaw_offset)
+      .def_readonly("yaw_offset_sigma", &RigCalibration::yaw_offset_sigma)
+      .def_readonly("rms_px", &RigCalibration::rms_px)
+      .def_readonly("view_rms_px", &RigCalibration::view_rms_px)
+      .def_readonly("views", &RigCalibration::views)
+      .def_readonly("points", &RigCalibration::points)
+      .def_readonly("yaw_span", &RigCalibration::yaw_span)
+      .def_readonly("distinct_yaws", &RigCalibration::distinct_yaws)
+      .def_readonly("baseline", &RigCalibration::baseline);
+  m.def("calibrateRig",
+        [](const CameraModel &camera, const BoardLayout &board, const std::vector<RigView> &views,
+           const RigCalibrationOptions &options) {
+          py::gil_scoped_release release;
+          return calibrateRig(camera, board, views, options);
+        },
+        py::arg("camera"), py::arg("board"), py::arg("views"), py::arg("options") = RigCalibrationOptions(),
+        "The yaw rig from views of a static board (what `calibrate-rig` runs); raises yawdepth.Error for too few "
+        "views, too small a yaw span or a failed fit.");
+  m.def("rigCalibrationYaml", &rigCalibrationYaml, py::arg("calibration"),
+        "The rig file text (YAML) of a rig calibration, as calibrate-rig writes it.");
 
   // ---------------------------------------------------------------- hand-eye calibration
   py::class_<HandEyeView>(m, "HandEyeView", R"doc(

@@ -114,6 +114,15 @@ std::vector<MotionSample> motionSamples(const py::handle &a)
   return out;
 }
 
+MotionSample sampleOf(const py::handle &row)
+{
+  Array a = Array::ensure(row);
+  if (!a || (a.size() != 6 && a.size() != 8))
+    throw Error("motion row: expected 6 [frame, x, y, z, heading, yaw] or 8 [frame, tx, ty, tz, tux, tuy, tuz, yaw] "
+                "numbers");
+  return motionSamples(a.reshape({py::ssize_t(1), a.size()})).front();
+}
+
 MotionLog motionLogOf(const py::handle &motion)
 {
   if (py::isinstance<MotionLog>(motion))

@@ -42,16 +42,6 @@ std::vector<std::pair<long, vpImagePoint>> imagePoints(const std::vector<Feature
   return out;
 }
 
-/*! One motion row (6 or 8 numbers, as a MotionLog.samples row) as a MotionSample. */
-MotionSample sampleOf(const py::handle &row)
-{
-  Array a = Array::ensure(row);
-  if (!a || (a.size() != 6 && a.size() != 8))
-    throw Error("odometry: expected a motion row of 6 [frame, x, y, z, heading, yaw] or 8 "
-                "[frame, tx, ty, tz, tux, tuy, tuz, yaw] numbers");
-  return motionSamples(a.reshape({py::ssize_t(1), a.size()})).front();
-}
-
 } // namespace
 
 void bindServo(py::module_ &m)

@@ -463,3 +463,45 @@ class HandEyeCalibration:
 def calibrateHandEye(camera: CameraModel, board: BoardLayout, views: Sequence[HandEyeView],
                      options: HandEyeOptions = ...) -> HandEyeCalibration: ...
 def handEyeRigYaml(calibration: HandEyeCalibration) -> str: ...
+
+class RigView:
+    def __init__(self, row: ArrayLike, features: ArrayLike) -> None: ...
+    @property
+    def row(self) -> Array: ...
+    @property
+    def features(self) -> Array: ...
+
+class RigCalibrationOptions:
+    initial_offset: Array
+    use_initial_offset: bool
+    initial_yaw_offset: float
+    board_square: bool
+    estimate_axis: bool
+    min_yaw_span: float
+    min_distinct_yaws: int
+    min_baseline: float
+    min_points_per_view: int
+    max_rms_px: float
+    max_offset: float
+    max_offset_sigma: float
+    check_board_scale: bool
+    def __init__(self) -> None: ...
+
+class RigCalibration:
+    camera_offset: Array
+    camera_offset_sigma: Array
+    yaw_axis: Array
+    yaw_axis_sigma: Array
+    yaw_offset: float
+    yaw_offset_sigma: float
+    rms_px: float
+    view_rms_px: List[float]
+    views: int
+    points: int
+    yaw_span: float
+    distinct_yaws: int
+    baseline: float
+
+def calibrateRig(camera: CameraModel, board: BoardLayout, views: Sequence[RigView],
+                 options: RigCalibrationOptions = ...) -> RigCalibration: ...
+def rigCalibrationYaml(calibration: RigCalibration) -> str: ...
