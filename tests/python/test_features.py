@@ -200,6 +200,7 @@ def test_rig_calibration_as_cli(tmp_path):
         if d.found:
             views.append(yawdepth.RigView(row, d.features))
     cal = yawdepth.calibrateRig(camera, board, views, yawdepth.RigCalibrationOptions())
+    assert isinstance(cal, yawdepth.RigCalibration)
     text = yawdepth.rigCalibrationYaml(cal)
     assert text == (tmp_path / "cli.yaml").read_text()
     (tmp_path / "py.yaml").write_text(text)
