@@ -47,35 +47,34 @@ def estimatePoints(camera, rig, motion, tracks, options=None, **keywords):
         rot_per_metre, motion_noise, min_baseline, min_parallax_px, robust_threshold_px,
         outlier_threshold_px, window, threads, drop_unusable, residual_check (bool), max_depth_sigma,
         noise (NoiseModel), gates (GateOptions).
+    `noise` and `gates` objects are applied before the single values, whatever the order given.
     As the command line, a 6-DoF MotionLog without a yaw column gets sigma_yaw 0 unless sigma_yaw
-    is given (as a keyword, or in `options`).
+    is given (as a keyword, or in a `noise` or `options` passed).
 
     Returns an Estimate: .points, a structured array with the points CSV's columns (id, frame, x, y,
     z, xc, yc, zc, sigma_zc: m; status: str), one row per track in id order; .c_cov (P, 3, 3) m^2;
     .outliers, .motion, .warnings and the consistency figures (see help(yawdepth.Estimate)).
     The GIL is released while the method runs. Raises yawdepth.Error with the C++ message.
     """
-    sigma_yaw_given = options is not None or "sigma_yaw" in keywords
+    sigma_yaw_given = options is not None or "sigma_yaw" in keywords or "noise" in keywords
     o = PipelineOptions() if options is None else _copy.copy(options)  # the caller's is not changed
-    noise, gates = o.noise, o.gates
+    # whole objects first, then the single values (which may refine them), whatever the keywords' order
+    for key in ("noise", "gates"):
+        if key in keywords:
+            setattr(o, key, keywords[key])
     for key, value in keywords.items():
+        if key in ("noise", "gates"):
+            continue
         if key in _NOISE:
-            setattr(noise, key, value)
+            setattr(o.noise, key, value)
         elif key in _GATES:
-            setattr(gates, key, value)
+            setattr(o.gates, key, value)
         elif key == "residual_check":
-            check = o.residual_check
-            check.enabled = bool(value)
-            o.residual_check = check
+            o.residual_check.enabled = bool(value)
         elif key in _PIPELINE:
             setattr(o, key, value)
-            if key == "noise":
-                noise = o.noise
-            elif key == "gates":
-                gates = o.gates
         else:
             raise TypeError(f"estimatePoints() got an unexpected keyword argument '{key}'")
-    o.noise, o.gates = noise, gates
     return _yawdepth._estimatePoints(camera, rig, motion, tracks, o, sigma_yaw_given)
 
 
