@@ -71,7 +71,7 @@ def test_options_as_cli(planar_scene, tmp_path):
     assert_array_equals_csv(python_estimate(planar_scene, options=opts).points, text)
     assert opts.noise.sigma_px == 0.4 and opts.method == "window"  # the options given are not changed
     noise = yawdepth.NoiseModel()  # a whole object, then a single value refining it, in either order
-    assert_array_equal_csv(python_estimate(planar_scene, sigma_px=0.4, noise=noise, method="window").points, text)
+    assert_array_equals_csv(python_estimate(planar_scene, sigma_px=0.4, noise=noise, method="window").points, text)
     assert noise.sigma_px == yawdepth.NoiseModel().sigma_px  # not changed either
 
 
