@@ -2,7 +2,7 @@
   bench_accuracy: accuracy of every yawdepth method against the Cramer-Rao lower bound and
   against OpenCV's two-view triangulation, on seeded synthetic scenes with the paper's camera.
 
-  A plain program that prints plain-text tables (paste them into a README as they are):
+  A plain program that prints plain-text tables (docs/accuracy.md quotes them as they are):
     bench_accuracy [--trials N] [--seed S] [--quick] [--frames F] [--window K]
   --trials N  trials per scene (default 200); every trial draws new points and new noise.
   --seed S    base seed (default 1); trial t of scene s uses seed S + 100000 s + t.

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# `yawdepth import-bag` on a large ROS 1 bag (written by real rosbag, benchmarks/write_large_bag.py)
-# and a large ROS 2 MCAP bag (by @mcap/core, benchmarks/write_large_mcap.mjs): 640x480 mono8 images
+# `yawdepth import-bag` on a large ROS 1 bag (written by real rosbag, benchmarks/write_large_bag.py),
+# a large ROS 2 MCAP bag (by @mcap/core, benchmarks/write_large_mcap.mjs) and the same messages in
+# rosbag2's SQLite bag (benchmarks/write_large_db3.py): 640x480 mono8 images
 # at 30 Hz, odometry at 100 Hz, on one core (taskset -c 0). Prints one table row per format: the
 # bag's size, its recording length, images, the import's time, throughput and peak memory, and the
 # time `cat` takes to read the file. Target (issue 32): faster than `rosbag play` at full
@@ -35,10 +36,14 @@ row ros1 "$work/large.bag" "$images" "$duration"
 # MCAP by @mcap/core (tests/data/bags/writers: npm ci --no-audit --no-fund there first).
 if command -v node >/dev/null && [ -d "$here/../tests/data/bags/writers/node_modules/@mcap/core" ]; then
   read -r pw ph < <(/usr/bin/python3 "$here/write_large_bag.py" --raw "$work/photo.raw")
-  read -r images duration < <(node "$here/write_large_mcap.mjs" "$work/large.mcap" "$size" "$work/photo.raw" "$pw" "$ph")
+  read -r images duration < <(node "$here/write_large_mcap.mjs" "$work/large.mcap" "$size" "$work/photo.raw" "$pw" "$ph" \
+                                --messages "$work/messages.bin")
   rm -f "$work/photo.raw"
   row mcap "$work/large.mcap" "$images" "$duration"
+  /usr/bin/python3 "$here/write_large_db3.py" "$work/messages.bin" "$work/large.db3"
+  rm -f "$work/messages.bin"
+  row db3 "$work/large.db3" "$images" "$duration"
 else
-  echo "bench_import_bag.sh: no node or tests/data/bags/writers/node_modules: MCAP not measured" >&2
+  echo "bench_import_bag.sh: no node or tests/data/bags/writers/node_modules: MCAP and db3 not measured" >&2
 fi
 exit $fail

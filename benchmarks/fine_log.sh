@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# fine_log.sh: the README's "fused on long, finely sampled logs" table. For each seed, a 1000-frame
+# fine_log.sh: docs/accuracy.md's "fused on long, finely sampled logs" figures. For each seed, a 1000-frame
 # log of 0.05 mm steps (our simulator: `yawdepth simulate`, 100 points, yaw 1 rad, odometry noise
 # 0.1 mm and 0.05 degree per increment), estimated with each method and the same noise model, and
 # every point compared with the truth at the frame it is reported at.

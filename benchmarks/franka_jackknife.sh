@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # franka_jackknife.sh: how well the 8 photos and arm poses of tests/data/franka-eye-in-hand fix the
-# board's scale and flatness (the README's "How well can these 8 poses fix the scale?" and
+# board's scale and flatness (docs/arms.md's "How well can these 8 poses fix the scale?" and
 # "Flatness is the board's"). With the hand-eye pose calibrated on all 8 photos (as
 # examples/franka_measure.sh does), `yawdepth measure` is run on subsets of the photos:
 #   1. leave-one-out, per-pose noise (refine, --motion-noise absolute, 1 mm and 0.05 deg) and plain

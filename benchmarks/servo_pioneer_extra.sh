@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# servo_pioneer_extra.sh: the README's figures on servo_pioneer_pan that its table
+# servo_pioneer_extra.sh: docs/accuracy.md's figures on servo_pioneer_pan that its table
 # (examples/servo_table_pioneer.sh) does not print.
 #   1. Estimated depth, front and side, at each pixel noise in SIGMAS, seeds 1..SEEDS (the table's
 #      runs): the first and last iteration at which the provider's estimate of a corner was used

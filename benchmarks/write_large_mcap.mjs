@@ -1,7 +1,9 @@
 // A large ROS 2 bag (MCAP, uncompressed chunks, as `ros2 bag record -s mcap` writes by default) for
 // bench_import_bag.sh, by the reference libraries of tests/data/bags/writers (@mcap/core's McapWriter,
 // @foxglove/rosmsg2-serialization's CDR): the topics of write_large_bag.py with the ROS 2 types.
-//   node write_large_mcap.mjs OUT.mcap SIZE_MB PHOTO.raw WIDTH HEIGHT [WRITERS_DIR]
+//   node write_large_mcap.mjs OUT.mcap SIZE_MB PHOTO.raw WIDTH HEIGHT [WRITERS_DIR] [--messages FILE]
+// --messages FILE: every message also written to FILE as it went into the MCAP (topic, type, log time,
+// CDR payload), for write_large_db3.py, which puts the same messages into rosbag2's SQLite bag.
 // PHOTO.raw: 8-bit gray pixels, row by row (write_large_bag.py --raw writes ViSP's Solvay photo so).
 import fs from "node:fs";
 import path from "node:path";
@@ -10,7 +12,11 @@ import { fileURLToPath, pathToFileURL } from "node:url";
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const [out, sizeMb, photoPath, pw, ph] = process.argv.slice(2, 7);
-const writersDir = path.resolve(process.argv[7] ?? path.join(here, "../tests/data/bags/writers"));
+const rest = process.argv.slice(7);
+const messagesAt = rest.indexOf("--messages");
+const messagesPath = messagesAt >= 0 ? rest[messagesAt + 1] : undefined;
+if (messagesAt >= 0) rest.splice(messagesAt, 2);
+const writersDir = path.resolve(rest[0] ?? path.join(here, "../tests/data/bags/writers"));
 const req = createRequire(path.join(writersDir, "package.json"));
 const load = async (name) => import(pathToFileURL(req.resolve(name)).href);
 const { McapWriter } = await load("@mcap/core");
@@ -53,9 +59,25 @@ for (const [topic, type] of [["/tf_static", "tf2_msgs/msg/TFMessage"], ["/odom",
   const schemaId = await writer.registerSchema({ name: type, encoding: "ros2msg", data: Buffer.from(defs[type]) });
   channels[topic] = { id: await writer.registerChannel({ schemaId, topic, messageEncoding: "cdr", metadata: new Map() }), type };
 }
+// --messages' records: u16 topic length, topic, u16 type length, type, u64 log time (ns), u32 size, CDR bytes (little endian).
+const messagesFd = messagesPath ? fs.openSync(messagesPath, "w") : undefined;
+const record = (topic, type, ns, data) => {
+  const t = Buffer.from(topic), y = Buffer.from(type), head = Buffer.alloc(2 + t.length + 2 + y.length + 12);
+  let o = head.writeUInt16LE(t.length, 0);
+  o += t.copy(head, o);
+  o = head.writeUInt16LE(y.length, o);
+  o += y.copy(head, o);
+  o = head.writeBigUInt64LE(ns, o);
+  head.writeUInt32LE(data.length, o);
+  fs.writeSync(messagesFd, head);
+  fs.writeSync(messagesFd, data);
+};
 let seq = 0;
-const add = (topic, ns, value) =>
-  writer.addMessage({ channelId: channels[topic].id, sequence: seq++, logTime: ns, publishTime: ns, data: writers[channels[topic].type].writeMessage(value) });
+const add = async (topic, ns, value) => {
+  const data = writers[channels[topic].type].writeMessage(value);
+  if (messagesFd !== undefined) record(topic, channels[topic].type, ns, data);
+  await writer.addMessage({ channelId: channels[topic].id, sequence: seq++, logTime: ns, publishTime: ns, data });
+};
 const zeros = (n) => new Array(n).fill(0);
 await add("/tf_static", T0, { transforms: [{ header: { stamp: stamp(T0), frame_id: "base_link" }, child_frame_id: "camera_optical_frame",
   transform: { translation: { x: 0.1, y: 0, z: 0 }, rotation: { x: -0.5, y: 0.5, z: -0.5, w: 0.5 } } }] });
@@ -83,4 +105,5 @@ while (k < frames || j < odomCount) {
 }
 await writer.end();
 fs.closeSync(fd);
+if (messagesFd !== undefined) fs.closeSync(messagesFd);
 console.log(frames, frames / 30);

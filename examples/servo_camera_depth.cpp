@@ -7,7 +7,7 @@
 
   Images: the motion log's `image` column (a recorded folder), or --video (an OpenCV capture:
   a V4L2 device index such as 0, or a video file); frame k of the capture takes the motion-log row
-  of frame k. Odometry: the motion log CSV (frame,x,y,z,heading,yaw; see the README). Each frame
+  of frame k. Odometry: the motion log CSV (frame,x,y,z,heading,yaw; see docs/formats.md). Each frame
   prints the tag corners' ids with the depth handed to vpFeaturePoint, its 1-sigma, the
   estimator's status, and whether it is the estimate (*) or still the prior.
 */

@@ -960,6 +960,161 @@ res=$(awk -F, 'FNR == 1 { next }
 want='0.958 0.531 | 9 0.9749 0.0889 ok 8 0.4775 0.0334 ok '
 [ "$res" = "$want" ] && pass || fail "README worked example: got '$res', README has '$want'"
 
+# ---------------------------------------------------------------------------
+# 8. A command line without surprises (issue #34): usage errors name the command's help, an unknown
+# option comes before a missing one (with a suggestion when one is close), renamed options keep
+# their old names, --quiet/--verbose/--config/--print-config on every command, settings files,
+# progress never on a pipe.
+U="$W/usage"
+mkdir -p "$U"
+# usage NAME WANT ARGS...: status 2, exactly the one stderr line WANT, nothing on stdout.
+usage() {
+  local name=$1 want=$2; shift 2
+  run "$U/$name" "$@"
+  local got; got=$(cat "$U/$name.err")
+  if [ "$(rc_of "$U/$name")" -eq 2 ] && [ "$got" = "$want" ] && [ ! -s "$U/$name.out" ]; then pass; else
+    fail "usage $name: exit $(rc_of "$U/$name"), stderr '$got', want '$want'"; fi
+}
+usage typo "yawdepth estimate: error: unknown option '--sigma-pxx' (did you mean --sigma-px?) (see yawdepth estimate --help)" \
+  estimate --sigma-pxx 1
+usage short_v "yawdepth estimate: error: unknown option '-v' (see yawdepth estimate --help)" estimate -v
+usage cam "yawdepth estimate: error: unknown option '--cam' (did you mean --camera?) (see yawdepth estimate --help)" \
+  estimate --cam x
+usage far "yawdepth estimate: error: unknown option '--frobnicate' (see yawdepth estimate --help)" \
+  estimate --camera "$YML" --frobnicate
+usage required "yawdepth estimate: error: --camera is required (see yawdepth estimate --help)" estimate
+usage bad_value "yawdepth estimate: error: --method: foo not in {paper,exact,fused,window,refine} (see yawdepth estimate --help)" \
+  estimate --camera "$YML" --rig "$RIG" --motion m --tracks t --method foo
+usage top_option "yawdepth: error: unknown option '--bogus' (see yawdepth --help)" --bogus
+usage no_command "yawdepth: error: no command given (one of estimate, measure, track, error-analysis, simulate, calibrate-camera, calibrate-rig, import, import-bag) (see yawdepth --help)"
+usage equals "yawdepth simulate: error: unknown option '--frame' (did you mean --frames?) (see yawdepth simulate --help)" \
+  simulate --frame=3
+for c in estimate measure track error-analysis simulate calibrate-camera calibrate-rig import import-bag; do
+  run "$U/$c.unknown" "$c" --no-such-option
+  [ "$(rc_of "$U/$c.unknown")" -eq 2 ] && [ "$(lines_of "$U/$c.unknown.err")" -eq 1 ] &&
+    grep -q -F -e "yawdepth $c: error: unknown option '--no-such-option' (see yawdepth $c --help)" "$U/$c.unknown.err" &&
+    pass || fail "$c --no-such-option: exit $(rc_of "$U/$c.unknown"): $(first "$U/$c.unknown.err")"
+  # Every command knows --quiet, --verbose, --config and --print-config (the unknown option would come first).
+  for o in --quiet --verbose; do
+    run "$U/$c$o" "$c" "$o" --help
+    [ "$(rc_of "$U/$c$o")" -eq 0 ] && grep -q -e "$o" "$U/$c$o.out" && grep -q -e '--config' "$U/$c$o.out" &&
+      grep -q -e '--print-config' "$U/$c$o.out" && pass || fail "$c $o --help: exit $(rc_of "$U/$c$o"): $(first "$U/$c$o.err")"
+  done
+done
+run "$U/qv" error-analysis --quiet --verbose
+grep -q -F -e "--quiet excludes --verbose" "$U/qv.err" && [ "$(rc_of "$U/qv")" -eq 2 ] && pass || fail "--quiet --verbose: $(first "$U/qv.err")"
+# Every angle option says (rad); the one in degrees says so in its name.
+for c in simulate calibrate-rig error-analysis estimate; do "$YAWDEPTH" "$c" --help; done >"$U/helps.txt" 2>&1
+res=$(awk '/^  --(yaw|yaw-rate|heading|turn-rate|board-tilt|initial-yaw-offset|sigma-heading|sigma-yaw|sigma-rot)[ ,]/ { n++; getline d; if ($0 !~ /\(rad/ && d !~ /\(rad/) print $1 }
+           END { print n + 0 }' "$U/helps.txt" | tr '\n' ' ')
+case $res in [0-9]*) [ "${res% }" -ge 12 ] && pass || fail "angle options: only $res seen" ;; *) fail "angle options without (rad): $res" ;; esac
+grep -q -e '--min-yaw-span-deg' "$U/helps.txt" && pass || fail "calibrate-rig --help lacks --min-yaw-span-deg"
+
+# Renamed options: the old name means the same (identical output) and warns.
+run "$U/ea_new" error-analysis --view side --depth 1 --sigma-odom 0.002 --sigma-yaw 0.001 --sigma-px 0.2
+run "$U/ea_old" error-analysis --view side --depth 1 --delta-dz 0.002 --delta-yaw 0.001 --delta-u 0.2
+if [ "$(rc_of "$U/ea_old")" -eq 0 ] && cmp -s "$U/ea_new.out" "$U/ea_old.out" && [ ! -s "$U/ea_new.err" ] &&
+  [ "$(grep -c 'is spelled --sigma-' "$U/ea_old.err")" -eq 3 ]; then pass; else
+  fail "error-analysis --delta-* aliases: exit $(rc_of "$U/ea_old"), $(first "$U/ea_old.err")"; fi
+run "$U/ea_cam" error-analysis --view side --depth 1 --camera "$XML"
+run "$U/ea_kx" error-analysis --view side --depth 1 --kx "$(awk -F'[<>]' '/<px>/ { print $3; exit }' "$XML")"
+[ "$(rc_of "$U/ea_cam")" -eq 0 ] && cmp -s "$U/ea_cam.out" "$U/ea_kx.out" && pass ||
+  fail "error-analysis --camera is not --kx with the camera's px: $(first "$U/ea_cam.err")"
+run "$U/ea_both" error-analysis --camera "$XML" --kx 1000
+[ "$(rc_of "$U/ea_both")" -eq 2 ] && grep -q excludes "$U/ea_both.err" && pass || fail "error-analysis --camera --kx: $(first "$U/ea_both.err")"
+RS="$U/rigsim"
+run "$RS" simulate --camera "$YML" --rig "$RIG" --out-dir "$RS" --frames 7 --step 0 --yaw -0.03 --yaw-rate 0.01 \
+  --pattern chessboard:7x5:0.03 --board-distance 0.8 --supersampling 2
+run "$RS.old" calibrate-rig --camera "$YML" --motion "$RS/motion.csv" --pattern chessboard:7x5:0.03 --out "$RS/rig.yaml" --min-yaw-span 3
+cp "$RS/rig.yaml" "$RS/rig_old.yaml" 2>/dev/null
+run "$RS.new" calibrate-rig --camera "$YML" --motion "$RS/motion.csv" --pattern chessboard:7x5:0.03 --out "$RS/rig.yaml" --min-yaw-span-deg 3
+if [ "$(rc_of "$RS.old")" -eq 0 ] && cmp -s "$RS.old.out" "$RS.new.out" && cmp -s "$RS/rig.yaml" "$RS/rig_old.yaml" &&
+  [ "$(cat "$RS.old.err")" = "yawdepth calibrate-rig: warning: --min-yaw-span is spelled --min-yaw-span-deg now (the old name still works)" ] &&
+  [ ! -s "$RS.new.err" ]; then pass; else fail "calibrate-rig --min-yaw-span alias: exit $(rc_of "$RS.old"): $(first "$RS.old.err")"; fi
+run "$RS.old30" calibrate-rig --camera "$YML" --motion "$RS/motion.csv" --pattern chessboard:7x5:0.03 --out "$RS/r30.yaml" --min-yaw-span 30
+run "$RS.new30" calibrate-rig --camera "$YML" --motion "$RS/motion.csv" --pattern chessboard:7x5:0.03 --out "$RS/r30.yaml" --min-yaw-span-deg 30
+[ "$(rc_of "$RS.old30")" -eq 1 ] && cmp -s "$RS.old30.err" "$RS.new30.err" && grep -q 'spanning 30 deg' "$RS.new30.err" && pass ||
+  fail "calibrate-rig --min-yaw-span 30 (degrees, both names): $(first "$RS.new30.err")"
+
+# Settings files: read, overridden by the command line, printed, read back.
+S="$U/settings"
+mkdir -p "$S"
+EST=(estimate --camera "$YML" --rig "$RIG" --motion "$X/motion.csv" --tracks "$X/tracks.csv")
+run "$S/direct" "${EST[@]}" --method fused --sigma-px 0.5
+run "$S/print" "${EST[@]}" --method fused --sigma-px 0.5 --print-config --out "$S/never.csv"
+[ "$(rc_of "$S/print")" -eq 0 ] && [ ! -s "$S/print.err" ] && [ ! -e "$S/never.csv" ] &&
+  grep -q '^sigma-px = 0.5$' "$S/print.out" && grep -q '^method = "fused"$' "$S/print.out" &&
+  grep -q '^# sigma-odom = 0.001$' "$S/print.out" && pass || fail "--print-config: exit $(rc_of "$S/print"): $(first "$S/print.err")"
+grep -v '^out = ' "$S/print.out" >"$S/run.toml"
+run "$S/back" estimate --config "$S/run.toml"
+[ "$(rc_of "$S/back")" -eq 0 ] && cmp -s "$S/direct.out" "$S/back.out" && pass ||
+  fail "estimate --config (--print-config's file): not the same points: $(first "$S/back.err")"
+run "$S/override" estimate --config "$S/run.toml" --sigma-px 0.3 --method exact
+run "$S/plain" "${EST[@]}"
+[ "$(rc_of "$S/override")" -eq 0 ] && cmp -s "$S/plain.out" "$S/override.out" && pass ||
+  fail "the command line does not override --config: $(first "$S/override.err")"
+# One robot file for every command: top-level keys of other commands' options are skipped.
+printf '# the robot\ncamera = "%s"\nrig = "%s"\nsigma_px = 0.3\nsigma-odom = 0.001\nsigma-heading = 0.00087266\nsigma-yaw = 0.00087266\n[measure]\npattern = "chessboard:5x4:0.03"\n[simulate]\nframes = 10\nstep = 0.02\nyaw = 1.5708\npoints = 12\n[estimate]\nmethod = "exact"\n' \
+  "$YML" "$RIG" >"$S/robot.toml"
+run "$S/sim" simulate --config "$S/robot.toml" --out-dir "$S/sim"
+run "$S/est" estimate --config "$S/robot.toml" --motion "$S/sim/motion.csv" --tracks "$S/sim/tracks.csv"
+run "$S/worked" "${EST[@]}" --sigma-px 0.3 --sigma-odom 0.001 --sigma-heading 0.00087266 --sigma-yaw 0.00087266
+[ "$(rc_of "$S/est")" -eq 0 ] && cmp -s "$S/sim/truth.csv" "$X/truth.csv" && cmp -s "$S/est.out" "$S/worked.out" && pass ||
+  fail "one robot file for simulate and estimate (the README's worked example): $(first "$S/sim.err") $(first "$S/est.err")"
+# The command line overrides the file also by an option that excludes the file's (--yaw, --view).
+printf 'view = "side"\ndepth = 1\n' >"$S/view.toml"
+run "$S/view_line" error-analysis --config "$S/view.toml" --yaw 0.3
+run "$S/view_direct" error-analysis --depth 1 --yaw 0.3
+[ "$(rc_of "$S/view_line")" -eq 0 ] && cmp -s "$S/view_line.out" "$S/view_direct.out" && pass ||
+  fail "error-analysis --config (view) --yaw: exit $(rc_of "$S/view_line"): $(first "$S/view_line.err")"
+# INI as well (';' comments, no quotes), a switch set to true.
+printf '; the robot\ncamera=%s\nrig=%s\n[estimate]\nmethod=fused\nsigma-px=0.5\nquiet=true\n' "$YML" "$RIG" >"$S/robot.ini"
+run "$S/ini" estimate --config "$S/robot.ini" --motion "$X/motion.csv" --tracks "$X/tracks.csv"
+[ "$(rc_of "$S/ini")" -eq 0 ] && cmp -s "$S/direct.out" "$S/ini.out" && [ ! -s "$S/ini.err" ] && pass ||
+  fail "estimate --config FILE.ini: $(first "$S/ini.err")"
+printf 'sigma-px = 0.3\nsigma-pxx = 1\n' >"$S/typo.toml"
+usage config_typo "yawdepth estimate: error: $S/typo.toml:2: unknown key 'sigma-pxx' for yawdepth estimate (did you mean sigma-px?) (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S/typo.toml"
+printf '[estimate]\nframes = 3\n' >"$S/section.toml"
+usage config_section_key "yawdepth estimate: error: $S/section.toml:2: unknown key 'frames' for yawdepth estimate (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S/section.toml"
+printf '[bogus]\nx = 1\n' >"$S/bogus.toml"
+usage config_bad_section "yawdepth estimate: error: $S/bogus.toml: [bogus] is not a yawdepth command (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S/bogus.toml"
+printf 'sigma-px = "abc"\n' >"$S/value.toml"
+usage config_bad_value "yawdepth estimate: error: --sigma-px: 'abc' is not a number (set in $S/value.toml) (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S/value.toml"
+usage config_missing "yawdepth estimate: error: $S/none.toml: cannot read the settings file (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S/none.toml"
+printf 'no-gate = maybe\n' >"$S/switch.toml"
+usage config_switch "yawdepth track: error: $S/switch.toml:1: 'no-gate' is a switch: true or false, not 'maybe' (see yawdepth track --help)" \
+  track --camera "$YML" --motion "$X/motion.csv" --out "$S/t.csv" --config "$S/switch.toml"
+
+# A negative number, or a list of them, is a value, not an unknown option.
+run "$S/negative" calibrate-rig --camera "$YML" --motion "$X/motion.csv" --pattern chessboard:5x4:0.03 --out "$S/r.yaml" \
+  --estimate-time-offset --time-offset-range -0.2,0.1 --initial-yaw-offset -0.5 --print-config
+[ "$(rc_of "$S/negative")" -eq 0 ] && grep -q '^time-offset-range = \[-0.2, 0.1\]$' "$S/negative.out" &&
+  grep -q '^initial-yaw-offset = -0.5$' "$S/negative.out" && pass ||
+  fail "negative values: exit $(rc_of "$S/negative"): $(first "$S/negative.err")"
+# --verbose: each stage's time on stderr; --quiet: nothing but warnings.
+run "$S/verbose" "${EST[@]}" --verbose
+[ "$(rc_of "$S/verbose")" -eq 0 ] && grep -q '^yawdepth estimate: done (' "$S/verbose.err" &&
+  grep -q '^yawdepth estimate: exact on 12 tracks x 10 frames (' "$S/verbose.err" && cmp -s "$S/verbose.out" "$S/plain.out" &&
+  pass || fail "estimate --verbose: $(first "$S/verbose.err")"
+# Progress: never when stderr is not a terminal (a render of 300 boards takes over a second).
+P="$U/progress"
+run "$P" simulate --camera "$YML" --rig "$RIG" --out-dir "$P" --frames 300 --pattern chessboard:9x7:0.03 --supersampling 8
+[ "$(rc_of "$P")" -eq 0 ] && [ ! -s "$P.err" ] && pass || fail "simulate with stderr on a file: $(first "$P.err")"
+if command -v script >/dev/null 2>&1; then
+  # On a terminal (script's pty): the updating line, ended by a newline; none with --quiet.
+  script -qec "'$YAWDEPTH' simulate --camera '$YML' --rig '$RIG' --out-dir '$P.tty' --frames 300 --pattern chessboard:9x7:0.03 --supersampling 8" \
+    /dev/null </dev/null >"$P.tty.log" 2>&1
+  grep -q 'simulate: 300/300 images rendered' "$P.tty.log" && pass || fail "simulate on a terminal shows no progress: $(head -c 200 "$P.tty.log")"
+  script -qec "'$YAWDEPTH' simulate --quiet --camera '$YML' --rig '$RIG' --out-dir '$P.ttyq' --frames 300 --pattern chessboard:9x7:0.03 --supersampling 8" \
+    /dev/null </dev/null >"$P.ttyq.log" 2>&1
+  ! grep -q 'images rendered' "$P.ttyq.log" && pass || fail "simulate --quiet on a terminal shows progress"
+fi
+
 # No stray temporary files anywhere.
 left=$(find "$W" -name '.*.tmp*' | head -3)
 [ -z "$left" ] && pass || fail "files: temporary files left: $left"

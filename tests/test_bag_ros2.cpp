@@ -325,6 +325,14 @@ std::vector<std::pair<std::string, BagFormat>> bagsIn(const std::string &dir)
       {dir + "ros2_split", BagFormat::Mcap},      {dir + "ros2.db3", BagFormat::Sqlite3},
       {dir + "ros2_db3", BagFormat::Sqlite3}};
   all.erase(std::remove_if(all.begin(), all.end(), [](const auto &b) { return !reads(b.second); }), all.end());
+  // rosbag2's compression (zstd, built with the MCAP reader's libraries): MESSAGE and FILE modes.
+  if (reads(BagFormat::Mcap)) {
+    all.emplace_back(dir + "ros2_zstd_mcap", BagFormat::Mcap);
+    if (reads(BagFormat::Sqlite3)) {
+      all.emplace_back(dir + "ros2_zstd_message", BagFormat::Sqlite3);
+      all.emplace_back(dir + "ros2_zstd_file", BagFormat::Sqlite3);
+    }
+  }
   return all;
 }
 
@@ -473,9 +481,11 @@ Raw firstOf(const std::string &topic)
 TEST_CASE("bag_ros2: every reference-written bag decodes to the values written", "[bag]")
 {
   const Counter c = checkBags(kBags);
-  // 7 bags (5 MCAP, 2 .db3) of 34 messages each, every field of every message compared.
+  // 10 bags (5 MCAP and one compressed by rosbag2's FILE mode, 2 .db3 and one of each compression mode)
+  // of 34 messages each, every field of every message compared.
   const std::size_t bags = bagsIn(kBags).size();
-  CHECK(bags == std::size_t((reads(BagFormat::Mcap) ? 5 : 0) + (reads(BagFormat::Sqlite3) ? 2 : 0)));
+  const bool mcap = reads(BagFormat::Mcap), db3 = reads(BagFormat::Sqlite3);
+  CHECK(bags == std::size_t((mcap ? 6 : 0) + (db3 ? 2 : 0) + (mcap && db3 ? 2 : 0)));
   CHECK(c.messages == bags * 34);
   CHECK(c.fields == bags * 2250);
 }
@@ -689,6 +699,75 @@ TEST_CASE("bag_ros2: records of unknown opcodes are skipped by their length", "[
     putLe(s, footer + 25, 0, 4); // no summary CRC
     CHECK(readAll(dir.write("op.mcap", s)) == 34);
   }
+}
+
+TEST_CASE("bag_ros2: rosbag2's compressed bags: damage named by the file given, no scratch file left", "[bag]")
+{
+  if (!reads(BagFormat::Mcap) || !reads(BagFormat::Sqlite3))
+    return; // zstd comes with the MCAP reader's libraries
+  const TempDir scratch, dir;
+  const char *old_tmpdir = std::getenv("TMPDIR");
+  const std::string saved = old_tmpdir ? old_tmpdir : "";
+  ::setenv("TMPDIR", scratch.path.c_str(), 1);
+  const std::string zst = slurp(kBags + "ros2_zstd_file/ros2_zstd_file_0.db3.zstd");
+  {
+    const std::unique_ptr<BagReader> r = openBag(kBags + "ros2_zstd_file");
+    CHECK(r->path() == kBags + "ros2_zstd_file");
+    CHECK(scratch.count() == 1); // the decompressed database, while the reader lives
+  }
+  CHECK(scratch.count() == 0);
+  SECTION("a compressed bag given as its one file")
+  {
+    CHECK(readAll(dir.write("alone.db3.zstd", zst)) == 34);
+  }
+  SECTION("cut short")
+  {
+    const std::string cut = dir.write("cut.db3.zstd", zst.substr(0, zst.size() / 2));
+    requireOneLine(errorOf([&] { openBag(cut); }), cut + ": ", "truncated");
+  }
+  SECTION("corrupt")
+  {
+    std::string bad = zst;
+    for (std::size_t k = 20; k < bad.size(); k += 7)
+      bad[k] = char(bad[k] ^ 0x5A);
+    const std::string path = dir.write("bad.db3.zstd", bad);
+    const std::string e = errorOf([&] { readAll(path); });
+    requireOneLine(e, path + ": ", "");
+    CHECK(e.find(scratch.path.string()) == std::string::npos); // never the scratch file's name
+  }
+  SECTION("a damaged message of MESSAGE compression names its topic")
+  {
+    std::string db = slurp(kBags + "ros2_zstd_message/ros2_zstd_message_0.db3");
+    const std::string magic("\x28\xb5\x2f\xfd", 4);
+    std::size_t damaged = 0;
+    for (std::size_t at = db.find(magic); at != std::string::npos; at = db.find(magic, at + 4))
+      if (at + 12 < db.size()) {
+        db[at + 8] = char(db[at + 8] ^ 0xFF);
+        db[at + 10] = char(db[at + 10] ^ 0xFF);
+        ++damaged;
+      }
+    REQUIRE(damaged > 0);
+    const std::string path = dir.write("damaged.db3", db);
+    const std::string e = errorOf([&] { readAll(path); });
+    INFO(e);
+    CHECK(e.find("message at t = ") != std::string::npos);
+    CHECK(e.find('\n') == std::string::npos);
+  }
+  SECTION("another compression format in metadata.yaml")
+  {
+    std::filesystem::create_directories(dir.path / "lz4");
+    std::string meta = slurp(kBags + "ros2_zstd_file/metadata.yaml");
+    meta.replace(meta.find("compression_format: \"zstd\""), 26, "compression_format: \"lz4\"");
+    dir.write("lz4/metadata.yaml", meta);
+    dir.write("lz4/ros2_zstd_file_0.db3.zstd", zst);
+    requireOneLine(errorOf([&] { openBag(dir.file("lz4")); }), dir.file("lz4/metadata.yaml") + ": ",
+                   "compression_format 'lz4'");
+  }
+  CHECK(scratch.count() == 0);
+  if (old_tmpdir)
+    ::setenv("TMPDIR", saved.c_str(), 1);
+  else
+    ::unsetenv("TMPDIR");
 }
 
 TEST_CASE("bag_ros2: refused .db3 files", "[bag]")

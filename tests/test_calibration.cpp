@@ -264,7 +264,7 @@ TEST_CASE("calibrate-camera recovers the paper's camera from rendered chessboard
   const CameraModel &t = set.truth;
   INFO("fx " << c.kx() << " fy " << c.ky() << " u0 " << c.u0() << " v0 " << c.v0() << " k1 "
              << c.brownCoefficients()[0] << " k2 " << c.brownCoefficients()[1] << " rms " << cal.rms_px);
-  // README ("Calibrating the camera") quotes these: fx, fy within 0.04 %, the principal point within
+  // docs/calibration.md ("The camera") quotes these: fx, fy within 0.04 %, the principal point within
   // 0.36 px, RMS 0.013 px. Measured (Release, seeded): fx +0.0384 %, fy +0.0332 %, u0 -0.354 px,
   // v0 +0.079 px, RMS 0.01337 px; the bounds sit just above.
   constexpr double kFocalTol = 0.0005;  // relative (0.05 %)
@@ -574,7 +574,7 @@ TEST_CASE("calibrate-camera names the pattern that is there, or says there is no
 
 namespace {
 
-// README ("The rig: yawdepth calibrate-rig") quotes: on rendered sequences the offset within 0.12 mm
+// docs/calibration.md ("The rig: yawdepth calibrate-rig") quotes: on rendered sequences the offset within 0.12 mm
 // and the yaw zero within 0.005 degree. Measured on the three scenes below (Release, seeded; board
 // square / static at an angle / robot motion): offset x -0.074 / -0.062 / -0.112 mm, z +0.019 /
 // +0.035 / +0.046 mm; yaw zero -0.0042 deg / (kept) / -0.0016 deg; axis 0.009 / 0.004 / 0.002 deg;
@@ -1063,7 +1063,7 @@ TEST_CASE("hand-eye on the real franka photos: ViSP's published eMc within milli
   const Eigen::Vector3d sig_t = 1e3 * cal.camera_pose_sigma.head<3>(), sig_r = cal.camera_pose_sigma.tail<3>() * 180 / M_PI;
   std::printf("  stated 1-sigma of eMc: %.2f to %.2f mm, %.3f to %.3f deg\n", sig_t.minCoeff(), sig_t.maxCoeff(),
               sig_r.minCoeff(), sig_r.maxCoeff());
-  // README ("A camera on an arm") quotes these: eMc within 2.4 mm and 0.41 deg of ViSP's (start 2.0 mm,
+  // docs/arms.md ("Hand-eye calibration") quotes these: eMc within 2.4 mm and 0.41 deg of ViSP's (start 2.0 mm,
   // 0.40 deg), RMS 0.19 px (4.4 px at the start), stated 1-sigma 0.5 to 0.8 mm and 0.05 to 0.09 deg,
   // largest hand-pose correction 5.7 mm and 0.46 deg. Measured: 2.43 mm, 0.405 deg (start 2.02 mm,
   // 0.397 deg), RMS 0.187 px (start 4.435 px), sigmas 0.46 to 0.84 mm and 0.048 to 0.092 deg,
@@ -1086,7 +1086,7 @@ TEST_CASE("hand-eye on the real franka photos: ViSP's published eMc within milli
   // ViSP's published board pose rMo within a few millimetres too.
   const vpHomogeneousMatrix rMo(0.5364858483, 0.123945742, 0.09155742609, 2.22636085, -2.213916548, 0.02071766945);
   CHECK((isoOf(cal.target_pose).translation() - isoOf(rMo).translation()).norm() < 5e-3);
-  // The board scale check on these photos (README, "The board's size"): the hand's motion says the
+  // The board scale check on these photos (docs/arms.md, "The board's size"): the hand's motion says the
   // board is 1.137 +- 0.030 times the 23.6 mm printed on the data's sheet, a mismatch it warns about:
   // not resolved (the print unmeasured, or the arm's errors growing with the distance). Pinned here
   // so that a change of it is seen.

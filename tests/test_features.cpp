@@ -292,7 +292,7 @@ TEST_CASE("chessboard corner accuracy on rendered images", "[features][slow]") {
   REQUIRE(scenes == 16);
   std::printf("corner accuracy: %ld corners, rms %.4f px, bias (%+.4f, %+.4f) px, max %.4f px\n", stats.n,
               stats.rms(), stats.biasX(), stats.biasY(), stats.max);
-  // README (the paper's experiment) quotes 0.018 px RMS for these renders (blur 0.7, noise 2; the
+  // docs/accuracy.md (the paper's experiment) quotes 0.018 px RMS for these renders (blur 0.7, noise 2; the
   // same figure bench_corner_refinement prints on its 24 scenes). Measured here (Release, seeded):
   // 496 corners, RMS 0.0175 px, bias (-0.0010, -0.0003) px, max 0.072 px; the bounds sit just above.
   constexpr double kRmsTolPx = 0.025;

@@ -2,6 +2,7 @@
 // a chessboard or an AprilTag grid; camera offset, yaw axis and yaw zero from a static board seen at
 // several yaw readings.
 #include "commands.h"
+#include "progress.h"
 
 #include <algorithm>
 #include <cmath>
@@ -58,7 +59,7 @@ BoardLayout makeBoard(const std::string &pattern, const std::string &tags, doubl
 
 void addBoardOptions(CLI::App *sub, std::string &tags, double &tag_gap, int &first_tag_id)
 {
-  sub->add_option("--tags", tags, "AprilTag grid: COLSxROWS tags")->capture_default_str();
+  addTagsOption(sub, tags);
   sub->add_option("--tag-gap", tag_gap, "AprilTag grid: gap between tags (m; default a quarter tag)")
       ->check(FiniteNonNegative);
   sub->add_option("--first-tag-id", first_tag_id, "AprilTag grid: id of the top-left tag")
@@ -67,7 +68,7 @@ void addBoardOptions(CLI::App *sub, std::string &tags, double &tag_gap, int &fir
 }
 
 struct CameraArgs {
-  std::string pattern, out, coverage, camera_name = "Camera", tags = "1x1", distortion = "auto", debug_dir;
+  std::string pattern, out, coverage, camera_name = "Camera", tags, distortion = "auto", debug_dir;
   std::vector<std::string> images;
   bool fix_aspect = false, fix_pp = false, drop_outliers = false, k3 = false, zero_tangent = false, quiet = false;
   double tag_gap = -1;
@@ -75,7 +76,7 @@ struct CameraArgs {
 };
 
 struct RigArgs {
-  std::string camera, camera_name, pattern, out, tags = "1x1";
+  std::string camera, camera_name, pattern, out, tags;
   MotionOptions motion;
   std::string hand_eye; // --hand-eye eye-in-hand|eye-to-hand, or empty for the yaw rig
   const CLI::Option *max_rms_option = nullptr;
@@ -120,9 +121,23 @@ CameraOutputs cameraOutputs(const CameraArgs &a, const CLI::App &sub)
 CalibrationDetections detectCameraViews(const CameraArgs &a, const BoardLayout &board)
 {
   std::vector<cv::Mat> images;
-  for (const std::string &path : a.images)
-    images.push_back(readGrayImage(path));
-  CalibrationDetections det = detectCalibrationViews(board, a.images, images);
+  {
+    ProgressLine progress;
+    for (const std::string &path : a.images) {
+      progress.count("calibrate-camera", images.size(), a.images.size(), "images read");
+      images.push_back(readGrayImage(path));
+    }
+  }
+  stage("calibrate-camera", std::to_string(images.size()) + " images read");
+  CalibrationDetections det;
+  {
+    ProgressLine progress;
+    det = detectCalibrationViews(board, a.images, images, DetectorOptions(), [&](std::size_t done, std::size_t total) {
+      progress.count("calibrate-camera", done, total, "images searched for the board");
+    });
+    progress.count("calibrate-camera", images.size(), images.size(), "images searched for the board");
+  }
+  stage("calibrate-camera", "board searched in " + std::to_string(det.detections.size()) + " images");
   for (const std::string &f : det.failures)
     std::cerr << "calibrate-camera: " << f << " (image skipped)\n";
   for (const std::string &w : det.warnings)
@@ -274,6 +289,7 @@ int runCalibrateCamera(const CameraArgs &a, const CLI::App &sub)
   const CalibrationDetections det = detectCameraViews(a, board);
   const CameraCalibrationOptions opt = cameraCalibrationOptions(a);
   const CameraCalibration cal = calibrateCamera(board, det.views, det.width, det.height, opt);
+  stage("calibrate-camera", "fitted on " + std::to_string(det.views.size()) + " views");
   if (!cal.visp_fitted) {
     std::string why;
     for (const auto &n : cal.notes)
@@ -325,7 +341,7 @@ Runner addCalibrateCamera(CLI::App &app)
       ->capture_default_str();
   sub->add_flag("--k3", a->k3, "The same as --distortion k5");
   sub->add_flag("--zero-tangent", a->zero_tangent, "Fix the tangential distortion p1 = p2 = 0");
-  sub->add_flag("--quiet", a->quiet, "Print only the RMS reprojection error (and problems on stderr)");
+  addVerbosityOptions(sub, a->quiet, "Print only the RMS reprojection error, no progress");
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
   return [a, sub]() { return runCalibrateCamera(*a, *sub); };
 }
@@ -392,6 +408,7 @@ int runHandEye(const RigArgs &a, const CameraModel &camera, const BoardLayout &b
                const std::vector<HandEyeView> &views)
 {
   const HandEyeCalibration cal = calibrateHandEye(camera, board, views, handEyeOptions(a));
+  stage("calibrate-rig", "hand-eye fitted on " + std::to_string(views.size()) + " views");
   writeFileAtomically(a.out, handEyeRigYaml(cal));
   printHandEye(a, cal);
   return 0;
@@ -405,7 +422,9 @@ void detectRigViews(const RigArgs &a, const CameraModel &camera, const BoardLayo
   PatternDetector detector(board.pattern);
   detector.setCamera(camera);
   std::vector<std::string> failures;
+  ProgressLine progress;
   for (std::size_t i = 0; i < motion.samples.size(); ++i) {
+    progress.count("calibrate-rig", i, motion.samples.size(), "images searched for the board");
     const long frame = motion.samples[i].frame;
     if (motion.images[i].empty()) {
       failures.push_back("frame " + std::to_string(frame) + ": no image");
@@ -420,6 +439,9 @@ void detectRigViews(const RigArgs &a, const CameraModel &camera, const BoardLayo
     views.push_back({motion.samples[i], d.features});
     hand_eye_views.push_back({wMv(motion.samples[i]), d.features, motion.images[i]});
   }
+  progress.finish();
+  stage("calibrate-rig", "board found in " + std::to_string(views.size()) + " of " +
+                             std::to_string(motion.samples.size()) + " images");
   if (views.empty())
     throw Error("the pattern " + board.pattern.toString() + " was not found in any of the " +
                 std::to_string(motion.samples.size()) + " images" +
@@ -570,6 +592,7 @@ int runCalibrateRig(const RigArgs &a)
   if (!a.hand_eye.empty())
     return runHandEye(a, camera, board, hand_eye_views);
   const RigCalibration rig = calibrateRig(camera, board, views, rigCalibrationOptions(a));
+  stage("calibrate-rig", "rig fitted on " + std::to_string(views.size()) + " views");
   writeFileAtomically(a.out, rigCalibrationYaml(rig));
   printRigCalibration(a, rig);
   return 0;
@@ -586,8 +609,7 @@ Runner addCalibrateRig(CLI::App &app)
       "axis (Lb), yaw axis direction, zero of the yaw reading, with uncertainties; writes the rig file. With "
       "--hand-eye: the camera's pose on a robot arm (eMc, or rMc for eye-to-hand) from a 6-DoF motion log of the "
       "hand's poses, written as the rig file's camera_pose.");
-  sub->add_option("--camera", a->camera, "Calibrated camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
+  addCameraOptions(sub, a->camera, a->camera_name, true, "calibrated (calibrate-camera)");
   addMotionOptions(sub, a->motion,
                    "Motion log with the yaw readings and an image column (frame,x,y,z,heading,yaw,image); with "
                    "--hand-eye, the hand's pose in the robot base per image (frame,tx,ty,tz,tux,tuy,tuz,image, or "
@@ -611,15 +633,19 @@ Runner addCalibrateRig(CLI::App &app)
   sub->add_flag("--board-square", a->board_square,
                 "The board stands square to the robot's forward direction: estimate the yaw zero from it");
   sub->add_flag("--fixed-axis", a->fixed_axis, "Take the yaw axis as the vision frame's +Y instead of estimating it");
-  sub->add_option("--min-yaw-span", a->min_yaw_span_deg, "Smallest accepted span of the yaw readings (degrees)")
-      ->check(FiniteNonNegative)
-      ->capture_default_str();
+  // In degrees (a span is read and typed in degrees), so the name says so; --min-yaw-span was its old name.
+  renamedFrom(sub,
+              sub->add_option("--min-yaw-span-deg,--min-yaw-span", a->min_yaw_span_deg,
+                              "Smallest accepted span of the yaw readings (deg; --min-yaw-span is its old name)")
+                  ->check(FiniteNonNegative)
+                  ->capture_default_str(),
+              "--min-yaw-span");
   a->max_rms_option = sub->add_option("--max-rms-px", a->max_rms_px,
                                       "A fit with a larger reprojection RMS failed and writes nothing (px; with "
                                       "--hand-eye the default is 20: arm kinematics err by millimetres)")
                            ->check(CLI::PositiveNumber & Finite)
                            ->capture_default_str();
-  sub->add_flag("--quiet", a->quiet, "No per-frame detection messages");
+  addVerbosityOptions(sub, a->quiet, "No progress or per-frame detection messages");
   sub->add_flag("--estimate-time-offset", a->estimate_time_offset,
                 "Estimate the time offset between the camera's clock and the motion log's with the rig or, with "
                 "--hand-eye, the arm (a timestamped log and --images; the pan must sweep back and forth, the arm "
@@ -633,7 +659,7 @@ Runner addCalibrateRig(CLI::App &app)
   addBoardOptions(sub, a->tags, a->tag_gap, a->first_tag_id);
   sub->get_option("--time-offset-range")->needs("--estimate-time-offset");
   sub->get_option("--estimate-time-offset")->excludes("--time-offset");
-  for (const char *rig_only : {"--initial-offset", "--initial-yaw-offset", "--board-square", "--fixed-axis", "--min-yaw-span"})
+  for (const char *rig_only : {"--initial-offset", "--initial-yaw-offset", "--board-square", "--fixed-axis", "--min-yaw-span-deg"})
     hand_eye->excludes(rig_only);
   return [a]() { return runCalibrateRig(*a); };
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/error_analysis.h>
 
@@ -13,7 +14,8 @@ namespace yawdepth::cli {
 namespace {
 
 struct ErrorArgs {
-  bool paper = false;
+  bool paper = false, quiet = false;
+  std::string camera, camera_name; // --camera: kx is its px
   ErrorAnalysisCase c;
   int monte_carlo = 0;
   unsigned long long seed = 1;
@@ -44,6 +46,14 @@ void printRow(const std::string &view, const ErrorAnalysisCase &c, int mc, unsig
   std::printf("\n");
 }
 
+/* --kx, or --camera (and --camera-name) whose px gives it: the two exclude each other. */
+void addErrorAnalysisCameraOptions(CLI::App *sub, ErrorArgs &a)
+{
+  CLI::Option *kx = sub->add_option("--kx", a.c.kx, "Focal length (px)")->check(Finite)->capture_default_str();
+  addCameraOptions(sub, a.camera, a.camera_name, false, "kx is its px, instead of --kx")->excludes(kx);
+  sub->get_option("--camera-name")->needs("--camera");
+}
+
 } // namespace
 
 Runner addErrorAnalysis(CLI::App &app)
@@ -58,23 +68,36 @@ Runner addErrorAnalysis(CLI::App &app)
                   ->capture_default_str();
   sub->add_option_function<std::string>(
          "--view", [a](const std::string &v) { a->c.yaw = v == "side" ? M_PI / 2 : v == "oblique" ? M_PI / 4 : 0.0; },
-         "Shorthand for --yaw: front (0), oblique (45 deg) or side (90 deg)")
+         "Shorthand for --yaw: front (0 rad), oblique (pi/4 = 0.7854 rad) or side (pi/2 = 1.5708 rad)")
       ->check(CLI::IsMember({"front", "oblique", "side"}))
       ->excludes(yaw);
   sub->add_option("--depth", a->c.depth, "Depth Z (m)")->check(Finite)->capture_default_str();
   sub->add_option("--u-offset", a->c.u_offset, "u_i - u0 (px)")->check(Finite)->capture_default_str();
   sub->add_option("--dz", a->c.dz, "Forward increment (m)")->check(Finite)->capture_default_str();
-  sub->add_option("--kx", a->c.kx, "Focal length (px)")->check(Finite)->capture_default_str();
-  sub->add_option("--delta-dz", a->c.delta_dz, "Odometry error (m)")->check(FiniteNonNegative)->capture_default_str();
-  sub->add_option("--delta-yaw", a->c.delta_yaw, "Yaw error (rad)")->check(FiniteNonNegative)->capture_default_str();
-  sub->add_option("--delta-u", a->c.delta_u, "Pixel error of u_i (px); the Monte Carlo noise per reading")
-      ->check(FiniteNonNegative)
-      ->capture_default_str();
+  addErrorAnalysisCameraOptions(sub, *a);
+  // The noise takes the names the other commands give it; the paper's delta names stay as aliases.
+  renamedFrom(sub,
+              sub->add_option("--sigma-odom,--delta-dz", a->c.delta_dz, "Odometry error of the increment (m)")
+                  ->check(FiniteNonNegative)
+                  ->capture_default_str(),
+              "--delta-dz");
+  renamedFrom(sub,
+              sub->add_option("--sigma-yaw,--delta-yaw", a->c.delta_yaw, "Yaw reading error (rad)")
+                  ->check(FiniteNonNegative)
+                  ->capture_default_str(),
+              "--delta-yaw");
+  renamedFrom(sub,
+              sub->add_option("--sigma-px,--delta-u", a->c.delta_u,
+                              "Pixel error of u_i (px); the Monte Carlo noise per reading")
+                  ->check(FiniteNonNegative)
+                  ->capture_default_str(),
+              "--delta-u");
   sub->add_option("--delta-du", a->c.delta_du, "|du_i - du_{i-1}| (px)")->check(FiniteNonNegative)->capture_default_str();
   sub->add_option("--monte-carlo", a->monte_carlo,
                   "Also print the 1-sigma first-order error and a Monte Carlo RMS and median over N draws")
       ->check(CLI::Range(0, 100000000));
   sub->add_option("--seed", a->seed, "Monte Carlo seed")->capture_default_str();
+  addVerbosityOptions(sub, a->quiet, "Nothing to silence: the table is the only output");
 
   return [a]() {
     if (a->paper) {
@@ -106,6 +129,8 @@ Runner addErrorAnalysis(CLI::App &app)
                   "prints 0.0001 for the yaw term; the first-order model gives the value above.\n");
       return 0;
     }
+    if (!a->camera.empty())
+      a->c.kx = loadCameraFile(a->camera, a->camera_name).kx();
     a->c.validate();
     printHeader(a->monte_carlo > 0);
     char view[32];

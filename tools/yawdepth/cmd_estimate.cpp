@@ -1,6 +1,7 @@
 // `yawdepth estimate`: points from a motion log and feature tracks.
 #include "commands.h"
 #include "method_options.h"
+#include "progress.h"
 
 #include <memory>
 #include <yawdepth/camera/camera_file.h>
@@ -13,7 +14,7 @@ namespace {
 struct EstimateArgs {
   std::string camera, camera_name, rig, tracks, out, outliers, ply;
   MotionOptions motion;
-  bool outliers_given = false, ply_given = false;
+  bool outliers_given = false, ply_given = false, quiet = false;
   MethodArgs method;
   InputOptions input;
 };
@@ -24,9 +25,8 @@ Runner addEstimate(CLI::App &app)
 {
   auto args = std::make_shared<EstimateArgs>();
   CLI::App *sub = app.add_subcommand("estimate", "Estimate each feature's 3D point from a motion log and feature tracks.");
-  sub->add_option("--camera", args->camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", args->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
-  sub->add_option("--rig", args->rig, "Rig file (YAML with camera_offset)")->required();
+  addCameraOptions(sub, args->camera, args->camera_name, true);
+  addRigOption(sub, args->rig, true);
   addMotionOptions(sub, args->motion, "Motion log (frame,x,y,z,heading,yaw or 6-DoF)");
   sub->add_option("--tracks", args->tracks, "Feature tracks CSV (frame,id,u,v)")->required();
   addMethodOptions(sub, args->method, "exact");
@@ -38,6 +38,7 @@ Runner addEstimate(CLI::App &app)
                   "Also write the ok points as a PLY point cloud (world frame of the motion log, with sigma_z and id)")
       ->each([args](const std::string &) { args->ply_given = true; });
   addInputOptions(sub, args->input);
+  addVerbosityOptions(sub, args->quiet, "No summaries on stderr (the time alignment, the residual check)");
 
   return [args]() {
     args->method.noise.validate();
@@ -57,16 +58,18 @@ Runner addEstimate(CLI::App &app)
     const CameraModel camera = loadCameraFile(args->camera, args->camera_name);
     const RigFile rig_file = readCommandRig("estimate", args->rig);
     const YawRig rig = rigOf(rig_file);
-    MotionLog motion = loadCommandMotion("estimate", args->motion, &rig_file, args->input.limits(), false).log;
+    MotionLog motion = loadCommandMotion("estimate", args->motion, &rig_file, args->input.limits(), args->quiet).log;
     checkMotionSteps(motion, args->motion.name());
     applyRigFile(rig_file, motion.samples);
     const std::vector<Track> tracks = readTracksCsv(args->tracks, args->input.limits());
+    stage("estimate", "inputs read: " + std::to_string(tracks.size()) + " tracks");
     checkTracksAgainstMotion(tracks, motion, args->tracks);
 
     const MethodRun run = runMethodOnLog(camera, rig, motion, tracks, args->method);
     if (args->outliers_given)
       writeTracksCsv(args->outliers, rejectedObservations(tracks, run.outliers));
     writePointOutputs(args->out, args->ply_given ? &args->ply : nullptr, rig, motion, run);
+    stage("estimate", "points written");
     return 0;
   };
 }

@@ -64,9 +64,9 @@ Runner addImport(CLI::App &app)
                 "images) as the frame-based motion log every command reads: each image's pose interpolated at its "
                 "time (SE(3)), images outside the log or in its gaps skipped and counted.");
   addMotionOptions(sub, a->motion, "Motion log");
-  sub->add_option("--rig", a->rig, "Rig file: its yaw (for a log without one) and time_offset (unless --time-offset)");
+  addRigOption(sub, a->rig, false, "only its yaw (for a log without one) and time_offset (unless --time-offset) are used");
   sub->add_option("--out-dir", a->out_dir, "Output folder (created): motion.csv with its image and t columns")->required();
-  sub->add_flag("--quiet", a->quiet, "No summary on standard output");
+  addVerbosityOptions(sub, a->quiet, "No summary on standard output");
   addInputOptions(sub, a->input);
   return [a]() { return runImport(*a); };
 }

@@ -1,6 +1,7 @@
 // `yawdepth import-bag`: a ROS 1 or ROS 2 bag written as the files every command reads (images/,
 // motion.csv, camera.yaml, rig.yaml); the bag options are shared with `measure --bag`.
 #include "commands.h"
+#include "progress.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -73,7 +74,13 @@ void addBagOptions(CLI::App *sub, BagOptions &b)
 
 BagImportResult importCommandBag(const std::string &command, const BagImportOptions &options, std::ostream *summary)
 {
-  BagImportResult r = importBag(options);
+  BagImportResult r;
+  {
+    ProgressLine progress;
+    BagImportOptions o = options;
+    o.progress = [&](std::size_t read, std::size_t total) { progress.count(command, read, total, "images read"); };
+    r = importBag(o);
+  }
   for (const std::string &w : r.warnings)
     warn(command, w);
   if (summary)
@@ -124,7 +131,7 @@ Runner addImportBag(CLI::App &app)
                   "An image between two poses (or joint readings) further apart than this is skipped (s)")
       ->check(CLI::PositiveNumber & Finite)
       ->capture_default_str();
-  sub->add_flag("--quiet", a->quiet, "No summary on standard output");
+  addVerbosityOptions(sub, a->quiet, "No summary on standard output");
   return [a]() { return runImportBag(*a); };
 }
 

@@ -5,6 +5,7 @@
 #include <map>
 #include "commands.h"
 #include "method_options.h"
+#include "progress.h"
 
 #include <filesystem>
 #include <iostream>
@@ -72,10 +73,7 @@ std::vector<Track> patternTracks(const MeasureArgs &a, const PatternSpec &patter
   detector.setCamera(camera);
   std::vector<FrameDetection> detections;
   std::vector<std::string> failures; // per-frame reasons, printed once we know the run succeeds
-  // Progress for long sequences, only on a terminal: a caller capturing stderr gets one line per
-  // problem, not a progress bar.
-  const bool progress = !a.quiet && n >= 20 && isatty(STDERR_FILENO);
-  const std::size_t every = std::max<std::size_t>(1, n / 10);
+  ProgressLine progress;
   for (std::size_t i = 0; i < n; ++i) {
     const long frame = motion.samples[i].frame;
     if (motion.images[i].empty()) {
@@ -95,9 +93,9 @@ std::vector<Track> patternTracks(const MeasureArgs &a, const PatternSpec &patter
     if (!debug_files.empty())
       writeDebugImage(debug_files[i], image, d);
     detections.push_back(std::move(d));
-    if (progress && ((i + 1) % every == 0 || i + 1 == n))
-      std::cerr << "measure: " << i + 1 << "/" << n << " frames, pattern found in " << found << "\n";
+    progress.count("measure", i + 1, n, "images, pattern found in " + std::to_string(found));
   }
+  progress.finish();
   if (found == 0)
     throw Error("the pattern " + pattern.toString() + " was not found in any of the " + std::to_string(n) +
                 " images" + (failures.empty() ? std::string() : " (" + failures.front().substr(9) + ")"));
@@ -247,11 +245,11 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
   } else {
     tracks = patternTracks(a, pattern, camera, motion, found, gray);
   }
+  stage("measure", std::to_string(tracks.size()) + " tracks from " + std::to_string(n) + " images");
   if (sub.count("--tracks-out") > 0)
     writeTracksCsv(a.tracks_out, tracks);
 
   MethodArgs method = a.method;
-  method.progress = !a.quiet;
   if (klt && method.method_option != nullptr && method.method_option->count() == 0)
     method.method = "fused"; // natural features: hundreds of tracks, the method that keeps up with the tracker
   if (klt && method.residual_option != nullptr && method.residual_option->count() == 0)
@@ -319,9 +317,10 @@ Runner addMeasure(CLI::App &app)
   CLI::App *sub = app.add_subcommand(
       "measure", "Detect a chessboard or AprilTags (or track natural corners) in the images of a motion log and "
                  "measure their 3D points.");
-  sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML (with --bag: default the bag's camera_info)");
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
-  sub->add_option("--rig", a->rig, "Rig file (YAML with camera_offset; with --bag: default the mount from /tf_static)");
+  addCameraOptions(sub, a->camera, a->camera_name, false,
+                   "required without --bag; with --bag the default is the bag's camera_info");
+  addRigOption(sub, a->rig, false, "required without --bag (the rig changes every point); with --bag the default is "
+                                   "the mount from /tf_static");
   addMotionOptions(sub, a->motion,
                    "Motion log with an image column (paths relative to the CSV's folder), a timestamped one with "
                    "--images, or with --features klt --video any motion log");
@@ -341,7 +340,7 @@ Runner addMeasure(CLI::App &app)
                   "Also write the ok points as a PLY point cloud (world frame, gray level at the feature, sigma_z, id)");
   sub->add_option("--tracks-out", a->tracks_out, "Also write the detected features as a tracks CSV (frame,id,u,v)");
   sub->add_option("--outliers", a->outliers, "fused/refine: also write the observations rejected as outliers");
-  sub->add_flag("--quiet", a->quiet, "No progress or per-frame detection messages on stderr");
+  addVerbosityOptions(sub, a->quiet, "No progress, summaries or per-frame detection messages on stderr");
   sub->add_option("--debug-dir", a->debug_dir,
                   "Write each image with its detected features and ids drawn (DIR/NNNN_NAME.png, NNNN its row in the log)");
   addInputOptions(sub, a->input);

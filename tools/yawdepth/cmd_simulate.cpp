@@ -4,6 +4,7 @@
 #include <functional>
 #include <utility>
 #include "commands.h"
+#include "progress.h"
 
 #include <cmath>
 #include <cstdio>
@@ -30,10 +31,10 @@ struct SimulateArgs {
   // Board mode.
   std::string pattern;
   double board_distance = 0.62, board_tilt = 0.0, board_offset_x = 0.0, board_offset_y = 0.0;
-  std::string tags = "2x2";
+  std::string tags;
   double tag_gap = -1;
   double outer_square = 0;
-  bool photo = false;
+  bool photo = false, quiet = false;
   RenderOptions render;
   /*! the options --photo sets when they are not given, each with how to take the preset's value */
   std::vector<std::pair<CLI::Option *, std::function<void(RenderOptions &, const RenderOptions &)>>> photo_options;
@@ -59,9 +60,8 @@ Eigen::Isometry3d boardPose(const YawRig &rig, const MotionSample &first, const 
 /* The scene's options: files, the planar robot's path or --arm's, the points, the noise, the seed. */
 void addSimulateSceneOptions(CLI::App *sub, SimulateArgs &a)
 {
-  sub->add_option("--camera", a.camera, "Camera file: ViSP XML or OpenCV YAML/XML")->required();
-  sub->add_option("--camera-name", a.camera_name, "Camera name in a ViSP XML file, or cam0, cam1, ... in a Kalibr camchain (default cam0)");
-  sub->add_option("--rig", a.rig, "Rig file (YAML with camera_offset)")->required();
+  addCameraOptions(sub, a.camera, a.camera_name, true, "with the image size to render a board");
+  addRigOption(sub, a.rig, true);
   sub->add_option("--out-dir", a.out_dir, "Output folder (created if missing)")->required();
   SceneOptions &s = a.scene;
   s.noise = NoiseModel{0.0, 0.0, 0.0, 0.0, 0.0};
@@ -122,7 +122,7 @@ void addSimulateBoardOptions(CLI::App *sub, SimulateArgs &a)
   sub->add_option("--board-offset-y", a.board_offset_y, "Board centre offset along the first camera's Y (m)")
       ->check(Finite)
       ->capture_default_str();
-  sub->add_option("--tags", a.tags, "AprilTag board: COLSxROWS tags")->capture_default_str();
+  addTagsOption(sub, a.tags);
   sub->add_option("--tag-gap", a.tag_gap, "AprilTag board: gap between tags (m; default a quarter tag)")->check(Finite);
   sub->add_option("--blur", a.render.blur_sigma_px, "Optical blur, Gaussian sigma (px)")->check(FiniteNonNegative)->capture_default_str();
   sub->add_option("--image-noise", a.render.noise_sigma, "Sensor noise, Gaussian sigma (gray levels)")
@@ -227,7 +227,9 @@ void renderBoardImages(const CameraModel &camera, const YawRig &rig, const Scene
                        const Eigen::Isometry3d &wMb, const SimulateArgs &a, MotionLog &measured, MotionLog &truth)
 {
   const std::filesystem::path dir(a.out_dir);
+  ProgressLine progress;
   for (std::size_t k = 0; k < scene.truth.size(); ++k) {
+    progress.count("simulate", k, scene.truth.size(), "images rendered");
     RenderOptions ro = a.render;
     ro.seed = a.scene.seed * 1000003ULL + k;
     ro.wall_seed = a.scene.seed;
@@ -244,6 +246,7 @@ void renderBoardImages(const CameraModel &camera, const YawRig &rig, const Scene
     measured.images.push_back(path);
     truth.images.push_back(path);
   }
+  progress.count("simulate", scene.truth.size(), scene.truth.size(), "images rendered");
 }
 
 /* Tracks of the true feature positions (with --sigma-px noise), like a perfect detector: each point
@@ -318,6 +321,7 @@ int runSimulate(SimulateArgs &a)
   if (board_mode)
     completeRenderOptions(camera, a); // before the output folder is created
   const Scene scene = simulateScene(camera, rig, so);
+  stage("simulate", "scene of " + std::to_string(scene.truth.size()) + " frames");
   makeOutputFolder(a);
 
   std::vector<long> ids;
@@ -336,6 +340,7 @@ int runSimulate(SimulateArgs &a)
       w_points.push_back(wMb * f.second);
     }
     renderBoardImages(camera, rig, scene, board, wMb, a, measured, truth);
+    stage("simulate", std::to_string(scene.truth.size()) + " images rendered");
     tracks = trueFeatureTracks(camera, rig, scene, ids, w_points, a);
   } else {
     for (std::size_t i = 0; i < scene.w_points.size(); ++i) {
@@ -366,6 +371,7 @@ Runner addSimulate(CLI::App &app)
                   "also the rendered images (frame_NNNN.png, named in motion.csv).");
   addSimulateSceneOptions(sub, *a);
   addSimulateBoardOptions(sub, *a);
+  addVerbosityOptions(sub, a->quiet, "No progress on stderr");
   return [a]() { return runSimulate(*a); };
 }
 

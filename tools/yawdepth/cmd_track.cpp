@@ -2,6 +2,7 @@
 // known motion; also what `measure --features klt` runs.
 #include "commands.h"
 #include "method_options.h"
+#include "progress.h"
 
 #include <algorithm>
 #include <cmath>
@@ -63,6 +64,33 @@ std::vector<NamedPath> imageInputs(const MotionLog &motion, const std::string &v
   return out;
 }
 
+/* trackSequence() on the log's images or --video's frames, with a progress line (ended before the
+   summary is printed). */
+static SequenceTracks trackImages(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
+                                  const NoiseModel &noise, const KltArgs &args)
+{
+  const std::size_t n = motion.samples.size();
+  ProgressLine progress;
+  const auto report = [&](std::size_t done, std::size_t total) { progress.count("track", done, total, "frames"); };
+  if (args.video.empty())
+    return trackSequence(camera, rig, motion.samples, motion.images, noise, args.klt, !args.no_gate, report);
+  std::unique_ptr<VideoFrames> opened;
+  try {
+    opened = std::make_unique<VideoFrames>(args.video);
+  } catch (const Error &e) {
+    throw Error(std::string("--video ") + e.what());
+  }
+  VideoFrames &video = *opened;
+  const FrameSource frames = [&](std::size_t) {
+    try {
+      return video.next();
+    } catch (const Error &e) {
+      throw Error(std::string(e.what()) + "; the motion log has " + std::to_string(n) + " rows");
+    }
+  };
+  return trackSequence(camera, rig, motion.samples, frames, noise, args.klt, !args.no_gate, report);
+}
+
 std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const MotionLog &motion,
                              const NoiseModel &noise, const KltArgs &args, bool quiet,
                              std::map<std::pair<long, long>, int> *gray, cv::Mat *last_image)
@@ -72,32 +100,7 @@ std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const
   if (camera.width() == 0 || camera.height() == 0)
     throw Error("KLT tracking needs the camera's image size (image_width, image_height in the camera file)");
   const std::size_t n = motion.samples.size();
-  const bool progress = !quiet && n >= 20 && isatty(STDERR_FILENO);
-  const std::size_t every = std::max<std::size_t>(1, n / 10);
-  const auto report = [&](std::size_t done, std::size_t total) {
-    if (progress && (done % every == 0 || done == total))
-      std::cerr << "track: " << done << "/" << total << " frames\n";
-  };
-  SequenceTracks seq;
-  if (args.video.empty()) {
-    seq = trackSequence(camera, rig, motion.samples, motion.images, noise, args.klt, !args.no_gate, report);
-  } else {
-    std::unique_ptr<VideoFrames> opened;
-    try {
-      opened = std::make_unique<VideoFrames>(args.video);
-    } catch (const Error &e) {
-      throw Error(std::string("--video ") + e.what());
-    }
-    VideoFrames &video = *opened;
-    const FrameSource frames = [&](std::size_t) {
-      try {
-        return video.next();
-      } catch (const Error &e) {
-        throw Error(std::string(e.what()) + "; the motion log has " + std::to_string(n) + " rows");
-      }
-    };
-    seq = trackSequence(camera, rig, motion.samples, frames, noise, args.klt, !args.no_gate, report);
-  }
+  SequenceTracks seq = trackImages(camera, rig, motion, noise, args);
   const KltStats &t = seq.totals;
   if (!quiet)
     std::cerr << "track: " << n << " frames, " << t.detected << " features detected, " << seq.tracks.size()
@@ -129,17 +132,18 @@ Runner addTrack(CLI::App &app)
   auto a = std::make_shared<TrackArgs>();
   CLI::App *sub = app.add_subcommand(
       "track", "Track natural corners (KLT) through the images of a motion log, gated by the known motion.");
-  sub->add_option("--camera", a->camera, "Camera file: ViSP XML or OpenCV YAML/XML (with the image size)")->required();
-  sub->add_option("--camera-name", a->camera_name, "Camera name in a ViSP XML file (optional when it holds one), or cam0, cam1, ... in a Kalibr camchain (default cam0)");
-  sub->add_option("--rig", a->rig,
-                  "Rig file (YAML): where the camera sits; without it the camera is at the vision frame's origin");
+  addCameraOptions(sub, a->camera, a->camera_name, true, "with the image size");
+  // Optional (scripts ran without it): the tracks are pixel positions, which the rig does not change.
+  addRigOption(sub, a->rig, false,
+               "the tracks written are pixel positions; the rig only places the epipolar gate (and gives a "
+               "timestamped log's yaw and time_offset); without it the camera is at the vision frame's origin");
   addMotionOptions(sub, a->motion,
                    "Motion log with an image column (paths relative to the CSV's folder), any with --video, or a "
                    "timestamped one with --images");
   sub->add_option("--out", a->out, "Output tracks CSV (frame,id,u,v)")->required();
   addMotionNoiseOptions(sub, a->method);
   addKltOptions(sub, a->klt);
-  sub->add_flag("--quiet", a->quiet, "No summary on stderr");
+  addVerbosityOptions(sub, a->quiet, "No progress or summary on stderr");
   addInputOptions(sub, a->input);
   return [a]() {
     a->method.noise.validate();
@@ -163,6 +167,7 @@ Runner addTrack(CLI::App &app)
     const bool six_dof = !motion.samples.empty() && motion.samples.front().six_dof;
     const NoiseModel noise = noiseForLog(a->method, six_dof, motion.yaw_column);
     const std::vector<Track> tracks = kltTracks(camera, rig, motion, noise, a->klt, a->quiet);
+    stage("track", std::to_string(tracks.size()) + " tracks");
     writeTracksCsv(a->out, tracks);
     return 0;
   };

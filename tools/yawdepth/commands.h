@@ -99,6 +99,40 @@ std::vector<std::string> debugFiles(const std::string &dir, const std::vector<st
 /*! \brief drawDetection() of `image` written as a PNG to `path` (its folder created), atomically. */
 void writeDebugImage(const std::string &path, const cv::Mat &image, const FrameDetection &detection);
 
+/*!
+  \brief --quiet and --verbose on `sub` (every command has both; they exclude each other). `quiet` is the
+  command's own flag; main() sets verbosity() from them after parsing (progress.h).
+  `quiet_help` says what --quiet silences in this command (never warnings or errors).
+*/
+void addVerbosityOptions(CLI::App *sub, bool &quiet, const std::string &quiet_help);
+/*! \brief --config FILE and --print-config on `sub` (every command): main() reads them (command_line.h). */
+void addConfigOptions(CLI::App *sub);
+/*! \brief The default of --tags in every command that takes it: a single tag, what apriltag:FAMILY:SIZE names. */
+inline const char *const kDefaultTags = "1x1";
+/*! \brief --tags COLSxROWS (AprilTag grid), the same name, default and help in every command. */
+CLI::Option *addTagsOption(CLI::App *sub, std::string &tags);
+/*!
+  \brief --camera FILE and --camera-name NAME (the camera read from a file), the same names and help in
+  every command; `note` adds what the camera is for in this command. Returns --camera.
+*/
+CLI::Option *addCameraOptions(CLI::App *sub, std::string &camera, std::string &camera_name, bool required,
+                              const std::string &note = "");
+/*!
+  \brief --rig FILE. `required` wherever the rig changes the numbers written; `optional_because` (when
+  not required) says in the help what happens without it.
+*/
+CLI::Option *addRigOption(CLI::App *sub, std::string &rig, bool required, const std::string &optional_because = "");
+/*!
+  \brief An option renamed: `opt` was created with both names (the new first); using `old_name` warns
+  `OLD is spelled NEW now` (main() checks the command line against renamedOptions()).
+*/
+CLI::Option *renamedFrom(const CLI::App *sub, CLI::Option *opt, const std::string &old_name);
+/*! \brief Every renamed option: (command, old name, new name). */
+struct RenamedOption {
+  std::string command, old_name, new_name;
+};
+const std::vector<RenamedOption> &renamedOptions();
+
 /*! \brief CLI11 validator: a finite number (rejects nan and inf). */
 extern const CLI::Validator Finite;
 /*! \brief CLI11 validator: a finite number >= 0. */

@@ -1,8 +1,11 @@
 // The `yawdepth` command line: subcommands wiring the library's modules.
 #include <opencv2/imgcodecs.hpp>
 #include <filesystem>
+#include "command_line.h"
 #include "commands.h"
+#include "progress.h"
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <iostream>
@@ -96,6 +99,7 @@ LoadedMotion loadCommandMotion(const std::string &command, const MotionOptions &
 {
   LoadedMotion m = loadMotion(options.input(), rig ? rig->yaw : std::nullopt,
                               rig ? rig->time_offset : std::nullopt, limits);
+  stage(command, options.name() + " read: " + std::to_string(m.log.samples.size()) + " rows");
   for (const std::string &w : motionWarnings(m.log, options.name()))
     warn(command, w);
   if (m.alignment && !quiet) {
@@ -186,7 +190,9 @@ static std::vector<Command> addCommands(CLI::App &app)
   auto add = [&](Runner (*adder)(CLI::App &)) {
     const std::size_t before = app.get_subcommands({}).size();
     Runner r = adder(app);
-    commands.emplace_back(app.get_subcommands({}).at(before), std::move(r));
+    CLI::App *sub = app.get_subcommands({}).at(before);
+    addConfigOptions(sub); // every command reads a settings file
+    commands.emplace_back(sub, std::move(r));
   };
   add(addEstimate);
   add(addMeasure);
@@ -200,20 +206,25 @@ static std::vector<Command> addCommands(CLI::App &app)
   return commands;
 }
 
+/* The commands' names, for messages: "estimate, measure, ...". */
+static std::string commandNames(const std::vector<Command> &commands)
+{
+  std::string names;
+  for (const auto &c : commands)
+    names += (names.empty() ? "" : ", ") + c.first->get_name();
+  return names;
+}
+
 /* An unknown command named (instead of CLI11's generic "A subcommand is required"): false, after the
    message on stderr, when `word` (the first argument, not an option) is no command's name. */
 static bool knownCommand(const std::vector<Command> &commands, const char *word)
 {
-  bool known = false;
-  std::string names;
-  for (const auto &c : commands) {
-    known = known || c.first->get_name() == word;
-    names += (names.empty() ? "" : ", ") + c.first->get_name();
-  }
-  if (!known)
-    std::cerr << "yawdepth: error: unknown command '" << oneLine(word) << "' (expected one of " << names
-              << "; see yawdepth --help)\n";
-  return known;
+  for (const auto &c : commands)
+    if (c.first->get_name() == word)
+      return true;
+  std::cerr << "yawdepth: error: unknown command '" << oneLine(word) << "' (expected one of "
+            << commandNames(commands) << ") (see yawdepth --help)\n";
+  return false;
 }
 
 /* Run the parsed subcommand `sub`: its status, or 1 with one line on stderr for an error (standard
@@ -222,6 +233,7 @@ static int runCommand(const CLI::App &sub, const Runner &run)
 {
   try {
     const int status = run();
+    stage(sub.get_name(), "done");
     errno = 0;
     std::cout.flush();
     if (!std::cout || std::fflush(stdout) != 0 || std::ferror(stdout)) {
@@ -246,6 +258,50 @@ static int runCommand(const CLI::App &sub, const Runner &run)
   }
 }
 
+/* The usage error's one line (status 2): `yawdepth CMD: error: REASON (see yawdepth CMD --help)`. */
+static int usageError(const std::string &command, const std::string &reason)
+{
+  const std::string who = command.empty() ? "yawdepth" : "yawdepth " + command;
+  std::cerr << who << ": error: " << oneLine(reason) << " (see " << who << " --help)\n";
+  return 2;
+}
+
+/* The command's --quiet and --verbose into verbosity() (one command per process). */
+static void setVerbosity(const CLI::App &sub)
+{
+  const CLI::Option *quiet = sub.get_option_no_throw("--quiet"), *verbose = sub.get_option_no_throw("--verbose");
+  verbosity().quiet = quiet != nullptr && quiet->count() > 0;
+  verbosity().verbose = verbose != nullptr && verbose->count() > 0;
+}
+
+/* Before CLI11 parses `args` (the words after the command `sub`): an unknown option is reported
+   before any missing one; --config's settings are added; renamed options warned about. Returns the
+   usage error's status, or 0 to go on. */
+static int prepareArguments(CLI::App &app, const CLI::App &sub, std::vector<std::string> &args,
+                            ConfigApplied &config)
+{
+  const std::string unknown = unknownOption(sub, args);
+  if (!unknown.empty())
+    return usageError(sub.get_name(), unknown);
+  try {
+    config = applyConfigFile(app, sub, args);
+  } catch (const ConfigFileError &e) {
+    return usageError(sub.get_name(), e.message);
+  }
+  warnRenamedOptions(sub, args);
+  return 0;
+}
+
+/* A parse error's reason, naming the settings file when the option it is about came from there. */
+static std::string parseReason(const CLI::ParseError &e, const ConfigApplied &config)
+{
+  std::string reason = e.what();
+  for (const std::string &name : config.options)
+    if (reason.find(name) != std::string::npos)
+      return reason + " (set in " + config.file + ")";
+  return reason;
+}
+
 } // namespace yawdepth::cli
 
 int main(int argc, char **argv)
@@ -263,11 +319,33 @@ int main(int argc, char **argv)
     version += " none";
   app.set_version_flag("--version", version);
   const std::vector<Command> commands = addCommands(app);
-  if (argc > 1 && argv[1][0] != '-' && !knownCommand(commands, argv[1]))
+  if (argc == 3 && std::string(argv[1]) == "--completion" && std::string(argv[2]) == "bash") {
+    std::cout << bashCompletion(app); // hidden: the build writes the installed completion with it
+    return 0;
+  }
+  if (argc == 1)
+    return usageError("", "no command given (one of " + commandNames(commands) + ")");
+  if (argv[1][0] != '-' && !knownCommand(commands, argv[1]))
     return 2;
 
+  const CLI::App *chosen = nullptr;
+  for (const auto &c : commands)
+    if (argc > 1 && c.first->get_name() == argv[1])
+      chosen = c.first;
+  std::vector<std::string> args(argv + 1, argv + argc);
+  ConfigApplied config;
+  if (chosen != nullptr) {
+    std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (const int status = prepareArguments(app, *chosen, rest, config))
+      return status;
+    rest.insert(rest.begin(), args.front());
+    args = std::move(rest);
+  } else if (const std::string unknown = unknownOption(app, args); !unknown.empty())
+    return usageError("", unknown);
+  const std::string command = chosen ? chosen->get_name() : std::string();
   try {
-    app.parse(argc, argv);
+    std::reverse(args.begin(), args.end()); // CLI11 takes the words last first
+    app.parse(args);
   } catch (const CLI::CallForHelp &e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp &e) {
@@ -275,14 +353,20 @@ int main(int argc, char **argv)
   } catch (const CLI::CallForVersion &e) {
     return app.exit(e);
   } catch (const CLI::ParseError &e) {
-    std::cerr << "yawdepth: error: " << oneLine(e.what()) << " (see yawdepth --help)\n";
-    return 2;
+    return usageError(command, parseReason(e, config));
   }
 
   // An interrupted run leaves no temporary file behind (the outputs are written atomically).
   yawdepth::removeTemporaryFilesOnSignals();
-  for (const auto &[sub, run] : commands)
-    if (sub->parsed())
-      return runCommand(*sub, run);
+  for (const auto &[sub, run] : commands) {
+    if (!sub->parsed())
+      continue;
+    if (sub->count("--print-config") > 0) {
+      std::cout << effectiveConfig(*sub);
+      return 0;
+    }
+    setVerbosity(*sub);
+    return runCommand(*sub, run);
+  }
   return 2;
 }

@@ -1,11 +1,11 @@
 #include "method_options.h"
 
 #include "commands.h"
+#include "progress.h"
 
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <unistd.h>
 
 #include <yawdepth/error.h>
 #include <yawdepth/pipeline/pipeline.h>
@@ -105,53 +105,6 @@ NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
                            args.sigma_yaw_option != nullptr && args.sigma_yaw_option->count() > 0);
 }
 
-namespace {
-
-/* refine's progress on a terminal: one line, rewritten at most once a second and at each new stage,
-   from the first report after 2 s (a short solve prints nothing); ended by a newline when the object goes. Not on a pipe
-   or a file: a caller capturing stderr gets one line per problem, not a progress bar. */
-class ProgressLine {
-public:
-  explicit ProgressLine(bool wanted) : active_(wanted && isatty(STDERR_FILENO)) {}
-  ~ProgressLine()
-  {
-    if (printed_)
-      std::fputc('\n', stderr);
-  }
-  ProgressLine(const ProgressLine &) = delete;
-  ProgressLine &operator=(const ProgressLine &) = delete;
-
-  std::function<void(const RefineProgress &)> callback()
-  {
-    if (!active_)
-      return {};
-    return [this](const RefineProgress &p) {
-      if (p.seconds < 2.0 || (p.seconds < last_ + 1.0 && p.stage == stage_))
-        return; // a new stage is shown at once, the same one at most once a second
-      last_ = p.seconds;
-      stage_ = p.stage;
-      const char *stage = p.stage == RefineProgress::Stage::RobustSolve  ? "robust solve"
-                          : p.stage == RefineProgress::Stage::FinalSolve ? "final solve"
-                                                                         : "covariances";
-      if (p.stage == RefineProgress::Stage::Covariance)
-        std::fprintf(stderr, "\rrefine: %d points x %d frames, %s ... (%.0f s)%20s", p.points, p.frames, stage, p.seconds,
-                     "");
-      else
-        std::fprintf(stderr, "\rrefine: %d points x %d frames, %s, iteration %d, cost %.6g (%.0f s)%8s", p.points,
-                     p.frames, stage, p.iteration, p.cost, p.seconds, "");
-      std::fflush(stderr);
-      printed_ = true;
-    };
-  }
-
-private:
-  bool active_;
-  bool printed_ = false;
-  double last_ = 0;
-  RefineProgress::Stage stage_ = RefineProgress::Stage::RobustSolve;
-};
-
-} // namespace
 
 std::vector<Track> rejectedObservations(const std::vector<Track> &tracks, const std::vector<std::vector<bool>> &outliers)
 {
@@ -182,16 +135,19 @@ MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const Mot
   po.max_depth_sigma = args.max_depth_sigma;
   PipelineResult r;
   {
-    ProgressLine line(args.progress && po.method == Method::Refine);
-    po.progress = line.callback();
+    ProgressLine line;
+    if (po.method == Method::Refine)
+      po.progress = line.refineCallback();
     r = estimatePoints(camera, rig, motion.samples, tracks, po);
   }
+  stage(args.command, args.method + " on " + std::to_string(tracks.size()) + " tracks x " +
+                          std::to_string(motion.samples.size()) + " frames");
   const bool checked = po.residual_check.enabled && po.method != Method::Paper && po.method != Method::Exact;
-  if (checked && args.progress && r.residuals.noise_scale != 1.0)
+  if (checked && !verbosity().quiet && r.residuals.noise_scale != 1.0)
     std::fprintf(stderr, "residual check: the noise model scaled by %.3g from the residuals (pixel noise %.3g px), "
                  "estimated again\n", r.residuals.noise_scale,
                  std::max(0.01, po.noise.sigma_px * r.residuals.noise_scale));
-  if (checked && args.progress)
+  if (checked && !verbosity().quiet)
     std::fprintf(stderr,
                  "residual check: pixel noise from the residuals %.3g px (model %.3g px)%s; tracker errors' "
                  "correlation %.2f (%d depths' sigma raised for it); %d of %d tracks not one point (inconsistent)\n",

@@ -26,9 +26,7 @@ struct MethodArgs {
   const CLI::Option *residual_option = nullptr; // to tell whether --residual-check was given
   double max_depth_sigma = 0;                   // --max-depth-sigma (0: no gate)
   const CLI::Option *max_depth_sigma_option = nullptr;
-  int threads = 1;      // refine: Ceres threads (--threads)
-  bool progress = true; // refine's progress line on a terminal's stderr for solves over 2 s, and the residual
-                        // check's summary line (both off with --quiet)
+  int threads = 1; // refine: Ceres threads (--threads)
 };
 
 /*! \brief Register the motion's noise options (--sigma-odom, --sigma-heading, --sigma-rot, --motion-noise,

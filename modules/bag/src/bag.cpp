@@ -2,6 +2,7 @@
 #include "readers.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -121,7 +122,9 @@ std::vector<std::string> folderFiles(const std::string &dir)
     std::vector<std::string> files;
     std::error_code ec;
     for (const auto &e : fs::directory_iterator(dir, ec)) {
-      const std::string ext = e.path().extension().string();
+      std::string ext = e.path().extension().string();
+      if (ext == ".zstd") // rosbag2's FILE compression: bag_0.db3.zstd
+        ext = e.path().stem().extension().string();
       if (e.is_regular_file() && (ext == ".mcap" || ext == ".db3" || ext == ".bag"))
         files.push_back(e.path().string());
     }
@@ -141,6 +144,18 @@ std::vector<std::string> folderFiles(const std::string &dir)
   const YAML::Node info = root["rosbag2_bagfile_information"];
   if (!info || !info.IsMap())
     throw Error(meta.string() + ": no rosbag2_bagfile_information (not a rosbag2 metadata file)");
+  // rosbag2_compression: zstd is its one compressor; the modes are undone by the bytes (openRosbag2).
+  const auto scalar = [&](const char *key) {
+    const YAML::Node n = info[key];
+    return n && n.IsScalar() ? n.Scalar() : std::string();
+  };
+  const std::string compression = scalar("compression_format");
+  std::string mode = scalar("compression_mode");
+  std::transform(mode.begin(), mode.end(), mode.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (!compression.empty() && compression != "zstd")
+    throw Error(meta.string() + ": compression_format '" + compression + "' (rosbag2 compresses with zstd, which yawdepth reads)");
+  if (!mode.empty() && mode != "none" && mode != "file" && mode != "message")
+    throw Error(meta.string() + ": compression_mode '" + scalar("compression_mode") + "' (rosbag2 writes FILE, MESSAGE or NONE)");
   const YAML::Node paths = info["relative_file_paths"];
   if (!paths || !paths.IsSequence() || paths.size() == 0)
     throw Error(meta.string() + ": rosbag2_bagfile_information.relative_file_paths is missing or empty");
@@ -166,12 +181,21 @@ std::unique_ptr<BagReader> openBag(const std::string &path)
   const fs::file_status st = fs::status(path, ec);
   if (ec || !fs::exists(st))
     throw Error(path + ": no such bag");
+  std::vector<std::string> files;
   if (fs::is_directory(st)) {
-    const std::vector<std::string> files = folderFiles(path);
-    return openFile(files.front(), path, files);
+    files = folderFiles(path);
+  } else {
+    checkInputFile(path);
+    files = {path};
   }
-  checkInputFile(path);
-  return openFile(path, path, {path});
+#ifdef YAWDEPTH_BAG_ZSTD
+  return bag_detail::openRosbag2(path, files, openFile);
+#else
+  for (const std::string &f : files)
+    if (fs::is_regular_file(f) && head(f, 4) == std::string("\x28\xb5\x2f\xfd", 4))
+      notBuilt(f, "a zstd-compressed bag (rosbag2's FILE compression)", "zstd (Debian: libzstd-dev)");
+  return openFile(files.front(), path, files);
+#endif
 }
 
 } // namespace yawdepth

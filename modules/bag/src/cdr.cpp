@@ -14,8 +14,12 @@ Reader::Reader(const std::uint8_t *data, std::size_t size, std::string where) : 
   if (size < 4 || !data)
     fail("CDR message of " + std::to_string(size) + " bytes, shorter than its 4-byte encapsulation header");
   if (data[0] == 0x28 && data[1] == 0xB5 && data[2] == 0x2F && data[3] == 0xFD)
-    fail("a zstd-compressed message (rosbag2's per-message compression), not CDR: decompress the bag first "
-         "(ros2 bag convert)");
+#ifdef YAWDEPTH_BAG_ZSTD
+    fail("a zstd-compressed message inside a zstd-compressed message, not CDR"); // openBag() undid the outer one
+#else
+    fail("a zstd-compressed message (rosbag2's MESSAGE compression), not CDR: this build was made without zstd "
+         "(Debian: libzstd-dev)");
+#endif
   if (data[0] != 0x00 || (data[1] != 0x00 && data[1] != 0x01)) {
     char h[16];
     std::snprintf(h, sizeof h, "%02x %02x", data[0], data[1]);

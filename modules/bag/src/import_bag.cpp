@@ -53,15 +53,16 @@ std::string sec(double s)
 }
 double toSec(std::int64_t ns) { return double(ns) * 1e-9; }
 
-/* The pose of a position and quaternion; throws for a quaternion that is not one. */
-vpHomogeneousMatrix poseOf(const std::array<double, 3> &p, const std::array<double, 4> &q, const std::string &what)
+/* The pose of a position and quaternion; throws for a quaternion that is not one, the message
+   starting with `where` (a prefix that ends in ": "). */
+vpHomogeneousMatrix poseOf(const std::array<double, 3> &p, const std::array<double, 4> &q, const std::string &where)
 {
   const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   for (double v : p)
     if (!std::isfinite(v))
-      throw Error(what + ": a position that is not finite");
+      throw Error(where + "a position that is not finite");
   if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3)
-    throw Error(what + ": a quaternion of norm " + std::to_string(n) + ", not 1");
+    throw Error(where + "a quaternion of norm " + std::to_string(n) + ", not 1");
   return vpHomogeneousMatrix(vpTranslationVector(p[0], p[1], p[2]),
                              vpRotationMatrix(vpQuaternionVector(q[0] / n, q[1] / n, q[2] / n, q[3] / n)));
 }
@@ -241,7 +242,7 @@ vpHomogeneousMatrix fromRos(const geometry_msgs::TransformStamped &t, const std:
 {
   const auto &tr = t.transform.translation;
   const auto &q = t.transform.rotation;
-  return poseOf({tr.x, tr.y, tr.z}, {q.x, q.y, q.z, q.w}, what);
+  return poseOf({tr.x, tr.y, tr.z}, {q.x, q.y, q.z, q.w}, what + ": ");
 }
 
 std::string framesOf(const tf2::BufferCore &buffer)
@@ -606,13 +607,13 @@ BagImportResult importBag(const BagImportOptions &o)
     tf2::BufferCore static_buffer(ros::Duration(10.0));
     for (const TransformMessage &t : statics) {
       const std::string what = path + ": " + kTfStatic + ": " + t.header.frame_id + " -> " + t.child_frame_id;
-      poseOf(t.translation, t.rotation, what); // refuses a non-unit quaternion, which tf2 would only log
+      poseOf(t.translation, t.rotation, what + ": "); // refuses a non-unit quaternion, which tf2 would only log
       buffer.setTransform(toRos(t), "bag", true);
       static_buffer.setTransform(toRos(t), "bag", true);
     }
     std::vector<std::int64_t> stamps;
     for (const TransformMessage &t : dynamics) {
-      poseOf(t.translation, t.rotation, path + ": /tf: " + t.header.frame_id + " -> " + t.child_frame_id);
+      poseOf(t.translation, t.rotation, path + ": /tf: " + t.header.frame_id + " -> " + t.child_frame_id + ": ");
       buffer.setTransform(toRos(t), "bag", false);
       stamps.push_back(t.header.stamp);
     }
@@ -759,6 +760,8 @@ BagImportResult importBag(const BagImportOptions &o)
     ro.end = w_end;
     bag->read(ro, [&](const BagMessage &m) {
       const std::size_t k = read_count++;
+      if (o.progress)
+        o.progress(read_count, std::size_t(image_topic.messages));
       if (k % std::size_t(o.every) != 0)
         return true;
       DecodedImage d = compressed ? decodeCompressed(m) : decodeRaw(m);

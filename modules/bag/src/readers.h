@@ -2,6 +2,7 @@
 // Private to the bag module: the readers openBag() dispatches to, each in its own file and built
 // only when its library was found (YAWDEPTH_BAG_ROS1, _MCAP, _DB3 from CMake), and the decoders of
 // each serialization that messages.cpp dispatches to.
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,6 +16,18 @@ namespace bag_detail {
 std::unique_ptr<BagReader> openRos1(const std::string &path);
 std::unique_ptr<BagReader> openMcap(const std::string &path, const std::vector<std::string> &files);
 std::unique_ptr<BagReader> openDb3(const std::string &path, const std::vector<std::string> &files);
+
+/*! openFile() of bag.cpp: the container of `files` (told by the first one's bytes), named `name`. */
+using OpenContainer = std::function<std::unique_ptr<BagReader>(const std::string &first, const std::string &name,
+                                                               const std::vector<std::string> &files)>;
+/*! Whether `path` starts with a zstd frame (rosbag2's FILE compression). rosbag2_compression.cpp, with
+    YAWDEPTH_BAG_ZSTD. */
+bool zstdFile(const std::string &path);
+/*! rosbag2's compression undone (rosbag2_compression.cpp): the zstd storage files decompressed into
+    scratch files, the container opened by `open`, zstd-compressed messages of a ROS 2 container
+    decompressed as they are read; every message names the files given. */
+std::unique_ptr<BagReader> openRosbag2(const std::string &name, const std::vector<std::string> &files,
+                                       const OpenContainer &open);
 
 /*! A ROS time (ns) as seconds with nine decimals, for the messages. */
 std::string secondsText(std::int64_t ns);

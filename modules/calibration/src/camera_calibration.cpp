@@ -872,7 +872,8 @@ void fitVispModels(const CameraFit &fit, const OpenCvSolution &sol, const std::v
 } // namespace
 
 CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std::vector<std::string> &names,
-                                             const std::vector<cv::Mat> &images, const DetectorOptions &options)
+                                             const std::vector<cv::Mat> &images, const DetectorOptions &options,
+                                             const std::function<void(std::size_t, std::size_t)> &progress)
 {
   if (images.empty())
     throw Error("no calibration images given");
@@ -883,6 +884,8 @@ CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std
   PatternDetector detector(board.pattern, options);
   CalibrationDetections out;
   for (std::size_t i = 0; i < images.size(); ++i) {
+    if (progress)
+      progress(i, images.size());
     const cv::Mat &img = images[i];
     if (img.empty()) {
       out.failures.push_back(names[i] + ": empty image");

@@ -311,6 +311,24 @@ void writeFileAtomically(const std::string &path, const std::string &contents)
   files.commit();
 }
 
+ScratchFile::ScratchFile(const std::string &suffix)
+{
+  const char *dir = std::getenv("TMPDIR");
+  std::string templ = std::string(dir && *dir ? dir : "/tmp") + "/yawdepth-XXXXXX" + suffix;
+  const int fd = ::mkstemps(templ.data(), static_cast<int>(suffix.size()));
+  if (fd < 0)
+    throw Error("cannot create a scratch file " + templ + ": " + std::strerror(errno));
+  ::close(fd);
+  path_ = templ;
+  slot_ = registerTemp(path_);
+}
+
+ScratchFile::~ScratchFile()
+{
+  ::unlink(path_.c_str());
+  unregisterTemp(slot_);
+}
+
 void removeTemporaryFilesOnSignals()
 {
   for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,10 @@ struct BagImportOptions {
   int every = 1;                  //!< keep every Nth image (N >= 1)
   double time_offset = 0.0;       //!< image at camera time t was taken at motion time t + time_offset (s)
   double max_pose_gap = 0.2;      //!< an image between pose samples further apart is skipped (s)
+  /*! Called after each image message of the window is read, with (images read, the image topic's
+      message count in the whole bag, 0 when the bag does not say); empty (the default): not called.
+      The library never prints: a command line shows it. */
+  std::function<void(std::size_t, std::size_t)> progress;
   /*! \brief Throws yawdepth::Error naming the option that is wrong (none or several motion sources, ...). */
   void validate() const;
 };

@@ -7,6 +7,8 @@
   each fitted by vpCalibration as ViSP's own calibration tool does), per-view errors, outlier
   views, parameter standard deviations, degeneracy checks and a coverage picture.
 */
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 #include <Eigen/Core>
@@ -40,11 +42,13 @@ struct CalibrationDetections {
   corners of tags that belong to `board`, not the centres).
   \throws yawdepth::Error when `images` is empty, the sizes differ, or the pattern is found in no
   image (the message says why, and hints at a wrong COLSxROWS when the board is found with one
-  corner fewer or more per side).
+  corner fewer or more per side). `progress`, when given, is called before each image with (images
+  done, images in all), on the calling thread (the library never prints: a command line shows it).
 */
 CalibrationDetections detectCalibrationViews(const BoardLayout &board, const std::vector<std::string> &names,
                                              const std::vector<cv::Mat> &images,
-                                             const DetectorOptions &options = DetectorOptions());
+                                             const DetectorOptions &options = DetectorOptions(),
+                                             const std::function<void(std::size_t, std::size_t)> &progress = {});
 
 /*! \brief Options of calibrateCamera(). */
 struct CameraCalibrationOptions {

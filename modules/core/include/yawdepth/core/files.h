@@ -146,6 +146,30 @@ private:
 void writeFileAtomically(const std::string &path, const std::string &contents);
 
 /*!
+  \brief A scratch file in the system's temporary folder (`$TMPDIR`, else `/tmp`), for a library that
+  must hand a file to another one (an SQLite bag decompressed for SQLite, say): created empty and
+  unique (mkstemps), removed by the destructor, and by the handlers of
+  removeTemporaryFilesOnSignals() when the program is interrupted.
+*/
+class ScratchFile {
+public:
+  /*!
+    \param suffix The end of its name (e.g. ".db3").
+    \throws yawdepth::Error when it cannot be created.
+  */
+  explicit ScratchFile(const std::string &suffix);
+  ~ScratchFile();
+  ScratchFile(const ScratchFile &) = delete;
+  ScratchFile &operator=(const ScratchFile &) = delete;
+  /*! \brief Its path. */
+  const std::string &path() const { return path_; }
+
+private:
+  std::string path_;
+  int slot_ = -1;
+};
+
+/*!
   \brief Install handlers for SIGINT, SIGTERM and SIGHUP (where the program has none) that remove
   the temporary files of writes in progress, then end the program by the same signal. For
   programs, such as the `yawdepth` command line; a library never calls it.

@@ -26,7 +26,7 @@
   growing baseline, linearised at its own solution. The observations between two keys are not
   used. Where every step resolves the depth and adds to it (coarse steps, points off the focus of
   expansion, the first frames of a track) every frame is a key, as in a plain filter.
-  Measured on logs of 1000 frames of 0.05 mm (our simulation, README): every `ok` point within
+  Measured on logs of 1000 frames of 0.05 mm (our simulation, docs/accuracy.md): every `ok` point within
   2 sigma, against a 2-sigma coverage of 0.12 with every frame a key.
 */
 #include <Eigen/Core>

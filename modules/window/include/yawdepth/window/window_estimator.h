@@ -57,7 +57,7 @@
   is observed again it starts anew.
 
   Cost per frame: O((3N + 5K)^3) for N features in the state and K planar frames (7K for 6-DoF):
-  the dense solve; see the README's cost table.
+  the dense solve; see docs/accuracy.md's cost table.
 */
 #include <Eigen/Core>
 #include <deque>
