@@ -151,3 +151,19 @@ def test_defaults_are_the_cpp_ones():
     assert yawdepth.bestMethod() in ("fused", "refine")
     n = yawdepth.noiseForMotionLog(yawdepth.NoiseModel(), True, False, False)
     assert n.sigma_yaw == 0 and yawdepth.noiseForMotionLog(yawdepth.NoiseModel(), True, False, True).sigma_yaw > 0
+
+
+def test_six_dof_without_yaw_column_as_cli(arm_scene, tmp_path):
+    """A 6-DoF log without a yaw column: sigma_yaw 0 unless given (noiseForMotionLog), as the CLI."""
+    lines = open(arm_scene["motion"]).read().splitlines()
+    header = lines[0].split(",")
+    k = header.index("yaw")
+    noyaw = tmp_path / "noyaw.csv"
+    noyaw.write_text("\n".join(",".join(c for j, c in enumerate(l.split(",")) if j != k) for l in lines) + "\n")
+    scene = dict(arm_scene, motion=str(noyaw))
+    assert not yawdepth.readMotionCsv(str(noyaw)).yaw_column
+    text = cli_points(scene, tmp_path / "a.csv", "--method", "fused")
+    assert_array_equals_csv(python_estimate(scene, method="fused").points, text)
+    given = cli_points(scene, tmp_path / "b.csv", "--method", "fused", "--sigma-yaw", "0.001")
+    assert given != text  # the policy matters on this log
+    assert_array_equals_csv(python_estimate(scene, method="fused", sigma_yaw=0.001).points, given)
