@@ -167,3 +167,17 @@ def test_six_dof_without_yaw_column_as_cli(arm_scene, tmp_path):
     given = cli_points(scene, tmp_path / "b.csv", "--method", "fused", "--sigma-yaw", "0.001")
     assert given != text  # the policy matters on this log
     assert_array_equals_csv(python_estimate(scene, method="fused", sigma_yaw=0.001).points, given)
+
+
+def test_the_docs_program_gives_the_cli_points(planar_scene, tmp_path):
+    """docs/python.md's program for `yawdepth estimate ... --method exact`, run as written (C, R, M, T
+    replaced by the scene's files): the CLI's points file, byte for byte."""
+    from conftest import SOURCE
+    text = open(os.path.join(SOURCE, "docs", "python.md")).read()
+    start = text.index("```python\n", text.index("does, in Python:")) + len("```python\n")
+    program = text[start:text.index("```", start)]
+    for name, key in (("C", "camera"), ("R", "rig"), ("M", "motion"), ("T", "tracks")):
+        program = program.replace(f'"{name}"', repr(planar_scene[key]))
+    program = program.replace('"points.csv"', repr(str(tmp_path / "py.csv")))
+    exec(compile(program, "docs/python.md", "exec"), {})
+    assert (tmp_path / "py.csv").read_text() == cli_points(planar_scene, tmp_path / "cli.csv", "--method", "exact")
