@@ -23,7 +23,8 @@ packages=(g++ make cmake pkg-config libvisp-dev libopencv-dev libeigen3-dev liba
           python3-camera-calibration-parsers python3-camera-calibration python3-opencv python3-cv-bridge python3-image-geometry
           librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
           libtf2-dev python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-tf2-msgs
-          libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev python3-ament-package)
+          libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev python3-ament-package
+          pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pytest python3-matplotlib)
 # The ROS 2 bag writers of the tests (tests/data/bags/writers: @mcap/core and ROS 2's CDR from the npm
 # registry) run on Node.js: Debian's, unless the machine has one already.
 command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)
@@ -119,7 +120,8 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 [ -x /usr/bin/llvm-symbolizer-14 ] && export ASAN_SYMBOLIZER_PATH=/usr/bin/llvm-symbolizer-14
 
-# The libraries and the tests (no command line, no benchmarks, no examples) built by clang with
+# The libraries and the tests (no command line, no benchmarks, no examples, no Python module: its
+# tests would need the ASan runtime preloaded into python, and they run in the Release tree) built by clang with
 # AddressSanitizer + UndefinedBehaviorSanitizer, and the fuzz targets in the same tree. The
 # command-line contract runs in the Release tree only (its file parsers are fuzzed here): CI's
 # 20-minute budget on 2 cores does not hold both. Without
@@ -131,7 +133,8 @@ build_sanitized() {
   cmake -S "$here" -B "$asan_dir" -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=Debug "${unity[@]}" \
         -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DYAWDEPTH_HOT_MODULE_OPTIONS=-O2 \
         -DYAWDEPTH_SANITIZE=address,undefined -DYAWDEPTH_BUILD_FUZZERS=ON \
-        -DYAWDEPTH_BUILD_BENCHMARKS=OFF -DYAWDEPTH_BUILD_EXAMPLES=OFF -DYAWDEPTH_BUILD_TOOLS=OFF >/dev/null
+        -DYAWDEPTH_BUILD_BENCHMARKS=OFF -DYAWDEPTH_BUILD_EXAMPLES=OFF -DYAWDEPTH_BUILD_TOOLS=OFF \
+        -DYAWDEPTH_PYTHON=OFF >/dev/null
   cmake --build "$asan_dir" -j "$jobs"
 }
 

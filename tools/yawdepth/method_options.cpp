@@ -101,10 +101,8 @@ void addMethodOptions(CLI::App *sub, MethodArgs &args, const std::string &defaul
 
 NoiseModel noiseForLog(const MethodArgs &args, bool six_dof, bool yaw_column)
 {
-  NoiseModel n = args.noise;
-  if (six_dof && !yaw_column && (args.sigma_yaw_option == nullptr || args.sigma_yaw_option->count() == 0))
-    n.sigma_yaw = 0.0;
-  return n;
+  return noiseForMotionLog(args.noise, six_dof, yaw_column,
+                           args.sigma_yaw_option != nullptr && args.sigma_yaw_option->count() > 0);
 }
 
 

@@ -51,6 +51,14 @@ void checkTimeIncreasing(double t, std::optional<double> previous, const std::fu
 
 } // namespace io_detail
 
+NoiseModel noiseForMotionLog(const NoiseModel &noise, bool six_dof, bool yaw_column, bool sigma_yaw_given)
+{
+  NoiseModel n = noise;
+  if (six_dof && !yaw_column && !sigma_yaw_given)
+    n.sigma_yaw = 0.0;
+  return n;
+}
+
 MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw, const InputLimits &limits)
 {
   CsvReader csv(path, limits);

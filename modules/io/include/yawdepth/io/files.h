@@ -92,6 +92,16 @@ MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw
                         const InputLimits &limits = InputLimits());
 
 /*!
+  \brief The noise model to estimate a motion log with: `noise`, except that a 6-DoF log without a
+  `yaw` column has no pan joint, so its yaw is exact (sigma_yaw 0) unless `sigma_yaw_given` (the
+  caller set sigma_yaw on purpose). `yawdepth estimate`/`measure` and the Python module use it.
+  \param noise The noise model given. \param six_dof Whether the log's rows are 6-DoF
+  (MotionSample::six_dof). \param yaw_column Whether it has a yaw column (MotionLog::yaw_column).
+  \param sigma_yaw_given Whether noise.sigma_yaw was given by the user rather than left at its default.
+*/
+NoiseModel noiseForMotionLog(const NoiseModel &noise, bool six_dof, bool yaw_column, bool sigma_yaw_given);
+
+/*!
   \brief Read feature tracks CSV: columns frame,id,u,v (any order, unknown columns ignored).
   Returns the tracks sorted by id, each track's observations sorted by frame. A repeated
   (frame, id) pair is an error. Read as a stream within `limits`, as readMotionCsv().
