@@ -6,7 +6,8 @@
 #                             UndefinedBehaviorSanitizer ($BUILD_DIR-asan, clang), the libFuzzer
 #                             targets for a bounded time, clang-tidy, doxygen
 #   tools/bootstrap.sh build  only install and build
-# Needs root or sudo only when packages are missing. BUILD_DIR (default: build), JOBS and
+# demo and build also install the Python module for Debian's python3 (cmake --install --component python).
+# Needs root or sudo when packages are missing or the Python module is installed. BUILD_DIR (default: build), JOBS and
 # FUZZ_SECONDS (per fuzz target, default 10) may be set.
 set -euo pipefail
 
@@ -72,6 +73,19 @@ compile() { cmake --build "$build_dir" -j "$jobs"; }
 build() {
   configure
   compile
+}
+
+# The Python module (when pybind11 was found) installed where Debian's python3 imports it (the
+# prefix's dist-packages, /usr/local by default), so that `python3 -c "import yawdepth"` works after
+# `demo` or `build`; needs root or sudo when that folder is not writable.
+install_python() {
+  [ -f "$build_dir/python/yawdepth/__init__.py" ] || return 0
+  local sudo=()
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "bootstrap: need root or sudo to install the Python module" >&2; return 1; }
+    sudo=(sudo)
+  fi
+  "${sudo[@]}" cmake --install "$build_dir" --component python | sed 's/^/bootstrap: /' >&2
 }
 
 demo() {
@@ -259,8 +273,8 @@ test_all() {
 }
 
 case "$what" in
-  demo) install_missing; build; demo ;;
+  demo) install_missing; build; install_python; demo ;;
   test) test_all ;;
-  build) install_missing; build ;;
+  build) install_missing; build; install_python ;;
   *) echo "usage: tools/bootstrap.sh [demo|test|build]" >&2; exit 2 ;;
 esac
