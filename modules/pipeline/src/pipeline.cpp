@@ -1,6 +1,7 @@
 #include <yawdepth/pipeline/pipeline.h>
 
 #include "rig_doubts.h"
+#include "variance_factor.h"
 
 #include <algorithm>
 #include <cmath>
@@ -104,7 +105,7 @@ void markUnconfirmed(PipelineResult &r)
 /* The whole log against the noise model given (see estimatePoints()). */
 constexpr double kMistakeS0 = 5;
 constexpr double kMistakeOutlierShare = 0.3;
-constexpr double kTooSmallS0 = 1.5;
+constexpr double kTooSmallS0 = pipeline_detail::kModelFitsS0;
 PipelineResult::Consistency wholeLog(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                                      const std::vector<Track> &tracks, const PipelineResult &r,
                                      const PipelineOptions &options)

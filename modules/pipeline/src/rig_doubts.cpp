@@ -88,7 +88,11 @@ std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, co
     if (!alt.measured || !std::isfinite(alt.f2))
       return;
     if (!given_fits) {
-      out.push_back({what, HUGE_VAL, std::sqrt(alt.f2)});
+      // Too few tracks fit as given to measure s0. A gross mistake only when the alternative fits at
+      // the noise model's level and explains at least twice as many tracks: a small scene (under
+      // min_tracks checkable tracks) has too few either way, and a clean one must never be doubted.
+      if (alt.f2 <= kModelFitsS0 * kModelFitsS0 && used(alt) >= 2 * std::max(used(given), 1))
+        out.push_back({what, HUGE_VAL, std::sqrt(alt.f2)});
       return;
     }
     // Judged on the tracks both models explain: the gates drop what a model cannot explain, so a

@@ -7,6 +7,10 @@
 namespace yawdepth {
 namespace pipeline_detail {
 
+/* s0 up to which a model fits the tracks: beyond it estimatePoints() warns that the sigmas are too
+   small, and rigDoubts() does not call an alternative a fit. */
+constexpr double kModelFitsS0 = 1.5;
+
 /* s0^2 over the tracks with dof >= 1 and use[i] (every track when `use` is empty): the median of
    chi2 / chiSquareMedian(dof), robust to the few tracks that are not one point; `sigma` its
    standard error (chi2 / nu has the relative variance 2 / nu; the median of n such ratios has

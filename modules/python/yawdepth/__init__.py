@@ -10,6 +10,7 @@ Files, as the command line reads them:
     motion = yawdepth.loadMotion("motion.csv", rig_file)             # MotionLog
     yawdepth.checkMotionSteps(motion, "motion.csv"); yawdepth.applyRigFile(rig_file, motion)
     tracks = yawdepth.readTracksCsv("tracks.csv")                    # (M, 4) [frame, id, u, v]
+    yawdepth.checkTracksAgainstMotion(tracks, motion, "tracks.csv")  # the CLI's message for a frame not in the log
     result = yawdepth.estimatePoints(camera, rig, motion, tracks, method="exact")
     result.points                                                    # structured array, the CSV's columns
 
