@@ -5,7 +5,7 @@
 #   ...
 #   <!-- /update_docs: ID -->
 #
-# in README.md or docs/*.md, and is the verbatim standard output of the command registered for ID
+# in README.md, docs/*.md or examples/*/README.md, and is the verbatim standard output of the command registered for ID
 # below, with a stamp line (the command, its exit status, the commit, the date, the machine) so that
 # a stale table shows its age. A benchmark that misses a target it states exits non-zero: its table is
 # still written (it shows the miss), the script names it and exits 1.
@@ -63,12 +63,13 @@ franka-measure	examples/franka_measure.sh "$Y"
 ros-calibration	/usr/bin/python3 benchmarks/ros_calibration_compare.py --yawdepth "$Y" --data tests/data/franka-eye-in-hand
 corners-real	"$B/benchmarks/bench_corners" --set opencv-left:9x6:0.025:$(ls /usr/share/doc/opencv-doc/examples/data/left[01]*.jpg | paste -sd,) --set opencv-right:9x6:0.025:$(ls /usr/share/doc/opencv-doc/examples/data/right[01]*.jpg | paste -sd,)
 time-offset	"$B/benchmarks/bench_time_offset"
+bag-drive	examples/bag_drive/run.sh "$Y"
 python-cost	/usr/bin/python3 benchmarks/bench_python.py --build "$B"
 EOF
 }
 command_of() { registry | awk -F'\t' -v id="$1" '$1 == id { print $2 }'; }
 
-pages() { ls README.md docs/*.md; }
+pages() { ls README.md docs/*.md examples/*/README.md 2>/dev/null || true; }
 
 # Marker lines, as "PAGE<TAB>LINE<TAB>open|close<TAB>ID".
 markers() {
