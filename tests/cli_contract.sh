@@ -1089,6 +1089,34 @@ usage config_missing "yawdepth estimate: error: $S/none.toml: cannot read the se
 printf 'no-gate = maybe\n' >"$S/switch.toml"
 usage config_switch "yawdepth track: error: $S/switch.toml:1: 'no-gate' is a switch: true or false, not 'maybe' (see yawdepth track --help)" \
   track --camera "$YML" --motion "$X/motion.csv" --out "$S/t.csv" --config "$S/switch.toml"
+# A review's cases: an option whose value was forgotten takes no setting as its value; a '#' in a
+# value (CLI11 reads a comment there, even quoted) refused both ways; a folder or no name as --config;
+# a [command] section's key over the same top-level key; a setting that needs an excluded one dropped;
+# an error about an option of the line not blamed on the file (--outliers is not --out).
+printf 'sigma-px = 0.5\n' >"$S/sp.toml"
+usage config_forgotten_value "yawdepth estimate: error: --out: 1 required TEXT missing (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S/sp.toml" --out
+[ ! -e "$U/--sigma-px=0.5" ] && [ ! -e "./--sigma-px=0.5" ] && pass || fail "a setting became --out's value"
+usage config_print_hash "yawdepth estimate: error: --print-config: the value of --out (run#2.csv) cannot be written in a settings file (a '#' reads as a comment, or both quotes): give it on the command line (see yawdepth estimate --help)" \
+  "${EST[@]}" --out 'run#2.csv' --print-config
+printf 'out = "run#2.csv"\n' >"$S/hash.toml"
+usage config_read_hash "yawdepth estimate: error: $S/hash.toml:1: 'out': a value with '#' (or ';' in INI), which a settings file reads as a comment: give it on the command line (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S/hash.toml"
+usage config_folder "yawdepth estimate: error: $S: a folder, not a settings file (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S"
+usage config_no_name "yawdepth estimate: error: --config needs a settings file's name (see yawdepth estimate --help)" \
+  "${EST[@]}" --config= --print-config
+printf 'sigma-px = 0.4\nquiet = true\n[estimate]\nsigma-px = 0.5\nquiet = false\n' >"$S/dup.toml"
+run "$S/dup" "${EST[@]}" --config "$S/dup.toml" --print-config
+[ "$(rc_of "$S/dup")" -eq 0 ] && grep -q '^sigma-px = 0.5$' "$S/dup.out" && grep -q '^# quiet = false$' "$S/dup.out" && pass ||
+  fail "a [estimate] key does not win over the top-level one: $(first "$S/dup.err")"
+printf 'camera = "%s"\ncamera-name = "x"\n' "$YML" >"$S/shared_camera.toml"
+run "$S/kx" error-analysis --kx 800 --config "$S/shared_camera.toml"
+[ "$(rc_of "$S/kx")" -eq 0 ] && [ ! -s "$S/kx.err" ] && pass ||
+  fail "error-analysis --kx with a shared camera file: exit $(rc_of "$S/kx"): $(first "$S/kx.err")"
+printf 'out = "%s"\n' "$S/o.csv" >"$S/out.toml"
+usage config_not_blamed "yawdepth estimate: error: --outliers: At Most 1 required but received 2 (see yawdepth estimate --help)" \
+  "${EST[@]}" --config "$S/out.toml" --outliers "$S/a.csv" --outliers "$S/b.csv"
 
 # A negative number, or a list of them, is a value, not an unknown option.
 run "$S/negative" calibrate-rig --camera "$YML" --motion "$X/motion.csv" --pattern chessboard:5x4:0.03 --out "$S/r.yaml" \

@@ -77,13 +77,17 @@ build() {
 
 # The Python module (when pybind11 was found) installed where Debian's python3 imports it (the
 # prefix's dist-packages, /usr/local by default), so that `python3 -c "import yawdepth"` works after
-# `demo` or `build`; needs root or sudo when that folder is not writable.
+# `demo` or `build`, as root or with sudo (without a password prompt); otherwise it says how.
 install_python() {
   [ -f "$build_dir/python/yawdepth/__init__.py" ] || return 0
   local sudo=()
   if [ "$(id -u)" -ne 0 ]; then
-    command -v sudo >/dev/null || { echo "bootstrap: need root or sudo to install the Python module" >&2; return 1; }
-    sudo=(sudo)
+    if ! command -v sudo >/dev/null || ! sudo -n true 2>/dev/null; then
+      echo "bootstrap: the Python module is built in $build_dir/python (PYTHONPATH=$build_dir/python);" \
+           "install it with: sudo cmake --install $build_dir --component python" >&2
+      return 0
+    fi
+    sudo=(sudo -n)
   fi
   "${sudo[@]}" cmake --install "$build_dir" --component python | sed 's/^/bootstrap: /' >&2
 }

@@ -154,7 +154,7 @@ update() {
   local m commit dirty stamp_machine today failed=() id cmd page rc out t0
   m=$(markers)
   commit=$(git rev-parse --short=10 HEAD)
-  dirty=$(git status --porcelain --untracked-files=no -- modules benchmarks examples tools | head -1)
+  dirty=$(git status --porcelain --untracked-files=no -- modules benchmarks examples tools)
   stamp_machine=$(machine)
   today=$(date -u +%Y-%m-%d)
   ((${#ids[@]})) || mapfile -t ids < <(registry | cut -f1)
@@ -162,7 +162,7 @@ update() {
   trap 'rm -f "$out"' RETURN
   for id in "${ids[@]}"; do
     cmd=$(command_of "$id")
-    [ -n "$cmd" ] || { echo "update_docs.sh: no table '$id' in the registry" >&2; return 2; }
+    [ -n "$cmd" ] || { echo "update_docs.sh: no table '$id' in the registry" >&2; rm -f "$out.err"; return 2; }
     page=$(awk -F'\t' -v id="$id" '$3 == "open" && $4 == id { print $1 }' <<<"$m")
     t0=$SECONDS rc=0
     echo "== update_docs: $id ($page): $cmd" >&2

@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 
 namespace yawdepth::cli {
@@ -220,16 +223,34 @@ bool excludesGiven(const CLI::Option &o, const std::set<const CLI::Option *> &gi
   return false;
 }
 
-/* --config's value among `args` (empty when not given). */
+/* --config's value among `args` (empty when not given); an empty name, or an option where the name
+   should be (`--config --print-config`), is refused. */
 std::string configFile(const std::vector<std::string> &args)
 {
   for (std::size_t i = 0; i < args.size() && args[i] != "--"; ++i) {
+    std::string file;
     if (args[i].rfind("--config=", 0) == 0)
-      return args[i].substr(9);
-    if (args[i] == "--config" && i + 1 < args.size())
-      return args[i + 1];
+      file = args[i].substr(9);
+    else if (args[i] == "--config" && i + 1 < args.size())
+      file = args[i + 1];
+    else
+      continue;
+    if (file.empty() || file.rfind("--", 0) == 0)
+      throw ConfigFileError{"--config needs a settings file's name" +
+                            (file.empty() ? std::string() : ", not the option " + file)};
+    return file;
   }
   return {};
+}
+
+/* A value CLI11's reader cut at a '#' (or ';' in INI), which it reads as a comment even inside
+   quotes: its opening quote is left unclosed. */
+bool cutAtComment(const std::vector<std::string> &inputs)
+{
+  for (const std::string &v : inputs)
+    if (!v.empty() && (v.front() == '"' || v.front() == '\'') && (v.size() == 1 || v.back() != v.front()))
+      return true;
+  return false;
 }
 
 } // namespace
@@ -241,6 +262,9 @@ ConfigApplied applyConfigFile(CLI::App &app, const CLI::App &sub, std::vector<st
   if (applied.file.empty())
     return applied;
   const std::string &file = applied.file;
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw ConfigFileError{file + ": a folder, not a settings file"};
   std::vector<CLI::ConfigItem> items;
   try {
     const bool ini = file.size() > 4 && file.compare(file.size() - 4, 4, ".ini") == 0;
@@ -249,7 +273,9 @@ ConfigApplied applyConfigFile(CLI::App &app, const CLI::App &sub, std::vector<st
     throw ConfigFileError{file + ": cannot read the settings file"};
   }
   const std::set<const CLI::Option *> given = givenOptions(sub, args);
-  std::vector<std::string> words;
+  // The settings for this command: a [command] section's key wins over the same top-level key.
+  std::map<const CLI::Option *, const CLI::ConfigItem *> chosen;
+  std::vector<const CLI::Option *> order;
   for (const CLI::ConfigItem &item : items) {
     if (item.name == "++" || item.name == "--")
       continue; // section markers
@@ -258,19 +284,55 @@ ConfigApplied applyConfigFile(CLI::App &app, const CLI::App &sub, std::vector<st
     const CLI::Option *o = settingOption(app, sub, item, key, file);
     if (o == nullptr || given.count(o) > 0 || excludesGiven(*o, given))
       continue; // the command line overrides the file, also by giving an option this one excludes
-    for (std::string &w : settingWords(*o, item.name, item.inputs, file))
+    if (cutAtComment(item.inputs))
+      throw ConfigFileError{where(file, item.name) + "'" + item.name + "': a value with '#' (or ';' in INI), which " +
+                            "a settings file reads as a comment: give it on the command line"};
+    const auto at = chosen.find(o);
+    if (at == chosen.end()) {
+      order.push_back(o);
+      chosen[o] = &item;
+    } else if (!item.parents.empty()) {
+      at->second = &item; // the section's
+    }
+  }
+  // A setting that needs an option neither given nor set (camera-name without camera, when the
+  // command line's --kx excluded the file's camera) goes too.
+  std::set<const CLI::Option *> present = given;
+  for (const CLI::Option *o : order)
+    present.insert(o);
+  for (bool dropped = true; dropped;) {
+    dropped = false;
+    for (const CLI::Option *o : order)
+      if (present.count(o) > 0 && given.count(o) == 0)
+        for (const CLI::Option *n : o->get_needs())
+          if (present.count(n) == 0) {
+            present.erase(o);
+            dropped = true;
+            break;
+          }
+  }
+  std::vector<std::string> words;
+  for (const CLI::Option *o : order) {
+    if (present.count(o) == 0)
+      continue;
+    for (std::string &w : settingWords(*o, chosen[o]->name, chosen[o]->inputs, file))
       words.push_back(std::move(w));
     applied.options.insert("--" + o->get_lnames().front());
   }
-  const auto end = std::find(args.begin(), args.end(), "--");
-  args.insert(end, words.begin(), words.end());
+  // Right after the command, so that an option on the line whose value was forgotten cannot take
+  // a setting as its value; the command line still wins (its options were left out above).
+  args.insert(args.begin(), words.begin(), words.end());
   return applied;
 }
 
 namespace {
 
-std::string tomlValue(const std::string &v)
+std::string tomlValue(const std::string &key, const std::string &v)
 {
+  if (v.find('#') != std::string::npos || (v.find('"') != std::string::npos && v.find('\'') != std::string::npos))
+    throw ConfigFileError{"--print-config: the value of --" + key + " (" + v +
+                          ") cannot be written in a settings file (a '#' reads as a comment, or both quotes): "
+                          "give it on the command line"};
   char *end = nullptr;
   std::strtod(v.c_str(), &end);
   if ((!v.empty() && end != v.c_str() && *end == '\0') || v == "true" || v == "false")
@@ -305,12 +367,12 @@ std::string effectiveConfig(const CLI::App &sub)
       continue;
     out << prefix;
     if (values.size() == 1 && o->get_expected_max() <= 1) {
-      out << key << " = " << tomlValue(values.front()) << "\n";
+      out << key << " = " << tomlValue(key, values.front()) << "\n";
       continue;
     }
     out << key << " = [";
     for (std::size_t i = 0; i < values.size(); ++i)
-      out << (i ? ", " : "") << tomlValue(values[i]);
+      out << (i ? ", " : "") << tomlValue(key, values[i]);
     out << "]\n";
   }
   return out.str();

@@ -6,6 +6,7 @@
 #include "progress.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <exception>
 #include <iostream>
@@ -296,8 +297,17 @@ static int prepareArguments(CLI::App &app, const CLI::App &sub, std::vector<std:
 static std::string parseReason(const CLI::ParseError &e, const ConfigApplied &config)
 {
   std::string reason = e.what();
+  // The option named as a word: --out is not --outliers, --camera not --camera-name.
+  auto named = [&](const std::string &name) {
+    for (std::size_t at = reason.find(name); at != std::string::npos; at = reason.find(name, at + 1)) {
+      const std::size_t end = at + name.size();
+      if (end == reason.size() || !(std::isalnum(static_cast<unsigned char>(reason[end])) || reason[end] == '-'))
+        return true;
+    }
+    return false;
+  };
   for (const std::string &name : config.options)
-    if (reason.find(name) != std::string::npos)
+    if (named(name))
       return reason + " (set in " + config.file + ")";
   return reason;
 }
@@ -362,7 +372,11 @@ int main(int argc, char **argv)
     if (!sub->parsed())
       continue;
     if (sub->count("--print-config") > 0) {
-      std::cout << effectiveConfig(*sub);
+      try {
+        std::cout << effectiveConfig(*sub);
+      } catch (const ConfigFileError &e) {
+        return usageError(sub->get_name(), e.message);
+      }
       return 0;
     }
     setVerbosity(*sub);
