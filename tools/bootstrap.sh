@@ -24,7 +24,7 @@ packages=(g++ make cmake pkg-config libvisp-dev libopencv-dev libeigen3-dev liba
           python3-camera-calibration-parsers python3-camera-calibration python3-opencv python3-cv-bridge python3-image-geometry
           librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
           libtf2-dev python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-tf2-msgs
-          libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev python3-ament-package
+          libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev zstd python3-ament-package
           pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pytest python3-matplotlib)
 # The ROS 2 bag writers of the tests (tests/data/bags/writers: @mcap/core and ROS 2's CDR from the npm
 # registry) run on Node.js: Debian's, unless the machine has one already.

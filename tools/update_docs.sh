@@ -166,7 +166,7 @@ update() {
     page=$(awk -F'\t' -v id="$id" '$3 == "open" && $4 == id { print $1 }' <<<"$m")
     t0=$SECONDS rc=0
     echo "== update_docs: $id ($page): $cmd" >&2
-    B=$B Y=$Y bash -c "B='$B' Y='$Y'; $cmd" >"$out" 2>"$out.err" || rc=$?
+    B=$B Y=$Y bash -c "$cmd" >"$out" 2>"$out.err" || rc=$?
     if [ ! -s "$out" ]; then
       echo "update_docs.sh: $id printed nothing (exit $rc); its table is kept:" >&2
       tail -5 "$out.err" >&2

@@ -105,7 +105,6 @@ void markUnconfirmed(PipelineResult &r)
 /* The whole log against the noise model given (see estimatePoints()). */
 constexpr double kMistakeS0 = 5;
 constexpr double kMistakeOutlierShare = 0.3;
-constexpr double kTooSmallS0 = pipeline_detail::kModelFitsS0;
 PipelineResult::Consistency wholeLog(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                                      const std::vector<Track> &tracks, const PipelineResult &r,
                                      const PipelineOptions &options)
@@ -316,7 +315,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
     check.gate_scale = model.gate_scale;
     r.residuals = checkResiduals(camera, rig, motion, tracks, r.outliers, model.noise, check, r.points);
     r.residuals.noise_scale = model.pixel_scale;
-  } else if (whole_track && log.s0 > kTooSmallS0) {
+  } else if (whole_track && log.s0 > pipeline_detail::kModelFitsS0) {
     r.warnings.push_back("the residuals are " + figure(log.s0) +
                          " times what the noise model allows: the sigmas are too small by about that (raise the "
                          "pixel noise, or let the residual check scale them)");
