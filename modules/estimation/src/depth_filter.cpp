@@ -159,22 +159,32 @@ void composeIncrementNoise(Eigen::Matrix<double, 6, 6> &cov, Eigen::Matrix3d &R,
   R = R * dR;
 }
 
+namespace {
+const double kTwoSigmaProbability = std::erf(2.0 / std::sqrt(2.0)); // 0.9545
+double normalCdf(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
+} // namespace
+
+bool inverseDepthBounded(double r)
+{
+  // P(|1/u - 1| <= c) for u = rho / rho_hat ~ N(1, r^2) grows with c to normalCdf(1/r) (negative inverse
+  // depths are never inside): some c reaches the 2-sigma probability only if normalCdf(1/r) exceeds it.
+  return r >= 0 && std::isfinite(r) && (r == 0 || normalCdf(1.0 / r) > kTwoSigmaProbability);
+}
+
 double inverseDepthInterval(double r)
 {
   if (!(r >= 0) || !std::isfinite(r))
     return std::numeric_limits<double>::quiet_NaN();
   if (r == 0)
     return 0.0;
-  // P(c) = P(|1/u - 1| <= c) for u = rho / rho_hat ~ N(1, r^2), increasing in c, with the limit
-  // Phi(1/r) as c grows (negative inverse depths are never inside).
-  const double target = std::erf(2.0 / std::sqrt(2.0)); // 0.9545
-  auto Phi = [](double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); };
-  auto P = [&](double c) {
-    const double near = c < 1.0 ? Phi(c / ((1.0 - c) * r)) : 1.0;
-    return near - Phi(-c / ((1.0 + c) * r));
-  };
-  if (!(Phi(1.0 / r) > target))
+  if (!inverseDepthBounded(r))
     return std::numeric_limits<double>::infinity();
+  // P(c) = P(|1/u - 1| <= c) for u = rho / rho_hat ~ N(1, r^2), increasing in c.
+  const double target = kTwoSigmaProbability;
+  auto P = [&](double c) {
+    const double near = c < 1.0 ? normalCdf(c / ((1.0 - c) * r)) : 1.0;
+    return near - normalCdf(-c / ((1.0 + c) * r));
+  };
   double lo = 0.0, hi = 2.0 * r;
   while (P(hi) < target) {
     lo = hi;

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <yawdepth/estimation/fused_estimator.h>
+#include <yawdepth/estimation/depth_filter.h>
 
 namespace yawdepth {
 
@@ -106,7 +106,7 @@ bool Impl::pointJacobian(const Feature &ft, Eigen::Matrix3d &Jf, Eigen::MatrixXd
   JY.setZero(3, sys.P);
   for (int j = 0; off >= 0 && j < kFrameDim; ++j)
     if (f.local[j] >= 0)
-      JY.col(off + f.local[j]) = (f.cam.dR[j].transpose() * u - rho * (f.cam.R.transpose() * f.cam.dc[j])) / rho;
+      JY.col(off + f.local[j]) = (q.cross(f.cam.w[j]) - rho * f.cam.Rt_dc[j]) / rho;
   return true;
 }
 
@@ -180,7 +180,7 @@ void Impl::ensureCache() const
     }
     e.c_cov = cov;
     // As `fused`: a depth without a bounded 2-sigma interval is not a measurement.
-    if (!e.c_cov.allFinite() || !std::isfinite(inverseDepthInterval(std::sqrt(e.c_cov(2, 2)) / e.c_P.z())))
+    if (!e.c_cov.allFinite() || !inverseDepthBounded(std::sqrt(e.c_cov(2, 2)) / e.c_P.z()))
       e.status = Status::Degenerate;
   }
   cache_valid = true;

@@ -175,12 +175,17 @@ Eigen::VectorXd Impl::priorDeltaY() const
   return d;
 }
 
-/* The observations of the state's features (every frame's, or only window frame only_frame's). */
+/* The observations of the state's features (every frame's, or only window frame only_frame's). Each
+   frame's information is gathered over all 7 parameters in fixed-size blocks, then its free
+   components are scattered into the system. */
 double Impl::observationFactors(SchurSystem &s, Phase phase, Fill fill, const std::vector<Frame> &fej,
                                 int only_frame) const
 {
+  using Mat7 = Eigen::Matrix<double, kFrameDim, kFrameDim>;
+  using Vec7 = Eigen::Matrix<double, kFrameDim, 1>;
+  std::vector<Mat7, Eigen::aligned_allocator<Mat7>> Hf(frames.size(), Mat7::Zero());
+  std::vector<Vec7, Eigen::aligned_allocator<Vec7>> gf(frames.size(), Vec7::Zero());
   double cost = 0;
-  Eigen::Matrix<double, 2, Eigen::Dynamic, 0, 2, kFrameDim> Jf;
   for (int i = 0; i < s.N(); ++i) {
     const Feature &ft = features.at(s.ids[static_cast<std::size_t>(i)]);
     for (const Obs &ob : ft.obs) {
@@ -204,21 +209,32 @@ double Impl::observationFactors(SchurSystem &s, Phase phase, Fill fill, const st
         continue;
       const double w = weightOf(sq, phase);
       const Eigen::Matrix<double, 2, 3> Jp = J.rightCols<3>();
+      const Eigen::Matrix<double, 2, kFrameDim> Jx = J.leftCols<kFrameDim>();
       s.b.segment<3>(3 * i) += w * Jp.transpose() * r;
-      if (fill == Fill::Full)
-        s.A.middleRows<3>(3 * i) += w * Jp.transpose() * Jp;
+      gf[static_cast<std::size_t>(fi)].noalias() += w * Jx.transpose() * r;
+      if (fill != Fill::Full)
+        continue;
+      s.A.middleRows<3>(3 * i).noalias() += w * Jp.transpose() * Jp;
+      Hf[static_cast<std::size_t>(fi)].noalias() += w * Jx.transpose() * Jx;
       const int off = s.frame_offset[static_cast<std::size_t>(fi)];
       if (off < 0)
         continue;
-      Jf.resize(2, f.dim);
+      const Eigen::Matrix<double, 3, kFrameDim> Ex = w * Jp.transpose() * Jx;
       for (int j = 0; j < kFrameDim; ++j)
         if (f.local[j] >= 0)
-          Jf.col(f.local[j]) = J.col(j);
-      s.g.segment(off, f.dim) += w * Jf.transpose() * r;
-      if (fill == Fill::Full) {
-        s.E.block(3 * i, off, 3, f.dim) += w * Jp.transpose() * Jf;
-        s.H.block(off, off, f.dim, f.dim) += w * Jf.transpose() * Jf;
-      }
+          s.E.block<3, 1>(3 * i, off + f.local[j]) += Ex.col(j);
+    }
+  }
+  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
+    const int off = s.frame_offset[fi];
+    const int *local = frames[fi].local;
+    for (int a = 0; off >= 0 && a < kFrameDim; ++a) {
+      if (local[a] < 0)
+        continue;
+      s.g(off + local[a]) += gf[fi](a);
+      for (int b = 0; fill == Fill::Full && b < kFrameDim; ++b)
+        if (local[b] >= 0)
+          s.H(off + local[a], off + local[b]) += Hf[fi](a, b);
     }
   }
   return cost;

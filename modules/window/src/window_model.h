@@ -46,6 +46,10 @@ struct CameraPose {
   Eigen::Vector3d dc[kFrameDim];                   //!< dc / dx_j
   Eigen::Matrix3d Rv = Eigen::Matrix3d::Identity(); //!< vision frame rotation Rref Exp(d)
   Eigen::Matrix3d dRv[3];                          //!< dRv / dd_j
+  // For the observations' Jacobians: dR_j = R [w_j]x (a rotation's derivative, in the camera frame),
+  // so d(R' u)/dx_j = (R' u) x w_j - rho R' dc_j.
+  Eigen::Vector3d w[kFrameDim];                    //!< vee(R' dR_j)
+  Eigen::Vector3d Rt_dc[kFrameDim];                //!< R' dc_j
 };
 
 /*! The camera of frame x (see the file comment) and its derivatives. */
@@ -72,6 +76,11 @@ inline void cameraPose(const double *x, const Eigen::Matrix3d &Rref, const Mount
   const Eigen::Matrix3d dV = out.Rv * dRy;
   out.dR[6] = dV * mount.R0;
   out.dc[6] = dV * mount.t0;
+  for (int j = 0; j < kFrameDim; ++j) {
+    const Eigen::Matrix3d W = out.R.transpose() * out.dR[j];
+    out.w[j] = Eigen::Vector3d(0.5 * (W(2, 1) - W(1, 2)), 0.5 * (W(0, 2) - W(2, 0)), 0.5 * (W(1, 0) - W(0, 1)));
+    out.Rt_dc[j] = out.R.transpose() * out.dc[j];
+  }
 }
 
 /*!
@@ -106,7 +115,7 @@ inline bool observationResidual(const Eigen::Matrix3d &Ra, const Eigen::Vector3d
     S << w.s00, w.s01, 0, w.s11;
     const Eigen::Matrix<double, 2, 3> SP = S * P;
     for (int j = 0; j < kFrameDim; ++j)
-      J->col(j) = SP * (f.dR[j].transpose() * u - rho * (f.R.transpose() * f.dc[j]));
+      J->col(j) = SP * (q.cross(f.w[j]) - rho * f.Rt_dc[j]);
     J->col(7) = SP * (f.R.transpose() * Ra.col(0));
     J->col(8) = SP * (f.R.transpose() * Ra.col(1));
     J->col(9) = SP * (f.R.transpose() * dca);

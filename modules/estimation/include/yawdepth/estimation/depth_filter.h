@@ -93,6 +93,10 @@ void composeIncrementNoise(Eigen::Matrix<double, 6, 6> &cov, Eigen::Matrix3d &R,
 */
 double inverseDepthInterval(double r);
 
+/*! \brief Whether inverseDepthInterval(r) is finite (the depth has a bounded 2-sigma interval: r below
+    about 0.59), without computing the interval; false for a negative or non-finite r. */
+bool inverseDepthBounded(double r);
+
 /*! \brief Options of DepthFilter. */
 struct DepthFilterOptions {
   NoiseModel noise;                     //!< Odometry and yaw noise (pixel noise comes with each observation).
