@@ -2,7 +2,7 @@
   bench_castle: natural-feature depth on someone else's rendered sequence, against its depth maps.
 
     bench_castle [--data DIR] [--frames N] [--max-features N] [--sigma-px S] [--method fused|window|refine]
-                 [--no-residual-check] [--max-depth-sigma R] [--points FILE]
+                 [--no-residual-check] [--max-depth-sigma R] [--points FILE] [--guided off|auto|on]
 
   Data: Debian's visp-images-data, mbt-depth/Castle-simu (ViSP's RGB-D tracker test sequence): 40
   rendered 640x480 gray images of a castle model, a 700 px pinhole camera (Config/chateau.xml),
@@ -90,6 +90,7 @@ struct Args {
   std::string method = "fused";   // measure --features klt's defaults: fused, the residual check, 5 %
   double max_depth_sigma = 0.05;
   std::string points; // --points FILE: every compared point as CSV
+  std::string guided = toString(KltOptions().guided); // --guided off|auto|on: KltOptions::guided
   bool no_residual_check = false;
 };
 
@@ -243,11 +244,11 @@ int main(int argc, char **argv)
 {
   Args a;
   bench::CommandLine cli("[--data DIR] [--frames N (2-40)] [--max-features N] [--sigma-px S] [--method M] "
-                         "[--no-residual-check] [--max-depth-sigma R] [--points FILE]");
+                         "[--no-residual-check] [--max-depth-sigma R] [--points FILE] [--guided off|auto|on]");
   cli.option("--data", a.data).option("--frames", a.frames);
   cli.option("--max-features", a.max_features).option("--sigma-px", a.sigma_px);
   cli.option("--method", a.method).flag("--no-residual-check", a.no_residual_check).option("--points", a.points);
-  cli.option("--max-depth-sigma", a.max_depth_sigma);
+  cli.option("--max-depth-sigma", a.max_depth_sigma).option("--guided", a.guided);
   if (!cli.parse(argc, argv))
     return 2;
   if (a.frames < 2 || a.frames > 40 || a.max_features < 1 || !(a.sigma_px > 0)) {
@@ -266,6 +267,7 @@ int main(int argc, char **argv)
     const Sequence q = readSequence(a.data, a.frames);
     KltOptions ko;
     ko.max_features = a.max_features;
+    ko.guided = kltGuidedFromString(a.guided);
     const auto t0 = std::chrono::steady_clock::now();
     const SequenceTracks seq = trackSequence(camera, rig, q.motion, q.images, po.noise, ko);
     const auto t1 = std::chrono::steady_clock::now();
@@ -279,13 +281,16 @@ int main(int argc, char **argv)
     std::printf("yawdepth on Castle-simu (visp-images-data mbt-depth, someone else's renderer): KLT tracks + %s "
                 "vs the depth maps\n", a.method.c_str());
     std::printf("Reproduce: build/benchmarks/bench_castle --frames %d --max-features %d --sigma-px %g --method %s "
-                "--max-depth-sigma %g%s\n",
-                a.frames, a.max_features, a.sigma_px, a.method.c_str(), a.max_depth_sigma,
+                "--max-depth-sigma %g --guided %s%s\n",
+                a.frames, a.max_features, a.sigma_px, a.method.c_str(), a.max_depth_sigma, a.guided.c_str(),
                 a.no_residual_check ? " --no-residual-check" : "");
     std::printf("%d frames; %zu tracks over 2+ frames (%d detected; cut: %d epipolar, %d forward-backward); %d ok "
                 "points, %d without depth truth (background, occluding edge)\n",
                 a.frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb, ok,
                 no_truth);
+    if (ko.guided != KltGuided::Off)
+      std::printf("guided search: %d steps continued by it; %d cut as ambiguous; %d lost (no match or flow)\n",
+                  seq.totals.guided, seq.totals.lost_ambiguous, seq.totals.lost_flow);
     std::printf("tracking %.1f ms/frame, estimation %.1f ms/frame (this machine, one core)\n", track_ms / a.frames,
                 est_ms / a.frames);
     const double px = std::max(0.01, a.sigma_px * est.residuals.noise_scale); // the model's pixel noise at the end

@@ -181,6 +181,14 @@ struct LiveFeatures {
   std::vector<long> ids;
 };
 
+/*! \brief The displacement (px) pyramidal LK follows reliably: a quarter of window x 2^levels (42 px by
+    default). Beyond it plain LK loses its way (bench_wide_baseline); below it plain LK is as good as
+    the guided search and cheaper. */
+double lkReachPx(const KltOptions &options)
+{
+  return 0.25 * options.window * static_cast<double>(1 << options.pyramid_levels);
+}
+
 /*! \brief What the guided search did with a feature (GuidedSearch::outcome; -1: not searched). */
 enum class GuidedCode { Found, OffImage, Ambiguous, LostFlow, LostFb };
 
@@ -203,9 +211,7 @@ GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, 
   GuidedSearch out;
   if (!motion || options.guided == KltGuided::Off)
     return out;
-  // Beyond about a quarter of window x 2^levels, pyramidal LK starts to lose its way (measured:
-  // bench_wide_baseline); below it, plain LK is as good and cheaper.
-  const double long_px = 0.25 * options.window * static_cast<double>(1 << options.pyramid_levels);
+  const double long_px = lkReachPx(options);
   out.outcome.assign(points.size(), -1);
   out.position.resize(points.size());
   std::vector<detail::GuidedRequest> requests;
@@ -288,17 +294,23 @@ LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options
   const auto plain_fb = [&](std::size_t i) {
     return std::hypot(back[i].x - points[i].x, back[i].y - points[i].y) > options.forward_backward_px;
   };
+  std::vector<char> plain_ok(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    plain_ok[i] = !plain_lost(i) && !plain_fb(i) && interior.contains(next[i]) && (!motion || in_band(i, next[i]));
   const GuidedSearch guided = guidedSearch(tracker, options, previous, image, points, motion, hints, interior,
-                                           [&](std::size_t i) {
-                                             return plain_lost(i) || plain_fb(i) || !interior.contains(next[i]) ||
-                                                    !in_band(i, next[i]);
-                                           },
-                                           &ids);
+                                           [&](std::size_t i) { return !plain_ok[i]; }, &ids);
+  const double reach = lkReachPx(options);
   LiveFeatures kept;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const bool by_guided = !guided.outcome.empty() && guided.outcome[i] >= 0;
+    int code = guided.outcome.empty() ? -1 : guided.outcome[i];
+    // auto: where the guided search finds no one match but plain LK passed every check over a
+    // displacement it follows (under its reach), plain LK's track stands.
+    if (code > static_cast<int>(GuidedCode::Found) && options.guided == KltGuided::Auto && plain_ok[i] &&
+        std::hypot(next[i].x - points[i].x, next[i].y - points[i].y) <= reach)
+      code = -1;
+    const bool by_guided = code >= 0;
     if (by_guided) {
-      switch (static_cast<GuidedCode>(guided.outcome[i])) {
+      switch (static_cast<GuidedCode>(code)) {
       case GuidedCode::OffImage:
         ++stats.lost_border;
         continue;
