@@ -303,9 +303,11 @@ LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options
   LiveFeatures kept;
   for (std::size_t i = 0; i < points.size(); ++i) {
     int code = guided.outcome.empty() ? -1 : guided.outcome[i];
-    // auto: where the guided search finds no one match but plain LK passed every check over a
-    // displacement it follows (under its reach), plain LK's track stands.
-    if (code > static_cast<int>(GuidedCode::Found) && options.guided == KltGuided::Auto && plain_ok[i] &&
+    // auto: where the guided search finds no match (no NCC peak, or its LK refinement failed) but
+    // plain LK passed every check over a displacement it follows (under its reach), plain LK's track
+    // stands. Not where it found two: plain LK may have locked onto the other.
+    if ((code == static_cast<int>(GuidedCode::LostFlow) || code == static_cast<int>(GuidedCode::LostFb)) &&
+        options.guided == KltGuided::Auto && plain_ok[i] &&
         std::hypot(next[i].x - points[i].x, next[i].y - points[i].y) <= reach)
       code = -1;
     const bool by_guided = code >= 0;
