@@ -12,6 +12,7 @@ namespace {
 /* The LK refinement may move the NCC match by this much (px) at most: farther, it found another
    structure than the one the NCC matched. */
 constexpr double kMaxRefinementPx = 3.0;
+
 } // namespace
 
 bool clipSegment(Eigen::Vector2d &a, Eigen::Vector2d &b, double lo_u, double lo_v, double hi_u, double hi_v)
@@ -41,8 +42,48 @@ bool clipSegment(Eigen::Vector2d &a, Eigen::Vector2d &b, double lo_u, double lo_
   return true;
 }
 
+namespace {
+
+/* Whether the NCC profile r[0..n) has one peak at `best` above `floor`: no other position as high
+   outside the best's lobe (the positions next to it above `floor`), and a lobe no longer than `max_width`. */
+bool onePeak(const float *r, int n, int best, double floor, int max_width)
+{
+  int lo = best, hi = best;
+  while (lo > 0 && r[lo - 1] >= floor)
+    --lo;
+  while (hi + 1 < n && r[hi + 1] >= floor)
+    ++hi;
+  if (hi - lo > max_width) // an edge along the line: no one position
+    return false;
+  for (int k = 0; k < n; ++k)
+    if ((k < lo || k > hi) && r[k] >= floor) // a separate peak as good: repeated texture
+      return false;
+  return true;
+}
+
+/* The NCC of `patch` (side x side, CV_32F) at each of n positions 1 px apart along `along` from
+   `start` in `image` (bilinear, on the grid of `along` and `across`); score: 1 x n. */
+void nccAlong(const cv::Mat &image, const cv::Mat &patch, const Eigen::Vector2d &start, const Eigen::Vector2d &along,
+              const Eigen::Vector2d &across, int n, cv::Mat &score)
+{
+  const int side = patch.cols, h = side / 2;
+  cv::Mat sx(side, n + side - 1, CV_32F), sy(side, n + side - 1, CV_32F), strip, strip_f;
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < n + side - 1; ++j) {
+      const Eigen::Vector2d o = start + (j - h) * along + (i - h) * across;
+      sx.at<float>(i, j) = static_cast<float>(o.x());
+      sy.at<float>(i, j) = static_cast<float>(o.y());
+    }
+  cv::remap(image, strip, sx, sy, cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
+  strip.convertTo(strip_f, CV_32F);
+  cv::matchTemplate(strip_f, patch, score, cv::TM_CCOEFF_NORMED);
+}
+
+} // namespace
+
 SegmentPeak searchSegment(const cv::Mat &prev, const cv::Mat &next, const cv::Point2f &point,
-                          const Eigen::Vector2d &near_px, const Eigen::Vector2d &far_px, const GuidedSettings &settings)
+                          const Eigen::Vector2d &near_px, const Eigen::Vector2d &far_px, double span_px,
+                          const GuidedSettings &settings)
 {
   SegmentPeak peak;
   const int h = settings.window / 2, side = 2 * h + 1;
@@ -53,41 +94,35 @@ SegmentPeak searchSegment(const cv::Mat &prev, const cv::Mat &next, const cv::Po
   const Eigen::Vector2d across(-along.y(), along.x());
   // The patch around the feature in the previous image and the strip along the segment in the new
   // one, both sampled on the same rotated grid (bilinear), so that matchTemplate compares like with like.
-  cv::Mat tx(side, side, CV_32F), ty(side, side, CV_32F), sx(side, n + side - 1, CV_32F), sy(side, n + side - 1, CV_32F);
-  for (int i = 0; i < side; ++i) {
+  cv::Mat tx(side, side, CV_32F), ty(side, side, CV_32F), patch, patch_f, score;
+  for (int i = 0; i < side; ++i)
     for (int j = 0; j < side; ++j) {
       const Eigen::Vector2d o = (j - h) * along + (i - h) * across;
       tx.at<float>(i, j) = static_cast<float>(point.x + o.x());
       ty.at<float>(i, j) = static_cast<float>(point.y + o.y());
     }
-    for (int j = 0; j < n + side - 1; ++j) {
-      const Eigen::Vector2d o = near_px + (j - h) * along + (i - h) * across;
-      sx.at<float>(i, j) = static_cast<float>(o.x());
-      sy.at<float>(i, j) = static_cast<float>(o.y());
-    }
-  }
-  cv::Mat patch, strip, patch_f, strip_f, score;
   cv::remap(prev, patch, tx, ty, cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
-  cv::remap(next, strip, sx, sy, cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
   patch.convertTo(patch_f, CV_32F);
-  strip.convertTo(strip_f, CV_32F);
-  cv::matchTemplate(strip_f, patch_f, score, cv::TM_CCOEFF_NORMED);
+  nccAlong(next, patch_f, near_px, along, across, n, score);
   const float *r = score.ptr<float>(0);
   const int best = static_cast<int>(std::max_element(r, r + n) - r);
   peak.ncc = r[best];
   if (!(peak.ncc >= settings.min_ncc))
     return peak; // Weak (NaN too: a flat patch)
-  // The best peak's lobe: the positions next to it within the margin of its score.
   const double floor_ncc = peak.ncc - settings.ambiguity_margin;
-  int lo = best, hi = best;
-  while (lo > 0 && r[lo - 1] >= floor_ncc)
-    --lo;
-  while (hi + 1 < n && r[hi + 1] >= floor_ncc)
-    ++hi;
-  bool ambiguous = hi - lo > settings.window; // an edge along the line: no one position
-  for (int k = 0; k < n && !ambiguous; ++k)
-    ambiguous = (k < lo || k > hi) && r[k] >= floor_ncc; // a separate peak as good: repeated texture
-  if (ambiguous) {
+  bool unique = onePeak(r, n, best, floor_ncc, settings.window);
+  // The patch along the same line in its own image, as far each way as the segment was long before
+  // the image cut it (at most the image's diagonal): a texture that repeats along the line has copies
+  // there too, even when the image border leaves only one of its copies on the segment in the new image.
+  const double diagonal = std::hypot(prev.cols, prev.rows);
+  const int m = static_cast<int>(std::ceil(std::min(std::max(span_px, length), diagonal)));
+  if (unique && m >= 1) {
+    cv::Mat self;
+    const Eigen::Vector2d start = Eigen::Vector2d(point.x, point.y) - m * along;
+    nccAlong(prev, patch_f, start, along, across, 2 * m + 1, self);
+    unique = onePeak(self.ptr<float>(0), 2 * m + 1, m, floor_ncc, settings.window);
+  }
+  if (!unique) {
     peak.outcome = GuidedOutcome::Ambiguous;
     return peak;
   }
@@ -111,7 +146,7 @@ std::vector<std::pair<GuidedOutcome, cv::Point2f>> guidedMatches(const cv::Mat &
   std::vector<std::size_t> index;
   for (std::size_t i = 0; i < requests.size(); ++i) {
     const GuidedRequest &q = requests[i];
-    const SegmentPeak p = searchSegment(prev, next, q.point, q.near_px, q.far_px, settings);
+    const SegmentPeak p = searchSegment(prev, next, q.point, q.near_px, q.far_px, q.span_px, settings);
     out[i].first = p.outcome;
     if (p.outcome != GuidedOutcome::Found)
       continue;

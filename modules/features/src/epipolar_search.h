@@ -24,10 +24,13 @@ enum class GuidedOutcome {
   LostFb     //!< the forward-backward error of the refinement is above the threshold
 };
 
-/*! \brief One feature to search: its pixel in the previous image and its segment (already clipped). */
+/*! \brief One feature to search: its pixel in the previous image and its segment (already clipped to
+    the image), and the segment's length (px) before that clipping: how far along the line the patch
+    must have no copy in its own image (see searchSegment()). */
 struct GuidedRequest {
   cv::Point2f point;
   Eigen::Vector2d near_px, far_px;
+  double span_px = 0;
 };
 
 /*! \brief The NCC search's settings (from KltOptions). */
@@ -47,9 +50,12 @@ struct SegmentPeak {
 };
 
 /*! \brief The NCC of the patch of `prev` around `point` at each pixel along near-far in `next`, and
-    its best peak with the ambiguity check. */
+    its best peak with the ambiguity check: no second peak within the margin in `next`'s profile, nor
+    in `prev`'s own profile along the same line within `span_px` of the feature (a repeated texture
+    whose other copies the image border hides in `next`). */
 SegmentPeak searchSegment(const cv::Mat &prev, const cv::Mat &next, const cv::Point2f &point,
-                          const Eigen::Vector2d &near_px, const Eigen::Vector2d &far_px, const GuidedSettings &settings);
+                          const Eigen::Vector2d &near_px, const Eigen::Vector2d &far_px, double span_px,
+                          const GuidedSettings &settings);
 
 /*! \brief Every request searched, then refined by LK (forward and backward) in two batched calls; the
     outcome of each and its refined pixel (meaningful when Found). */
