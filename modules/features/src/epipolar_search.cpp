@@ -114,13 +114,18 @@ SegmentPeak searchSegment(const cv::Mat &prev, const cv::Mat &next, const cv::Po
   // The patch along the same line in its own image, as far each way as the segment was long before
   // the image cut it (at most the image's diagonal): a texture that repeats along the line has copies
   // there too, even when the image border leaves only one of its copies on the segment in the new image.
+  // Only the part of that line in the image (beyond it, the strip would be made up by the border; the
+  // patches of its ends are, in part, as the feature's own patch can be).
   const double diagonal = std::hypot(prev.cols, prev.rows);
-  const int m = static_cast<int>(std::ceil(std::min(std::max(span_px, length), diagonal)));
-  if (unique && m >= 1) {
+  const double m = std::ceil(std::min(std::max(span_px, length), diagonal));
+  const Eigen::Vector2d p(point.x, point.y);
+  Eigen::Vector2d lo = p - m * along, hi = p + m * along;
+  if (unique && m >= 1 && clipSegment(lo, hi, 0, 0, prev.cols - 1.0, prev.rows - 1.0)) {
+    const int before = static_cast<int>(std::floor((p - lo).norm())); // positions before the feature
+    const int count = before + 1 + static_cast<int>(std::floor((hi - p).norm()));
     cv::Mat self;
-    const Eigen::Vector2d start = Eigen::Vector2d(point.x, point.y) - m * along;
-    nccAlong(prev, patch_f, start, along, across, 2 * m + 1, self);
-    unique = onePeak(self.ptr<float>(0), 2 * m + 1, m, floor_ncc, settings.window);
+    nccAlong(prev, patch_f, p - before * along, along, across, count, self);
+    unique = onePeak(self.ptr<float>(0), count, before, floor_ncc, settings.window);
   }
   if (!unique) {
     peak.outcome = GuidedOutcome::Ambiguous;
