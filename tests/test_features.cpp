@@ -868,6 +868,9 @@ TEST_CASE("klt guided: a wide sideways step plain LK loses is tracked along the 
     const WideStep plain = trackWideStep(scene, im1, c2Mc1, o);
     REQUIRE(plain.inside >= 100);
     CHECK(plain.kept <= kPlainKeepsAtMost * plain.inside);
+    const auto gross = [&](const WideStep &w) {
+      return std::count_if(w.errors.begin(), w.errors.end(), [&](double e) { return e >= kWorstTolPx; });
+    };
     for (const KltGuided g : {KltGuided::Auto, KltGuided::On}) {
       CAPTURE(toString(g));
       o.guided = g;
@@ -875,7 +878,10 @@ TEST_CASE("klt guided: a wide sideways step plain LK loses is tracked along the 
       CHECK(guided.kept >= kGuidedKeepsAtLeast * guided.inside);
       CHECK(guided.stats.guided >= kGuidedKeepsAtLeast * guided.inside);
       CHECK(medianOf(guided.errors) < kMedianTolPx);
-      CHECK(*std::max_element(guided.errors.begin(), guided.errors.end()) < kWorstTolPx);
+      if (g == KltGuided::On) // every track sub-pixel
+        CHECK(*std::max_element(guided.errors.begin(), guided.errors.end()) < kWorstTolPx);
+      else // auto keeps what plain LK passed within its reach, its wrong locks too, and adds none
+        CHECK(gross(guided) <= gross(plain));
     }
     // A depth hint at the truth (2 m +- 3 x 5 cm) keeps them as well; one at 0.5 m +- 3 x 1 cm
     // searches where they are not, and keeps (almost) none.

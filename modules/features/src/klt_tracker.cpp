@@ -200,25 +200,26 @@ struct GuidedSearch {
 
 /*!
   \brief The guided search (klt_tracker.h, "Guided matching") for the features that need it: every one
-  with options.guided On, else (Auto) those whose segment is long or for which `plain_failed` is true.
+  with options.guided On, else (Auto) those for which `needs_search` is true.
 */
-template <class PlainFailed>
+template <class NeedsSearch>
 GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
-                          const cv::Mat &image, const std::vector<cv::Point2f> &points, const KltMotion *motion,
-                          const std::map<long, std::pair<double, double>> &hints, const ImageInterior &interior,
-                          PlainFailed plain_failed, const std::vector<long> *ids = nullptr)
+                          const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
+                          const KltMotion *motion, const std::map<long, std::pair<double, double>> &hints,
+                          const ImageInterior &interior, NeedsSearch needs_search)
 {
   GuidedSearch out;
   if (!motion || options.guided == KltGuided::Off)
     return out;
-  const double long_px = lkReachPx(options);
   out.outcome.assign(points.size(), -1);
   out.position.resize(points.size());
   std::vector<detail::GuidedRequest> requests;
   std::vector<std::size_t> index;
   for (std::size_t i = 0; i < points.size(); ++i) {
+    if (options.guided == KltGuided::Auto && !needs_search(i))
+      continue;
     double z_near = options.min_depth, z_far = options.max_depth;
-    const auto hint = ids ? hints.find((*ids)[i]) : hints.end();
+    const auto hint = hints.find(ids[i]);
     if (hint != hints.end()) { // depth +- 3 sigma, within [min_depth, max_depth]
       z_near = std::clamp(hint->second.first - 3 * hint->second.second, options.min_depth, options.max_depth);
       z_far = std::clamp(hint->second.first + 3 * hint->second.second, z_near, options.max_depth);
@@ -227,8 +228,6 @@ GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, 
     bool seen = tracker.epipolarSegment(Eigen::Vector2d(points[i].x, points[i].y), motion->cMp, z_near, z_far, a, b);
     const double span = seen ? (b - a).norm() : 0.0; // before the image cuts it: the self-check's reach
     seen = seen && detail::clipSegment(a, b, interior.lo, interior.lo, interior.hi_u, interior.hi_v);
-    if (options.guided == KltGuided::Auto && !(seen && (b - a).norm() > long_px) && !plain_failed(i))
-      continue;
     if (!seen) {
       out.outcome[i] = static_cast<int>(GuidedCode::OffImage);
       continue;
@@ -297,20 +296,18 @@ LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options
   std::vector<char> plain_ok(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     plain_ok[i] = !plain_lost(i) && !plain_fb(i) && interior.contains(next[i]) && (!motion || in_band(i, next[i]));
-  const GuidedSearch guided = guidedSearch(tracker, options, previous, image, points, motion, hints, interior,
-                                           [&](std::size_t i) { return !plain_ok[i]; }, &ids);
+  // auto searches where plain LK failed a check or moved farther than it follows reliably.
   const double reach = lkReachPx(options);
+  const auto moved = [&](std::size_t i) { return std::hypot(next[i].x - points[i].x, next[i].y - points[i].y); };
+  const GuidedSearch guided = guidedSearch(tracker, options, previous, image, points, ids, motion, hints, interior,
+                                           [&](std::size_t i) { return !plain_ok[i] || moved(i) > reach; });
   LiveFeatures kept;
   for (std::size_t i = 0; i < points.size(); ++i) {
     int code = guided.outcome.empty() ? -1 : guided.outcome[i];
-    // auto: where the guided search finds no one match (none, or two: repeated texture, an edge along
-    // the line), plain LK decides as without the search: its track stands when it passed every check
-    // over a displacement it follows (under its reach), else it is lost for plain LK's reason.
-    // (Castle-simu: a third of its tracks are on edges or bricks that the search calls ambiguous along
-    // the long segment of min_depth 0.1 m, and plain LK follows them right over a few pixels.) Only a
-    // plain track beyond its reach is cut for the search's reason. `on` refuses them all.
-    if (code > static_cast<int>(GuidedCode::Found) && options.guided == KltGuided::Auto &&
-        !(plain_ok[i] && std::hypot(next[i].x - points[i].x, next[i].y - points[i].y) > reach))
+    // auto: where the search finds no one match (none, or two: repeated texture, an edge along the
+    // line) for a track plain LK lost, it is lost for plain LK's reason, as without the search; a
+    // plain track beyond LK's reach is cut for the search's reason.
+    if (code > static_cast<int>(GuidedCode::Found) && options.guided == KltGuided::Auto && !plain_ok[i])
       code = -1;
     const bool by_guided = code >= 0;
     if (by_guided) {
