@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <unistd.h>
@@ -35,12 +36,20 @@ void addKltOptions(CLI::App *sub, KltArgs &args)
       ->capture_default_str();
   sub->add_option("--max-depth", args.klt.max_depth,
                   "KLT: the farthest a tracked point can be (m, above --min-depth; inf: no limit), for the guided search")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Validator(
+          [](std::string &s) {
+            char *end = nullptr;
+            const double v = std::strtod(s.c_str(), &end);
+            return end != s.c_str() && *end == '\0' && v > 0 ? std::string()
+                                                             : "must be a positive number or inf, not " + s;
+          },
+          "POSITIVE|inf"))
       ->capture_default_str();
   sub->add_option_function<std::string>(
          "--guided", [&args](const std::string &s) { args.klt.guided = kltGuidedFromString(s); },
-         "KLT: search each feature's epipolar segment (NCC, then LK) when its segment is long or plain LK lost it "
-         "(auto), for every feature (on), or never (off) [auto]")
+         "KLT: search each feature's epipolar segment (NCC, then LK; ambiguous matches refused) where plain LK lost "
+         "it or moved it farther than LK follows (auto), for every feature (on: strict, for repeated textures), or "
+         "never (off) [auto]")
       ->check(CLI::IsMember({"auto", "on", "off"}));
   sub->add_flag("--no-gate", args.no_gate, "KLT: do not gate the tracks with the motion (no epipolar band)");
   sub->add_option("--video", args.video,
