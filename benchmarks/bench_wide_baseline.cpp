@@ -2,7 +2,8 @@
   bench_wide_baseline: KLT matching across a wide step (disparities of 50 to 150 px), plain pyramidal
   LK against the search guided by the known motion (KltOptions::guided, issue 35).
 
-    bench_wide_baseline [--data DIR] [--max-features N] [--no-castle]
+    bench_wide_baseline [--data DIR] [--max-features N] [--no-castle] [--min-ncc C] [--ambiguity-margin M]
+                        [--guided-levels L]
 
   Each row is a set of image pairs: the tracker (KltTracker, default options but --max-features and
   `guided`) detects corners in the first image, then tracks them into the second with the pair's
@@ -271,8 +272,12 @@ int main(int argc, char **argv)
   std::string data = "/usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu";
   int max_features = 300;
   bool no_castle = false;
-  bench::CommandLine cli("[--data DIR] [--max-features N] [--no-castle]");
+  KltOptions base; // the search's settings (KltOptions' defaults unless given)
+  bench::CommandLine cli("[--data DIR] [--max-features N] [--no-castle] [--min-ncc C] [--ambiguity-margin M] "
+                         "[--guided-levels L]");
   cli.option("--data", data).option("--max-features", max_features).flag("--no-castle", no_castle);
+  cli.option("--min-ncc", base.min_ncc).option("--ambiguity-margin", base.ambiguity_margin);
+  cli.option("--guided-levels", base.guided_levels);
   if (!cli.parse(argc, argv))
     return 2;
   if (max_features < 1) {
@@ -284,8 +289,11 @@ int main(int argc, char **argv)
     const KltGuided modes[] = {KltGuided::Off, KltGuided::Auto, KltGuided::On};
     std::printf("bench_wide_baseline: KLT across wide steps, plain LK (guided off) against the search along the "
                 "epipolar segment (auto, on); one core\n");
-    std::printf("Reproduce: build/benchmarks/bench_wide_baseline --max-features %d%s\n", max_features,
-                no_castle ? " --no-castle" : "");
+    base.max_features = max_features;
+    base.validate();
+    std::printf("Reproduce: build/benchmarks/bench_wide_baseline --max-features %d --min-ncc %g --ambiguity-margin %g "
+                "--guided-levels %d%s\n",
+                max_features, base.min_ncc, base.ambiguity_margin, base.guided_levels, no_castle ? " --no-castle" : "");
     printHeader();
     bool met = true;
     // (a) the renders.
@@ -307,8 +315,7 @@ int main(int argc, char **argv)
       for (int s = 0; s < kSeeds; ++s)
         pairs.push_back(renderPair(sc.n, sc.d, sc.step, 100u + static_cast<unsigned>(s)));
       for (KltGuided g : modes) {
-        KltOptions ko;
-        ko.max_features = max_features;
+        KltOptions ko = base;
         ko.guided = g;
         Row row;
         for (const Pair &p : pairs)
@@ -358,8 +365,7 @@ int main(int argc, char **argv)
           pairs.push_back(std::move(p));
         }
         for (KltGuided g : modes) {
-          KltOptions ko;
-          ko.max_features = max_features;
+          KltOptions ko = base;
           ko.guided = g;
           Row row;
           for (const Pair &p : pairs)
