@@ -48,8 +48,8 @@ void addKltOptions(CLI::App *sub, KltArgs &args)
   sub->add_option_function<std::string>(
          "--guided", [&args](const std::string &s) { args.klt.guided = kltGuidedFromString(s); },
          "KLT: search each feature's epipolar segment (NCC, then LK; ambiguous matches refused) where plain LK lost "
-         "it or moved it farther than LK follows (auto), for every feature (on: strict, for repeated textures), or "
-         "never (off) [auto]")
+         "it or moved it farther than LK follows, and every feature of a frame where that is most (auto), for every "
+         "feature (on), or never (off) [auto]")
       ->check(CLI::IsMember({"auto", "on", "off"}));
   sub->add_flag("--no-gate", args.no_gate, "KLT: do not gate the tracks with the motion (no epipolar band)");
   sub->add_option("--video", args.video,

@@ -296,17 +296,23 @@ LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options
   std::vector<char> plain_ok(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     plain_ok[i] = !plain_lost(i) && !plain_fb(i) && interior.contains(next[i]) && (!motion || in_band(i, next[i]));
-  // auto searches where plain LK failed a check or moved farther than it follows reliably.
+  // auto searches where plain LK failed a check or moved farther than it follows reliably; where that
+  // is most of the features, the step is wide and plain LK's other tracks are suspect too (locks onto
+  // a wrong corner within its reach): every feature is searched.
   const double reach = lkReachPx(options);
   const auto moved = [&](std::size_t i) { return std::hypot(next[i].x - points[i].x, next[i].y - points[i].y); };
+  std::size_t doubtful = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    doubtful += !plain_ok[i] || moved(i) > reach ? 1 : 0;
+  const bool wide_step = 2 * doubtful > points.size();
   const GuidedSearch guided = guidedSearch(tracker, options, previous, image, points, ids, motion, hints, interior,
-                                           [&](std::size_t i) { return !plain_ok[i] || moved(i) > reach; });
+                                           [&](std::size_t i) { return wide_step || !plain_ok[i] || moved(i) > reach; });
   LiveFeatures kept;
   for (std::size_t i = 0; i < points.size(); ++i) {
     int code = guided.outcome.empty() ? -1 : guided.outcome[i];
     // auto: where the search finds no one match (none, or two: repeated texture, an edge along the
     // line) for a track plain LK lost, it is lost for plain LK's reason, as without the search; a
-    // plain track beyond LK's reach is cut for the search's reason.
+    // plain track it searched (beyond LK's reach, or in a wide step) is cut for the search's reason.
     if (code > static_cast<int>(GuidedCode::Found) && options.guided == KltGuided::Auto && !plain_ok[i])
       code = -1;
     const bool by_guided = code >= 0;

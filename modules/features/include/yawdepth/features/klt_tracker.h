@@ -43,15 +43,16 @@
   - `off`: never (plain pyramidal LK only);
   - `on`: for every feature; its refusals are final (`lost_ambiguous`, `lost_flow`, `lost_fb`);
   - `auto` (default): for a feature whose plain LK track failed a check or moved farther than LK's
-    reach, \f$ 0.25 \cdot window \cdot 2^{levels}\f$ px (42 px by default). Where the search finds
-    one match, it wins; where it finds none or two, a track plain LK lost stays lost (for plain LK's
-    reason), and one plain LK moved beyond its reach is cut (for the search's). A plain track that
-    passed every check within LK's reach is kept unsearched: the search costs nothing on a sequence
-    plain LK follows, but `auto` keeps plain LK's lock onto a copy of a repeated texture (or onto a
-    wrong corner) within its reach, where `on` would have refused or corrected it
-    (bench_wide_baseline: 0.3 % of the tracks gross on wide steps, against 0 % with `on`).
-    (Searching also every plain track whose segment is long, measured: Castle-simu's tracking 3.5x
-    slower, its segments long by min_depth = 0.1 m, for one more point.)
+    reach, \f$ 0.25 \cdot window \cdot 2^{levels}\f$ px (42 px by default); and for every feature of a
+    frame where that is more than half of them (a wide step: plain LK's other tracks are suspect,
+    locks onto a wrong corner or a copy of a repeated texture within its reach). Where the search
+    finds one match, it wins; where it finds none or two, a track plain LK lost stays lost (for plain
+    LK's reason) and a plain track it searched is cut (for the search's). A plain track that passed
+    every check within LK's reach in a frame plain LK mostly follows is kept unsearched: the search
+    costs next to nothing on such a sequence (Castle-simu: 15 searched steps in 40 frames), but such
+    a frame's lock onto a wrong corner stays (Castle-simu frames k, k + 2: 1.6 % of the tracks more
+    than 3 px off, as without the search; 0.4 % with `on`). Searching every plain track whose
+    segment is long instead (min_depth = 0.1 m makes most long): Castle-simu's tracking 3.5x slower.
   Its cost: two NCC strips per searched feature (the segment in the new image, the line in the
   previous one): about 0.6 ms per feature whose segment crosses a 640x480 image, one core
   (bench_wide_baseline prints the time per pair).
