@@ -191,5 +191,54 @@ std::vector<std::pair<GuidedOutcome, cv::Point2f>> guidedMatches(const cv::Mat &
   return out;
 }
 
+double lkReachPx(const KltOptions &options)
+{
+  return 0.25 * options.window * static_cast<double>(1 << options.pyramid_levels);
+}
+
+GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
+                          const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
+                          const KltMotion &motion, const std::map<long, std::pair<double, double>> &hints,
+                          double lo, double hi_u, double hi_v, const std::vector<char> &search)
+{
+  GuidedSearch out;
+  out.outcome.assign(points.size(), GuidedOutcome::NotSearched);
+  out.position.resize(points.size());
+  std::vector<GuidedRequest> requests;
+  std::vector<std::size_t> index;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!search[i])
+      continue;
+    double z_near = options.min_depth, z_far = options.max_depth;
+    const auto hint = hints.find(ids[i]);
+    if (hint != hints.end()) { // depth +- 3 sigma, within [min_depth, max_depth]
+      z_near = std::clamp(hint->second.first - 3 * hint->second.second, options.min_depth, options.max_depth);
+      z_far = std::clamp(hint->second.first + 3 * hint->second.second, z_near, options.max_depth);
+    }
+    Eigen::Vector2d a, b;
+    bool seen = tracker.epipolarSegment(Eigen::Vector2d(points[i].x, points[i].y), motion.cMp, z_near, z_far, a, b);
+    const double span = seen ? (b - a).norm() : 0.0; // before the image cuts it: the self-check's reach
+    seen = seen && clipSegment(a, b, lo, lo, hi_u, hi_v);
+    if (!seen) {
+      out.outcome[i] = GuidedOutcome::OffImage;
+      continue;
+    }
+    requests.push_back({points[i], a, b, span});
+    index.push_back(i);
+  }
+  GuidedSettings gs;
+  gs.window = options.window;
+  gs.min_ncc = options.min_ncc;
+  gs.ambiguity_margin = options.ambiguity_margin;
+  gs.levels = options.guided_levels;
+  gs.forward_backward_px = options.forward_backward_px;
+  const auto found = guidedMatches(previous, image, requests, gs);
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    out.outcome[index[k]] = found[k].first;
+    out.position[index[k]] = found[k].second;
+  }
+  return out;
+}
+
 } // namespace detail
 } // namespace yawdepth

@@ -5,9 +5,12 @@
   scored by NCC against the feature's patch, the ambiguity check, then LK from the best position
   with the forward-backward check.
 */
+#include <map>
+#include <utility>
 #include <vector>
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <yawdepth/features/klt_tracker.h>
 
 namespace yawdepth {
 namespace detail {
@@ -17,6 +20,8 @@ bool clipSegment(Eigen::Vector2d &a, Eigen::Vector2d &b, double lo_u, double lo_
 
 /*! \brief What the guided search did with one feature. */
 enum class GuidedOutcome {
+  NotSearched, //!< left to plain LK
+  OffImage,  //!< no part of the segment is in the image
   Found,     //!< matched, refined and checked forward-backward
   Weak,      //!< no position on the segment correlates with the patch (best NCC under min_ncc)
   Ambiguous, //!< a second peak within the margin of the best, or a lobe longer than the window
@@ -62,6 +67,27 @@ SegmentPeak searchSegment(const cv::Mat &prev, const cv::Mat &next, const cv::Po
 std::vector<std::pair<GuidedOutcome, cv::Point2f>> guidedMatches(const cv::Mat &prev, const cv::Mat &next,
                                                                  const std::vector<GuidedRequest> &requests,
                                                                  const GuidedSettings &settings);
+
+/*! \brief The displacement (px) pyramidal LK follows reliably: a quarter of window x 2^levels (42 px by
+    default). Beyond it plain LK loses its way (bench_wide_baseline); below it plain LK is as good as
+    the guided search and cheaper. */
+double lkReachPx(const KltOptions &options);
+
+/*! \brief The guided search's results, one per feature. */
+struct GuidedSearch {
+  std::vector<GuidedOutcome> outcome; //!< NotSearched for a feature left to plain LK
+  std::vector<cv::Point2f> position;  //!< the refined pixel where Found
+};
+
+/*!
+  \brief The guided search (klt_tracker.h, "Guided matching") for the features `search` marks: each
+  one's segment between min_depth and max_depth (or its depth hint +- 3 sigma, `hints` by id),
+  cut to the image's interior [lo, hi_u] x [lo, hi_v], searched and refined (guidedMatches()).
+*/
+GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
+                          const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
+                          const KltMotion &motion, const std::map<long, std::pair<double, double>> &hints,
+                          double lo, double hi_u, double hi_v, const std::vector<char> &search);
 
 } // namespace detail
 } // namespace yawdepth

@@ -181,89 +181,6 @@ struct LiveFeatures {
   std::vector<long> ids;
 };
 
-/*! \brief The displacement (px) pyramidal LK follows reliably: a quarter of window x 2^levels (42 px by
-    default). Beyond it plain LK loses its way (bench_wide_baseline); below it plain LK is as good as
-    the guided search and cheaper. */
-double lkReachPx(const KltOptions &options)
-{
-  return 0.25 * options.window * static_cast<double>(1 << options.pyramid_levels);
-}
-
-/*! \brief What the guided search did with a feature (GuidedSearch::outcome; -1: not searched). */
-enum class GuidedCode { Found, OffImage, Ambiguous, LostFlow, LostFb };
-
-/*! \brief The guided search's results, one per feature (empty when it did not run). */
-struct GuidedSearch {
-  std::vector<int> outcome; // GuidedCode, or -1 for a feature left to plain LK
-  std::vector<cv::Point2f> position;
-};
-
-/*!
-  \brief The guided search (klt_tracker.h, "Guided matching") for the features that need it: every one
-  with options.guided On, else (Auto) those for which `needs_search` is true.
-*/
-template <class NeedsSearch>
-GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
-                          const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
-                          const KltMotion *motion, const std::map<long, std::pair<double, double>> &hints,
-                          const ImageInterior &interior, NeedsSearch needs_search)
-{
-  GuidedSearch out;
-  if (!motion || options.guided == KltGuided::Off)
-    return out;
-  out.outcome.assign(points.size(), -1);
-  out.position.resize(points.size());
-  std::vector<detail::GuidedRequest> requests;
-  std::vector<std::size_t> index;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (options.guided == KltGuided::Auto && !needs_search(i))
-      continue;
-    double z_near = options.min_depth, z_far = options.max_depth;
-    const auto hint = hints.find(ids[i]);
-    if (hint != hints.end()) { // depth +- 3 sigma, within [min_depth, max_depth]
-      z_near = std::clamp(hint->second.first - 3 * hint->second.second, options.min_depth, options.max_depth);
-      z_far = std::clamp(hint->second.first + 3 * hint->second.second, z_near, options.max_depth);
-    }
-    Eigen::Vector2d a, b;
-    bool seen = tracker.epipolarSegment(Eigen::Vector2d(points[i].x, points[i].y), motion->cMp, z_near, z_far, a, b);
-    const double span = seen ? (b - a).norm() : 0.0; // before the image cuts it: the self-check's reach
-    seen = seen && detail::clipSegment(a, b, interior.lo, interior.lo, interior.hi_u, interior.hi_v);
-    if (!seen) {
-      out.outcome[i] = static_cast<int>(GuidedCode::OffImage);
-      continue;
-    }
-    requests.push_back({points[i], a, b, span});
-    index.push_back(i);
-  }
-  detail::GuidedSettings gs;
-  gs.window = options.window;
-  gs.min_ncc = options.min_ncc;
-  gs.ambiguity_margin = options.ambiguity_margin;
-  gs.levels = options.guided_levels;
-  gs.forward_backward_px = options.forward_backward_px;
-  const auto found = detail::guidedMatches(previous, image, requests, gs);
-  for (std::size_t k = 0; k < index.size(); ++k) {
-    GuidedCode c = GuidedCode::Found;
-    switch (found[k].first) {
-    case detail::GuidedOutcome::Found:
-      break;
-    case detail::GuidedOutcome::Ambiguous:
-      c = GuidedCode::Ambiguous;
-      break;
-    case detail::GuidedOutcome::LostFb:
-      c = GuidedCode::LostFb;
-      break;
-    case detail::GuidedOutcome::Weak:
-    case detail::GuidedOutcome::LostFlow:
-      c = GuidedCode::LostFlow;
-      break;
-    }
-    out.outcome[index[k]] = static_cast<int>(c);
-    out.position[index[k]] = found[k].second;
-  }
-  return out;
-}
-
 /*!
   \brief The features at `points` (ids `ids`) of `previous` followed into `image` by pyramidal
   Lucas-Kanade, forward and backward; those lost (no flow, forward-backward error, border, outside
@@ -299,38 +216,47 @@ LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options
   // auto searches where plain LK failed a check or moved farther than it follows reliably; where that
   // is most of the features, the step is wide and plain LK's other tracks are suspect too (locks onto
   // a wrong corner within its reach): every feature is searched.
-  const double reach = lkReachPx(options);
+  const double reach = detail::lkReachPx(options);
   const auto moved = [&](std::size_t i) { return std::hypot(next[i].x - points[i].x, next[i].y - points[i].y); };
   std::size_t doubtful = 0;
   for (std::size_t i = 0; i < points.size(); ++i)
     doubtful += !plain_ok[i] || moved(i) > reach ? 1 : 0;
   const bool wide_step = 2 * doubtful > points.size();
-  const GuidedSearch guided = guidedSearch(tracker, options, previous, image, points, ids, motion, hints, interior,
-                                           [&](std::size_t i) { return wide_step || !plain_ok[i] || moved(i) > reach; });
+  std::vector<char> search(points.size(), 0);
+  if (motion && options.guided != KltGuided::Off)
+    for (std::size_t i = 0; i < points.size(); ++i)
+      search[i] = options.guided == KltGuided::On || wide_step || !plain_ok[i] || moved(i) > reach;
+  const detail::GuidedSearch guided =
+      motion ? detail::guidedSearch(tracker, options, previous, image, points, ids, *motion, hints, interior.lo,
+                                    interior.hi_u, interior.hi_v, search)
+             : detail::GuidedSearch{std::vector<detail::GuidedOutcome>(points.size()), {}};
   LiveFeatures kept;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    int code = guided.outcome.empty() ? -1 : guided.outcome[i];
+    using detail::GuidedOutcome;
+    GuidedOutcome outcome = guided.outcome[i];
     // auto: where the search finds no one match (none, or two: repeated texture, an edge along the
     // line) for a track plain LK lost, it is lost for plain LK's reason, as without the search; a
     // plain track it searched (beyond LK's reach, or in a wide step) is cut for the search's reason.
-    if (code > static_cast<int>(GuidedCode::Found) && options.guided == KltGuided::Auto && !plain_ok[i])
-      code = -1;
-    const bool by_guided = code >= 0;
+    if (outcome != GuidedOutcome::Found && options.guided == KltGuided::Auto && !plain_ok[i])
+      outcome = GuidedOutcome::NotSearched;
+    const bool by_guided = outcome != GuidedOutcome::NotSearched;
     if (by_guided) {
-      switch (static_cast<GuidedCode>(code)) {
-      case GuidedCode::OffImage:
+      switch (outcome) {
+      case GuidedOutcome::OffImage:
         ++stats.lost_border;
         continue;
-      case GuidedCode::Ambiguous:
+      case GuidedOutcome::Ambiguous:
         ++stats.lost_ambiguous;
         continue;
-      case GuidedCode::LostFb:
+      case GuidedOutcome::LostFb:
         ++stats.lost_fb;
         continue;
-      case GuidedCode::LostFlow:
+      case GuidedOutcome::Weak:
+      case GuidedOutcome::LostFlow:
         ++stats.lost_flow;
         continue;
-      case GuidedCode::Found:
+      case GuidedOutcome::NotSearched:
+      case GuidedOutcome::Found:
         next[i] = guided.position[i];
         break;
       }
