@@ -752,6 +752,187 @@ TEST_CASE("klt: bad input", "[features][klt]")
   CHECK(tracker.track(blank).empty());
 }
 
+TEST_CASE("klt guided: the epipolar segment against a hand computation", "[features][klt]")
+{
+  constexpr double kRoundOff = 1e-9; // px
+  const PlaneScene scene; // f = 600 px, centre (320, 240), no distortion
+  const KltTracker tracker(scene.camera);
+  Eigen::Vector2d near_px, far_px;
+  // Pixel (400, 300): bearing (80/600, 60/600, 1). The camera moved so that cMp's translation is
+  // (-0.1, 0.05, 0.2), no rotation: at depth Z the point is (Z x - 0.1, Z y + 0.05, Z + 0.2).
+  const vpHomogeneousMatrix cMp(-0.1, 0.05, 0.2, 0, 0, 0);
+  REQUIRE(tracker.epipolarSegment(Eigen::Vector2d(400, 300), cMp, 1.0, 4.0, near_px, far_px));
+  // Z = 1: (0.1333 - 0.1, 0.1 + 0.05, 1.2) -> u = 320 + 600 (1/30) / 1.2, v = 240 + 600 (0.15) / 1.2.
+  CHECK(near_px.x() == Approx(320 + 600 * (1.0 / 30) / 1.2).margin(kRoundOff));
+  CHECK(near_px.y() == Approx(240 + 600 * 0.15 / 1.2).margin(kRoundOff));
+  // Z = 4: (0.5333 - 0.1, 0.4 + 0.05, 4.2).
+  CHECK(far_px.x() == Approx(320 + 600 * (4 * 80.0 / 600 - 0.1) / 4.2).margin(kRoundOff));
+  CHECK(far_px.y() == Approx(240 + 600 * 0.45 / 4.2).margin(kRoundOff));
+  // Z = infinity: the bearing itself (no rotation), the pixel it started at.
+  REQUIRE(tracker.epipolarSegment(Eigen::Vector2d(400, 300), cMp, 1.0, std::numeric_limits<double>::infinity(),
+                                  near_px, far_px));
+  CHECK((far_px - Eigen::Vector2d(400, 300)).norm() < kRoundOff);
+  // A point between the two depths is on the segment, and the gate agrees.
+  const Eigen::Vector2d mid(320 + 600 * (2 * 80.0 / 600 - 0.1) / 2.2, 240 + 600 * (0.2 + 0.05) / 2.2);
+  REQUIRE(tracker.epipolarSegment(Eigen::Vector2d(400, 300), cMp, 1.0, 4.0, near_px, far_px));
+  const Eigen::Vector2d ab = far_px - near_px, am = mid - near_px;
+  CHECK(std::abs(ab.x() * am.y() - ab.y() * am.x()) / ab.norm() < kRoundOff);
+  CHECK(am.dot(ab) > 0);
+  CHECK(am.norm() < ab.norm());
+  CHECK(tracker.epipolarDistance(Eigen::Vector2d(400, 300), mid, cMp) < 1e-6);
+  // A pure rotation: the segment is one point, the rotated bearing.
+  const vpHomogeneousMatrix rot(0, 0, 0, 0.0, 0.02, 0.0);
+  REQUIRE(tracker.epipolarSegment(Eigen::Vector2d(400, 300), rot, 0.5, 10.0, near_px, far_px));
+  const vpColVector q = rot * vpColVector({80.0 / 600, 0.1, 1.0, 1.0});
+  const Eigen::Vector2d rotated(320 + 600 * q[0] / q[2], 240 + 600 * q[1] / q[2]);
+  CHECK((near_px - rotated).norm() < kRoundOff);
+  CHECK((far_px - rotated).norm() < kRoundOff);
+  // Turned away (180 degrees about the vertical): no depth in front of the camera.
+  CHECK_FALSE(tracker.epipolarSegment(Eigen::Vector2d(400, 300), vpHomogeneousMatrix(0, 0, 0, 0, M_PI, 0), 0.5,
+                                      std::numeric_limits<double>::infinity(), near_px, far_px));
+  // The options: max_depth above min_depth, a known mode.
+  KltOptions bad;
+  bad.max_depth = bad.min_depth;
+  CHECK_THROWS_AS(bad.validate(), Error);
+  CHECK_THROWS_AS(kltGuidedFromString("sometimes"), Error);
+  CHECK(kltGuidedFromString(toString(KltGuided::On)) == KltGuided::On);
+}
+
+namespace {
+
+/* The tracks of `f2` that continue a feature of `f1`, against the plane's truth: how many, their errors
+   (px); `inside`: the features of f1 whose true position is at least `border` px inside the image. */
+struct WideStep {
+  int inside = 0, kept = 0;
+  std::vector<double> errors;
+  KltStats stats;
+};
+
+WideStep trackWideStep(const PlaneScene &scene, const cv::Mat &im1, const vpHomogeneousMatrix &c2Mc1, KltOptions o,
+                       double hint_depth = 0, double hint_sigma = 0)
+{
+  KltTracker tracker(scene.camera, o);
+  const std::vector<FeatureObservation> f1 = tracker.track(im1);
+  if (hint_sigma > 0)
+    for (const FeatureObservation &f : f1)
+      tracker.setDepthHint(f.id, hint_depth, hint_sigma);
+  KltMotion m;
+  m.cMp = c2Mc1;
+  m.sigma_rot = 1e-4;
+  m.sigma_trans = 1e-4;
+  const std::vector<FeatureObservation> f2 = tracker.track(scene.warp(im1, c2Mc1), &m);
+  WideStep w;
+  w.stats = tracker.lastStats();
+  std::map<long, FeatureObservation> first;
+  for (const FeatureObservation &f : f1) {
+    first[f.id] = f;
+    const Eigen::Vector2d t = scene.map(c2Mc1, f.u, f.v);
+    w.inside += t.x() >= o.border_px && t.y() >= o.border_px && t.x() <= 639 - o.border_px && t.y() <= 479 - o.border_px;
+  }
+  for (const FeatureObservation &f : f2) {
+    const auto it = first.find(f.id);
+    if (it == first.end())
+      continue;
+    const Eigen::Vector2d t = scene.map(c2Mc1, it->second.u, it->second.v);
+    w.errors.push_back(std::hypot(f.u - t.x(), f.v - t.y()));
+    ++w.kept;
+  }
+  return w;
+}
+
+double medianOf(std::vector<double> v)
+{
+  if (v.empty())
+    return std::nan("");
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+} // namespace
+
+TEST_CASE("klt guided: a wide sideways step plain LK loses is tracked along the epipolar segment, sub-pixel",
+          "[features][klt]")
+{
+  constexpr double kPlainKeepsAtMost = 0.3;   // of the features whose truth is in the image
+  constexpr double kGuidedKeepsAtLeast = 0.8; // the same
+  constexpr double kMedianTolPx = 0.15;       // a clean cubic warp of a smooth texture
+  constexpr double kWorstTolPx = 1.0;         // every track sub-pixel
+  const PlaneScene scene;                     // a wall 2 m ahead, f = 600 px
+  const cv::Mat im1 = scene.texture(21);
+  for (const double step : {0.17, 0.5}) { // disparity 600 step / 2: 51 and 150 px
+    CAPTURE(step);
+    const vpHomogeneousMatrix c2Mc1(-step, 0.0, 0.0, 0.0, 0.0, 0.0);
+    KltOptions o;
+    o.max_features = 200;
+    o.guided = KltGuided::Off;
+    const WideStep plain = trackWideStep(scene, im1, c2Mc1, o);
+    REQUIRE(plain.inside >= 100);
+    CHECK(plain.kept <= kPlainKeepsAtMost * plain.inside);
+    const auto gross = [&](const WideStep &w) {
+      return std::count_if(w.errors.begin(), w.errors.end(), [&](double e) { return e >= kWorstTolPx; });
+    };
+    for (const KltGuided g : {KltGuided::Auto, KltGuided::On}) {
+      CAPTURE(toString(g));
+      o.guided = g;
+      const WideStep guided = trackWideStep(scene, im1, c2Mc1, o);
+      CHECK(guided.kept >= kGuidedKeepsAtLeast * guided.inside);
+      CHECK(guided.stats.guided >= kGuidedKeepsAtLeast * guided.inside);
+      CHECK(medianOf(guided.errors) < kMedianTolPx);
+      // Every track sub-pixel: auto too, as plain LK lost most features (a wide step: every feature
+      // searched, plain LK's locks onto a wrong corner within its reach corrected).
+      CHECK(*std::max_element(guided.errors.begin(), guided.errors.end()) < kWorstTolPx);
+      CHECK(gross(guided) <= gross(plain));
+    }
+    // A depth hint at the truth (2 m +- 3 x 5 cm) keeps them as well; one at 0.5 m +- 3 x 1 cm
+    // searches where they are not, and keeps (almost) none.
+    o.guided = KltGuided::On;
+    const WideStep hinted = trackWideStep(scene, im1, c2Mc1, o, 2.0, 0.05);
+    CHECK(hinted.kept >= kGuidedKeepsAtLeast * hinted.inside);
+    CHECK(*std::max_element(hinted.errors.begin(), hinted.errors.end()) < kWorstTolPx);
+    const WideStep wrong = trackWideStep(scene, im1, c2Mc1, o, 0.5, 0.01);
+    CHECK(wrong.kept <= 0.05 * wrong.inside);
+  }
+}
+
+TEST_CASE("klt guided: a texture repeated along the epipolar line is refused, never mismatched", "[features][klt]")
+{
+  constexpr double kRefusedAtLeast = 0.8; // on: of the features whose truth is in view; auto: of plain LK's tracks
+  constexpr double kMatchTolPx = 1.0;     // a kept track is the right one: within a pixel of the truth
+  constexpr int kPeriod = 24;             // px: the texture repeats along x
+  const PlaneScene scene;
+  // One 24-px-wide column of smoothed noise, repeated across the image: every patch has copies 24 px
+  // apart along the (horizontal) epipolar lines of a sideways step.
+  cv::Mat noise(480, kPeriod, CV_32F), tile, row;
+  cv::RNG rng(5);
+  rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
+  cv::GaussianBlur(noise, tile, cv::Size(0, 0), 2.0);
+  cv::normalize(tile, tile, 0, 255, cv::NORM_MINMAX);
+  cv::repeat(tile, 1, 640 / kPeriod + 1, row);
+  cv::Mat im1;
+  row(cv::Rect(0, 0, 640, 480)).convertTo(im1, CV_8U);
+  const vpHomogeneousMatrix c2Mc1(-0.2, 0.0, 0.0, 0.0, 0.0, 0.0); // 60 px of disparity
+  KltOptions o;
+  o.max_features = 200;
+  o.guided = KltGuided::Off;
+  const WideStep plain = trackWideStep(scene, im1, c2Mc1, o);
+  REQUIRE(plain.inside >= 50);
+  const auto wrong = [&](const WideStep &w) {
+    return std::count_if(w.errors.begin(), w.errors.end(), [&](double e) { return e >= kMatchTolPx; });
+  };
+  // Plain LK locks onto copies within its reach (12 px away, where the truth is 60): wrong tracks.
+  std::printf("repeated texture, guided off: %ld of %d kept tracks wrong\n", static_cast<long>(wrong(plain)),
+              plain.kept);
+  // on refuses every feature; auto too, as plain LK lost or overreached most features (a wide step:
+  // every feature searched, its refusals final for the tracks plain LK passed).
+  for (const KltGuided g : {KltGuided::Auto, KltGuided::On}) {
+    CAPTURE(toString(g));
+    o.guided = g;
+    const WideStep w = trackWideStep(scene, im1, c2Mc1, o);
+    CHECK(w.stats.lost_ambiguous >= kRefusedAtLeast * (g == KltGuided::On ? w.inside : plain.kept));
+    CHECK(wrong(w) == 0);
+  }
+}
+
 namespace {
 
 // Six frames of the textured plane, the camera 5 mm further sideways each time.

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <unistd.h>
@@ -33,6 +34,23 @@ void addKltOptions(CLI::App *sub, KltArgs &args)
   sub->add_option("--gate-sigmas", args.klt.gate_sigmas, "KLT: half-width of the epipolar band (sigmas)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  sub->add_option("--max-depth", args.klt.max_depth,
+                  "KLT: the farthest a tracked point can be (m, above --min-depth; inf: no limit), for the guided search")
+      ->check(CLI::Validator(
+          [](std::string &s) {
+            char *end = nullptr;
+            const double v = std::strtod(s.c_str(), &end);
+            return end != s.c_str() && *end == '\0' && v > 0 ? std::string()
+                                                             : "must be a positive number or inf, not " + s;
+          },
+          "POSITIVE|inf"))
+      ->capture_default_str();
+  sub->add_option_function<std::string>(
+         "--guided", [&args](const std::string &s) { args.klt.guided = kltGuidedFromString(s); },
+         "KLT: search each feature's epipolar segment (NCC, then LK; ambiguous matches refused) where plain LK lost "
+         "it or moved it farther than LK follows, and every feature of a frame where that is most (auto), for every "
+         "feature (on), or never (off) [auto]")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
   sub->add_flag("--no-gate", args.no_gate, "KLT: do not gate the tracks with the motion (no epipolar band)");
   sub->add_option("--video", args.video,
                   "Take the images from a video file (ViSP's vpVideoReader) or a numbered image sequence (one %d or %0Nd, "
@@ -106,7 +124,8 @@ std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const
     std::cerr << "track: " << n << " frames, " << t.detected << " features detected, " << seq.tracks.size()
               << " tracked over 2 frames or more; cut: " << t.lost_epipolar << " outside the epipolar band, "
               << t.lost_fb << " forward-backward, " << t.lost_flow << " lost, " << t.lost_border
-              << " left the image\n";
+              << " left the image" << (t.lost_ambiguous ? ", " + std::to_string(t.lost_ambiguous) + " ambiguous" : "")
+              << (t.guided ? "; " + std::to_string(t.guided) + " steps by the guided search" : "") << "\n";
   if (gray)
     *gray = std::move(seq.gray);
   if (last_image)

@@ -57,7 +57,8 @@ struct KltArgs {
   matches.
 */
 std::vector<NamedPath> imageInputs(const MotionLog &motion, const std::string &video);
-/*! \brief Register --max-features, --min-distance, --track-sigma-px, --min-depth, --gate-sigmas, --no-gate, --video. */
+/*! \brief Register --max-features, --min-distance, --track-sigma-px, --min-depth, --gate-sigmas, --max-depth, --guided,
+    --no-gate, --video. */
 void addKltOptions(CLI::App *sub, KltArgs &args);
 /*!
   \brief KLT tracks (KltTracker) through the images of a motion log, each frame gated by the motion's

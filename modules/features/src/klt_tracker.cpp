@@ -8,7 +8,33 @@
 #include <string>
 #include <yawdepth/error.h>
 
+#include "epipolar_search.h"
+
 namespace yawdepth {
+
+const char *toString(KltGuided g)
+{
+  switch (g) {
+  case KltGuided::Off:
+    return "off";
+  case KltGuided::On:
+    return "on";
+  case KltGuided::Auto:
+    break;
+  }
+  return "auto";
+}
+
+KltGuided kltGuidedFromString(const std::string &s)
+{
+  if (s == "off")
+    return KltGuided::Off;
+  if (s == "auto")
+    return KltGuided::Auto;
+  if (s == "on")
+    return KltGuided::On;
+  throw Error("klt: guided must be off, auto or on, not '" + s + "'");
+}
 
 void KltOptions::validate() const
 {
@@ -36,6 +62,14 @@ void KltOptions::validate() const
     throw Error("klt: sigma_px must be finite and positive");
   if (!(std::isfinite(min_depth) && min_depth > 0))
     throw Error("klt: min_depth must be finite and positive");
+  if (!(max_depth > min_depth)) // infinity allowed: the point at infinity
+    throw Error("klt: max_depth must be greater than min_depth");
+  if (!(std::isfinite(min_ncc) && min_ncc > -1 && min_ncc < 1))
+    throw Error("klt: min_ncc must be in (-1, 1)");
+  if (!(std::isfinite(ambiguity_margin) && ambiguity_margin >= 0 && ambiguity_margin < 2))
+    throw Error("klt: ambiguity_margin must be in [0, 2)");
+  if (guided_levels < 0 || guided_levels > 8)
+    throw Error("klt: guided_levels must be in [0, 8]");
 }
 
 KltTracker::KltTracker(const CameraModel &camera, const KltOptions &options) : camera_(camera), options_(options)
@@ -43,6 +77,58 @@ KltTracker::KltTracker(const CameraModel &camera, const KltOptions &options) : c
   options_.validate();
   if (camera_.width() == 0 || camera_.height() == 0)
     throw Error("klt: the camera needs an image size");
+}
+
+bool KltTracker::epipolarSegment(const Eigen::Vector2d &uv_prev, const vpHomogeneousMatrix &cMp, double z_near,
+                                 double z_far, Eigen::Vector2d &near_px, Eigen::Vector2d &far_px) const
+{
+  Eigen::Vector2d mp;
+  if (!camera_.undistort(uv_prev, mp) || !(z_near > 0) || !(z_far >= z_near))
+    return false;
+  const Eigen::Isometry3d M = toIsometry(cMp);
+  const Eigen::Vector3d t = M.translation();
+  const Eigen::Vector3d dir = M.linear() * Eigen::Vector3d(mp.x(), mp.y(), 1.0);
+  constexpr double kFront = 1e-9;
+  // The far end: the point at infinity (the bearing rotated) or the point at z_far.
+  const Eigen::Vector3d pf = std::isinf(z_far) ? dir : Eigen::Vector3d(dir * z_far + t);
+  if (pf.z() <= kFront)
+    return false;
+  double zn = z_near;
+  if (t.z() + dir.z() * zn <= kFront) // the near end behind the camera: start where the ray comes in front
+    zn = (kFront - t.z()) / dir.z() * 1.001; // dir.z() > 0 here: the far end is in front
+  const Eigen::Vector3d pn = dir * zn + t;
+  Eigen::Vector2d a(pn.x() / pn.z(), pn.y() / pn.z()), b(pf.x() / pf.z(), pf.y() / pf.z());
+  // Cut in normalised coordinates (where the path is straight) to a box around the view, so that the
+  // distortion model is never asked about points far outside the image.
+  const double w = camera_.width(), h = camera_.height();
+  double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
+  for (const Eigen::Vector2d &c : {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0), Eigen::Vector2d(0, h),
+                                   Eigen::Vector2d(w, h), Eigen::Vector2d(w / 2, 0), Eigen::Vector2d(w / 2, h),
+                                   Eigen::Vector2d(0, h / 2), Eigen::Vector2d(w, h / 2)}) {
+    Eigen::Vector2d m;
+    if (!camera_.undistort(c, m))
+      continue;
+    lo_x = std::min(lo_x, m.x());
+    hi_x = std::max(hi_x, m.x());
+    lo_y = std::min(lo_y, m.y());
+    hi_y = std::max(hi_y, m.y());
+  }
+  const double mx = 0.1 * (hi_x - lo_x), my = 0.1 * (hi_y - lo_y);
+  if (!(lo_x < hi_x) || !detail::clipSegment(a, b, lo_x - mx, lo_y - my, hi_x + mx, hi_y + my))
+    return false;
+  near_px = camera_.project(a);
+  far_px = camera_.project(b);
+  return near_px.allFinite() && far_px.allFinite();
+}
+
+void KltTracker::setDepthHint(long id, double depth, double sigma)
+{
+  if (!(std::isfinite(depth) && depth > 0 && std::isfinite(sigma) && sigma > 0)) {
+    hints_.erase(id);
+    return;
+  }
+  if (std::find(ids_.begin(), ids_.end(), id) != ids_.end())
+    hints_[id] = {depth, sigma};
 }
 
 double KltTracker::bandHalfWidth(const KltMotion &motion) const
@@ -102,7 +188,8 @@ struct LiveFeatures {
 */
 LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
                             const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
-                            const KltMotion *motion, const ImageInterior &interior, KltStats &stats)
+                            const KltMotion *motion, const std::map<long, std::pair<double, double>> &hints,
+                            const ImageInterior &interior, KltStats &stats)
 {
   const cv::Size win(options.window, options.window);
   const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
@@ -112,13 +199,71 @@ LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options
   cv::calcOpticalFlowPyrLK(previous, image, points, next, status, err, win, options.pyramid_levels, term);
   cv::calcOpticalFlowPyrLK(image, previous, next, back, status_back, err_back, win, options.pyramid_levels, term);
   const double band = motion ? tracker.bandHalfWidth(*motion) : 0.0;
+  const auto in_band = [&](std::size_t i, const cv::Point2f &p) {
+    const double d = tracker.epipolarDistance(Eigen::Vector2d(points[i].x, points[i].y), Eigen::Vector2d(p.x, p.y),
+                                              motion->cMp);
+    return d <= band; // NaN: no depth in front of both cameras explains the match
+  };
+  const auto plain_lost = [&](std::size_t i) {
+    return !status[i] || !status_back[i] || !std::isfinite(next[i].x) || !std::isfinite(next[i].y);
+  };
+  const auto plain_fb = [&](std::size_t i) {
+    return std::hypot(back[i].x - points[i].x, back[i].y - points[i].y) > options.forward_backward_px;
+  };
+  std::vector<char> plain_ok(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    plain_ok[i] = !plain_lost(i) && !plain_fb(i) && interior.contains(next[i]) && (!motion || in_band(i, next[i]));
+  // auto searches where plain LK failed a check or moved farther than it follows reliably; where that
+  // is most of the features, the step is wide and plain LK's other tracks are suspect too (locks onto
+  // a wrong corner within its reach): every feature is searched.
+  const double reach = detail::lkReachPx(options);
+  const auto moved = [&](std::size_t i) { return std::hypot(next[i].x - points[i].x, next[i].y - points[i].y); };
+  std::size_t doubtful = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    doubtful += !plain_ok[i] || moved(i) > reach ? 1 : 0;
+  const bool wide_step = 2 * doubtful > points.size();
+  std::vector<char> search(points.size(), 0);
+  if (motion && options.guided != KltGuided::Off)
+    for (std::size_t i = 0; i < points.size(); ++i)
+      search[i] = options.guided == KltGuided::On || wide_step || !plain_ok[i] || moved(i) > reach;
+  const detail::GuidedSearch guided =
+      motion ? detail::guidedSearch(tracker, options, previous, image, points, ids, *motion, hints, interior.lo,
+                                    interior.hi_u, interior.hi_v, search)
+             : detail::GuidedSearch{std::vector<detail::GuidedOutcome>(points.size()), {}};
   LiveFeatures kept;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!status[i] || !status_back[i] || !std::isfinite(next[i].x) || !std::isfinite(next[i].y)) {
+    using detail::GuidedOutcome;
+    GuidedOutcome outcome = guided.outcome[i];
+    // auto: where the search finds no one match (none, or two: repeated texture, an edge along the
+    // line) for a track plain LK lost, it is lost for plain LK's reason, as without the search; a
+    // plain track it searched (beyond LK's reach, or in a wide step) is cut for the search's reason.
+    if (outcome != GuidedOutcome::Found && options.guided == KltGuided::Auto && !plain_ok[i])
+      outcome = GuidedOutcome::NotSearched;
+    const bool by_guided = outcome != GuidedOutcome::NotSearched;
+    if (by_guided) {
+      switch (outcome) {
+      case GuidedOutcome::OffImage:
+        ++stats.lost_border;
+        continue;
+      case GuidedOutcome::Ambiguous:
+        ++stats.lost_ambiguous;
+        continue;
+      case GuidedOutcome::LostFb:
+        ++stats.lost_fb;
+        continue;
+      case GuidedOutcome::Weak:
+      case GuidedOutcome::LostFlow:
+        ++stats.lost_flow;
+        continue;
+      case GuidedOutcome::NotSearched:
+      case GuidedOutcome::Found:
+        next[i] = guided.position[i];
+        break;
+      }
+    } else if (plain_lost(i)) {
       ++stats.lost_flow;
       continue;
-    }
-    if (std::hypot(back[i].x - points[i].x, back[i].y - points[i].y) > options.forward_backward_px) {
+    } else if (plain_fb(i)) {
       ++stats.lost_fb;
       continue;
     }
@@ -126,16 +271,13 @@ LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options
       ++stats.lost_border;
       continue;
     }
-    if (motion) {
-      const double d = tracker.epipolarDistance(Eigen::Vector2d(points[i].x, points[i].y),
-                                                Eigen::Vector2d(next[i].x, next[i].y), motion->cMp);
-      if (!(d <= band)) { // NaN too: no depth in front of both cameras explains the match
-        ++stats.lost_epipolar;
-        continue;
-      }
+    if (motion && !in_band(i, next[i])) {
+      ++stats.lost_epipolar;
+      continue;
     }
     kept.points.push_back(next[i]);
     kept.ids.push_back(ids[i]);
+    stats.guided += by_guided ? 1 : 0;
   }
   stats.tracked = static_cast<int>(kept.points.size());
   return kept;
@@ -180,7 +322,7 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
 
   LiveFeatures kept;
   if (!points_.empty() && !previous_.empty())
-    kept = followFeatures(*this, options_, previous_, image, points_, ids_, motion, interior, stats_);
+    kept = followFeatures(*this, options_, previous_, image, points_, ids_, motion, hints_, interior, stats_);
 
   // New corners where the tracks thinned out, away from the live ones.
   const int alive = static_cast<int>(kept.points.size());
@@ -204,6 +346,8 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
   }
   points_ = std::move(kept.points);
   ids_ = std::move(kept.ids);
+  for (auto h = hints_.begin(); h != hints_.end();) // a hint lives as long as its feature
+    h = std::binary_search(ids_.begin(), ids_.end(), h->first) ? std::next(h) : hints_.erase(h);
   previous_ = image.clone();
   std::vector<FeatureObservation> out;
   out.reserve(points_.size());
@@ -279,6 +423,8 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
     out.totals.lost_border += st.lost_border;
     out.totals.lost_epipolar += st.lost_epipolar;
     out.totals.detected += st.detected;
+    out.totals.guided += st.guided;
+    out.totals.lost_ambiguous += st.lost_ambiguous;
     d.found = !d.features.empty();
     detections.push_back(std::move(d));
     if (i + 1 == n)

@@ -302,6 +302,11 @@ class KltOptions:
     gate_sigmas: float
     sigma_px: float
     min_depth: float
+    max_depth: float
+    guided: str
+    min_ncc: float
+    ambiguity_margin: float
+    guided_levels: int
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
@@ -311,6 +316,7 @@ class KltTracker:
               sigma_trans: float = 0.0) -> Array: ...
     @property
     def lastStats(self) -> Dict[str, int]: ...
+    def setDepthHint(self, id: int, depth: float, sigma: float) -> None: ...
 
 def trackSequence(camera: CameraModel, rig: YawRig, motion: MotionLog, noise: NoiseModel,
                   options: KltOptions = ..., gate: bool = True,

@@ -25,6 +25,37 @@
   or jumps to a repeated texture leaves this band and is cut rather than averaged into a depth.
   With a camera that does not translate the segment shrinks to a point: the gate is then the
   rotation's prediction.
+
+  Guided matching (issue 35). Pyramidal LK follows a displacement of roughly half its window times
+  \f$2^{levels}\f$ and no more; a wide step (disparities of 50-150 px) loses most tracks. With the
+  motion known, the feature must be on its epipolar segment between the depths `min_depth` and
+  `max_depth` (infinity by default: the rotation's prediction), or within depth +- 3 sigma of the
+  feature's own depth estimate when one is given (setDepthHint()). The guided search samples that
+  segment every pixel (a rectified strip along it), scores each position by the zero-mean normalised
+  cross-correlation (NCC) of a `window` x `window` patch around the feature in the previous image,
+  takes the best (sub-pixel by a parabola), refuses the match when it is weak (NCC under
+  `min_ncc`) or ambiguous (a second, separate peak within `ambiguity_margin` of the best: repeated
+  texture; the best peak's lobe longer than the window: an edge along the line; or such a copy of
+  the patch along the same line in its own image, as far as the segment reaches before the image
+  cuts it: a repeated texture whose other copies the border hides), then refines it by LK started
+  at that position (`guided_levels` pyramid levels) with the forward-backward check (backward LK
+  started at the feature) and the epipolar band as for any track. `guided`:
+  - `off`: never (plain pyramidal LK only);
+  - `on`: for every feature; its refusals are final (`lost_ambiguous`, `lost_flow`, `lost_fb`);
+  - `auto` (default): for a feature whose plain LK track failed a check or moved farther than LK's
+    reach, \f$ 0.25 \cdot window \cdot 2^{levels}\f$ px (42 px by default); and for every feature of a
+    frame where that is more than half of them (a wide step: plain LK's other tracks are suspect,
+    locks onto a wrong corner or a copy of a repeated texture within its reach). Where the search
+    finds one match, it wins; where it finds none or two, a track plain LK lost stays lost (for plain
+    LK's reason) and a plain track it searched is cut (for the search's). A plain track that passed
+    every check within LK's reach in a frame plain LK mostly follows is kept unsearched: the search
+    costs next to nothing on such a sequence (Castle-simu: 15 searched steps in 40 frames), but such
+    a frame's lock onto a wrong corner stays (Castle-simu frames k, k + 2: 1.6 % of the tracks more
+    than 3 px off, as without the search; 0.4 % with `on`). Searching every plain track whose
+    segment is long instead (min_depth = 0.1 m makes most long): Castle-simu's tracking 3.5x slower.
+  Its cost: two NCC strips per searched feature (the segment in the new image, the line in the
+  previous one): about 0.6 ms per feature whose segment crosses a 640x480 image, one core
+  (bench_wide_baseline prints the time per pair).
 */
 #include <functional>
 #include <limits>
@@ -41,6 +72,17 @@
 
 namespace yawdepth {
 
+/*! \brief When KltTracker searches the epipolar segment (see the file). */
+enum class KltGuided {
+  Off,  //!< plain pyramidal LK only
+  Auto, //!< the guided search for long segments and for features plain LK lost
+  On    //!< the guided search for every feature (with a motion)
+};
+/*! \brief "off", "auto", "on". */
+const char *toString(KltGuided g);
+/*! \brief From "off", "auto", "on"; throws yawdepth::Error otherwise. */
+KltGuided kltGuidedFromString(const std::string &s);
+
 /*! \brief Options of KltTracker. */
 struct KltOptions {
   int max_features = 300;            //!< most features alive at once
@@ -55,6 +97,14 @@ struct KltOptions {
   double gate_sigmas = 4;            //!< k: half-width of the epipolar band in sigmas
   double sigma_px = 0.5;             //!< tracker noise per point (px)
   double min_depth = 0.1;            //!< Z_min: the nearest a tracked point can be (m)
+  /*! Z_max: the farthest a tracked point can be (m, > min_depth); infinity (default): the far end of the
+      guided search is the rotation's prediction. Used by the guided search only; the band keeps
+      [min_depth, infinity). */
+  double max_depth = std::numeric_limits<double>::infinity();
+  KltGuided guided = KltGuided::Auto; //!< when to search the epipolar segment (see the file)
+  double min_ncc = 0.7;               //!< guided: the best NCC of an accepted match
+  double ambiguity_margin = 0.1;      //!< guided: refuse when a separate peak is within this NCC of the best
+  int guided_levels = 1;              //!< guided: pyramid levels of the LK refinement from the NCC match
   /*! \brief Throws yawdepth::Error for invalid options. */
   void validate() const;
 };
@@ -74,6 +124,8 @@ struct KltStats {
   int lost_border = 0;      //!< ended: left the image (minus the border)
   int lost_epipolar = 0;    //!< cut: outside the epipolar band
   int detected = 0;         //!< new features
+  int guided = 0;           //!< of `tracked`: continued by the guided search (epipolar segment + NCC + LK)
+  int lost_ambiguous = 0;   //!< cut: the guided search found two matches (repeated texture) or an edge
 };
 
 /*!
@@ -104,6 +156,20 @@ public:
   double epipolarDistance(const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv, const vpHomogeneousMatrix &cMp) const;
   /*! \brief Half-width of the epipolar band (px) for a motion's uncertainty (see the file). */
   double bandHalfWidth(const KltMotion &motion) const;
+  /*!
+    \brief The epipolar segment of `uv_prev` in the current image: the images (observed pixels) of the
+    previous bearing at depth `z_near` and at depth `z_far` (infinity: the rotation's prediction),
+    depths along the previous camera's Z. The near end is moved to where the ray comes in front of the
+    current camera when it would be behind it. False when no part of the segment is in front.
+  */
+  bool epipolarSegment(const Eigen::Vector2d &uv_prev, const vpHomogeneousMatrix &cMp, double z_near, double z_far,
+                       Eigen::Vector2d &near_px, Eigen::Vector2d &far_px) const;
+  /*!
+    \brief The depth of feature `id` in the camera of its last image (m), to narrow its guided search to
+    depth +- 3 sigma (within [min_depth, max_depth]). Optional; kept while the feature lives, replaced
+    by the next call; `sigma` <= 0 or a non-finite depth removes it. Ignored for an id not alive.
+  */
+  void setDepthHint(long id, double depth, double sigma);
 
 private:
   CameraModel camera_;
@@ -113,6 +179,7 @@ private:
   std::vector<long> ids_;
   long next_id_ = 0;
   KltStats stats_;
+  std::map<long, std::pair<double, double>> hints_; // id -> (depth, sigma)
 };
 
 /*! \brief Gray level (0-255) at a sub-pixel position of an 8-bit gray image, bilinear; -1 outside
