@@ -77,7 +77,7 @@ bool costTable(bool quick, std::uint64_t seed)
               "   5 mm forward per frame, points at 2 to 3 m: none leaves the image), K frames in the window; the\n"
               "   median over %d frames after the window filled (addFrame, and estimate() of every feature).\n",
               timed);
-  std::printf("   state = parameters of the dense solve (5 per planar frame: position, heading, yaw; 3 per feature).\n");
+  std::printf("   state = parameters estimated (5 per planar frame: position, heading, yaw; 3 per feature; the prior's\n   auxiliary directions).\n");
   std::printf("%s\n", std::string(78, '-').c_str());
   std::printf("%10s %8s %8s %16s %16s %14s\n", "features", "window", "state", "window (ms)", "estimates (ms)",
               "fused (ms)");

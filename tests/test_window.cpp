@@ -395,6 +395,14 @@ TEST_CASE("window: features appear and vanish, frames without motion or without 
   CHECK(est.estimate(20).status == Status::TooFewFrames);
   for (const Observation &ob : tracks[20].observations)
     CHECK_FALSE(est.isOutlier(20, ob.frame)); // its flags are forgotten too
+  // Frames without any feature until every feature has left the state (free poses, no point).
+  for (int k = 0; k < o.window + 2; ++k) {
+    next.frame += 1;
+    next.x += 0.02;
+    est.addFrame(next, {});
+  }
+  CHECK(est.ids().empty());
+  CHECK(est.stateDimension() > 0);
 }
 
 TEST_CASE("window: a camera that does not move gives no_motion, not a depth", "[window]")

@@ -148,7 +148,8 @@ bool Impl::factor(SchurSystem &s)
   }
   if (s.P > 0) {
     Eigen::MatrixXd S = s.H;
-    S.selfadjointView<Eigen::Lower>().rankUpdate(s.U.transpose(), -1.0);
+    if (N > 0) // (Eigen's rank update divides by its inner size)
+      S.selfadjointView<Eigen::Lower>().rankUpdate(s.U.transpose(), -1.0);
     if (!dampedCholesky(S, s.S))
       return false;
   }

@@ -25,15 +25,19 @@
   information two frames 2 cm apart give a point at 3 m, so that a point without parallax stays finite).
 
   Each frame: the new frame's pose is aligned alone to the state (dead reckoning as the start),
-  then Gauss–Newton runs on the whole window (a dense solve: the prior couples every feature;
-  chord steps reuse the last factorisation while they make progress; it stops when another step
-  would lower the cost by less than `convergence`). Least squares first; when that changes an
+  then Gauss–Newton runs on the whole window (the points eliminated by the Schur complement, a
+  3 x 3 block each, and the reduced system of the poses factorised; chord steps reuse the last
+  factorisation while they make progress; it stops when another step would lower the cost by less
+  than `convergence`). Least squares first; when that changes an
   outlier flag (reprojection error beyond outlier_threshold_px), a Cauchy phase (scale
   robust_threshold_px) runs before the final least squares on the inliers, so that the estimate is
   efficient and the covariance is the inverse of the information. When the window holds more than
   `window` frames, the oldest is marginalised: its factors and the previous prior are linearised
   at the current estimate and the frame (with every feature no later frame of the window
-  observed) is removed by the Schur complement. Every later Jacobian of a frame or feature in the
+  observed) is removed by the Schur complement. The prior holds no feature-feature term: what the
+  removed frames coupled between features is carried by a few auxiliary directions, estimated with
+  the state (the leading directions of that coupling in each feature's own information units;
+  those dropped carry under 1 % of any feature's information). Every later Jacobian of a frame or feature in the
   prior is evaluated at the value it had when it entered the prior (first-estimate Jacobians), so
   that relinearisation cannot make the prior overconfident. Flags of the marginalised observations
   are final. A feature enters the state at its second observation within the window; its start is
@@ -56,8 +60,8 @@
   removed from the state and its last estimate kept (estimate() returns it until forget()); if it
   is observed again it starts anew.
 
-  Cost per frame: O((3N + 5K)^3) for N features in the state and K planar frames (7K for 6-DoF):
-  the dense solve; see docs/accuracy.md's cost table.
+  Cost per frame: linear in the N features in the state, O(N (5K + A)^2) with K planar frames
+  (7K for 6-DoF) and A auxiliary directions (at most 64); see docs/accuracy.md's cost table.
 */
 #include <Eigen/Core>
 #include <deque>
@@ -146,7 +150,8 @@ public:
   int windowFrames() const;
   /*! \brief The estimated motion-log row of a frame still in the window (throws otherwise). */
   MotionSample motion(long frame) const;
-  /*! \brief Parameters currently estimated (the dimension of the dense solve). */
+  /*! \brief Parameters currently estimated: the frames' free components, 3 per feature in the
+      state and the prior's auxiliary directions. */
   int stateDimension() const;
 
 private:
