@@ -5,8 +5,11 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
+#include <set>
 #include <string>
 #include <yawdepth/error.h>
+
+#include "track_checks.h"
 
 namespace yawdepth {
 
@@ -36,6 +39,10 @@ void KltOptions::validate() const
     throw Error("klt: sigma_px must be finite and positive");
   if (!(std::isfinite(min_depth) && min_depth > 0))
     throw Error("klt: min_depth must be finite and positive");
+  if (!(std::isfinite(min_ncc) && min_ncc < 1))
+    throw Error("klt: min_ncc must be finite and under 1 (0 or less: no appearance check)");
+  if (!(std::isfinite(jump_sigmas) && jump_sigmas >= 0))
+    throw Error("klt: jump_sigmas must be finite and non-negative (0: no jump check)");
 }
 
 KltTracker::KltTracker(const CameraModel &camera, const KltOptions &options) : camera_(camera), options_(options)
@@ -181,6 +188,16 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
   LiveFeatures kept;
   if (!points_.empty() && !previous_.empty())
     kept = followFeatures(*this, options_, previous_, image, points_, ids_, motion, interior, stats_);
+  // Still one static point? Appearance and jumps (track_checks.h).
+  appearance_cuts_.clear();
+  {
+    std::map<long, cv::Point2f> previous;
+    for (std::size_t i = 0; i < ids_.size(); ++i)
+      previous.emplace(ids_[i], points_[i]);
+    track_checks::checkTracks(camera_, options_, image, motion, previous, kept.points, kept.ids, state_, next_id_,
+                              stats_, appearance_cuts_);
+    stats_.tracked = static_cast<int>(kept.points.size());
+  }
 
   // New corners where the tracks thinned out, away from the live ones.
   const int alive = static_cast<int>(kept.points.size());
@@ -198,12 +215,21 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
       if (!interior.contains(c) || !std::isfinite(c.x) || !std::isfinite(c.y) || crowded(c))
         continue;
       kept.points.push_back(c);
-      kept.ids.push_back(next_id_++);
+      kept.ids.push_back(next_id_);
+      if (options_.min_ncc > 0) // the appearance check's reference
+        state_[next_id_].reference = track_checks::patchAt(image, c, options_.window);
+      ++next_id_;
       ++stats_.detected;
     }
   }
   points_ = std::move(kept.points);
   ids_ = std::move(kept.ids);
+  if (!state_.empty()) { // forget the features that ended
+    std::vector<long> live = ids_;
+    std::sort(live.begin(), live.end());
+    for (auto it = state_.begin(); it != state_.end();)
+      it = std::binary_search(live.begin(), live.end(), it->first) ? std::next(it) : state_.erase(it);
+  }
   previous_ = image.clone();
   std::vector<FeatureObservation> out;
   out.reserve(points_.size());
@@ -249,6 +275,7 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
   SequenceTracks out;
   std::vector<FrameDetection> detections;
   detections.reserve(n);
+  std::set<long> dropped; // cut for their appearance: the whole track is not one point
   for (std::size_t i = 0; i < n; ++i) {
     const MotionSample &s = samples[i];
     const cv::Mat image = frames(i);
@@ -279,6 +306,9 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
     out.totals.lost_border += st.lost_border;
     out.totals.lost_epipolar += st.lost_epipolar;
     out.totals.detected += st.detected;
+    out.totals.lost_appearance += st.lost_appearance;
+    out.totals.split_jump += st.split_jump;
+    dropped.insert(tracker.lastAppearanceCuts().begin(), tracker.lastAppearanceCuts().end());
     d.found = !d.features.empty();
     detections.push_back(std::move(d));
     if (i + 1 == n)
@@ -287,7 +317,7 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
       progress(i + 1, n);
   }
   for (Track &t : PatternDetector::toTracks(detections))
-    if (t.observations.size() >= 2) // a feature seen once measures nothing
+    if (t.observations.size() >= 2 && dropped.count(t.id) == 0) // a feature seen once measures nothing
       out.tracks.push_back(std::move(t));
   return out;
 }

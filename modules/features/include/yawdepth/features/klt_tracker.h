@@ -55,6 +55,17 @@ struct KltOptions {
   double gate_sigmas = 4;            //!< k: half-width of the epipolar band in sigmas
   double sigma_px = 0.5;             //!< tracker noise per point (px)
   double min_depth = 0.1;            //!< Z_min: the nearest a tracked point can be (m)
+  /*! Appearance check (track_checks.h): a feature whose `window` x `window` patch, after the
+      Lucas-Kanade alignment, has a zero-mean normalised cross-correlation with its patch at
+      detection below this is cut, and trackSequence() drops its whole track (a corner on an
+      occlusion boundary or a T-junction changes as its two sides move with different parallax, and
+      slid in its earlier frames too). 0 (or less): no appearance check. */
+  double min_ncc = 0.9;
+  /*! Jump check (track_checks.h, with a motion): a step whose position along the epipolar line is
+      further than `jump_sigmas` sigmas from what the feature's own earlier steps say (its inverse
+      depth) splits the feature: the track so far ends, the new position starts a new feature (new
+      id). 0: no jump check. */
+  double jump_sigmas = 4.0;
   /*! \brief Throws yawdepth::Error for invalid options. */
   void validate() const;
 };
@@ -74,6 +85,16 @@ struct KltStats {
   int lost_border = 0;      //!< ended: left the image (minus the border)
   int lost_epipolar = 0;    //!< cut: outside the epipolar band
   int detected = 0;         //!< new features
+  int lost_appearance = 0;  //!< cut: its patch no longer matches its patch at detection (min_ncc); whole track dropped
+  int split_jump = 0;       //!< split: a step inconsistent with its own earlier steps (jump_sigmas); new id
+};
+
+/*! \brief Per-feature state of the track checks (appearance, jumps; see track_checks.h in the
+    module's sources). Internal to KltTracker. */
+struct KltFeatureState {
+  cv::Mat reference;        //!< the feature's patch at detection (32-bit float, `window` x `window`)
+  double rho_weight = 0;    //!< sum of 1 / sigma^2 of its steps' inverse depths (0: no step yet)
+  double rho_weighted = 0;  //!< sum of rho / sigma^2 of its steps' inverse depths
 };
 
 /*!
@@ -95,6 +116,9 @@ public:
   std::vector<FeatureObservation> track(const cv::Mat &image, const KltMotion *motion = nullptr);
   /*! \brief What the last track() call did. */
   const KltStats &lastStats() const { return stats_; }
+  /*! \brief The features the last track() call cut for their appearance (KltOptions::min_ncc): their
+      whole tracks are not one point (trackSequence() drops them). */
+  const std::vector<long> &lastAppearanceCuts() const { return appearance_cuts_; }
   /*!
     \brief Distance (px) of `uv` from the epipolar segment of `uv_prev` (see the file); NaN when the
     segment is not defined (a point that would be behind the camera at every depth).
@@ -113,6 +137,8 @@ private:
   std::vector<long> ids_;
   long next_id_ = 0;
   KltStats stats_;
+  std::map<long, KltFeatureState> state_; // per live feature, for the track checks
+  std::vector<long> appearance_cuts_;
 };
 
 /*! \brief Gray level (0-255) at a sub-pixel position of an 8-bit gray image, bilinear; -1 outside
