@@ -414,10 +414,10 @@ int main(int argc, char **argv)
                 "--max-depth-sigma %g%s\n",
                 a.frames, a.max_features, a.sigma_px, a.method.c_str(), a.max_depth_sigma,
                 a.no_residual_check ? " --no-residual-check" : "");
-    std::printf("%d frames; %zu tracks over 2+ frames (%d detected; cut: %d epipolar, %d forward-backward); %d ok "
-                "points, %d without depth truth (background, occluding edge)\n",
-                a.frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb, ok,
-                no_truth);
+    std::printf("%d frames; %zu tracks over 2+ frames (%d detected; cut: %d epipolar, %d forward-backward, %d "
+                "appearance; %d split at a jump); %d ok points, %d without depth truth (background, occluding edge)\n",
+                a.frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb,
+                seq.totals.lost_appearance, seq.totals.split_jump, ok, no_truth);
     std::printf("tracking %.1f ms/frame, estimation %.1f ms/frame (this machine, one core)\n", track_ms / a.frames,
                 est_ms / a.frames);
     const double px = std::max(0.01, a.sigma_px * est.residuals.noise_scale); // the model's pixel noise at the end

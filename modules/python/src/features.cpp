@@ -61,6 +61,8 @@ py::dict statsOf(const KltStats &s)
   d["lost_border"] = s.lost_border;
   d["lost_epipolar"] = s.lost_epipolar;
   d["detected"] = s.detected;
+  d["lost_appearance"] = s.lost_appearance;
+  d["split_jump"] = s.split_jump;
   return d;
 }
 
@@ -114,7 +116,8 @@ PatternDetector(pattern, options=DetectorOptions()): pattern as the CLI's --patt
   py::class_<KltOptions>(m, "KltOptions", R"doc(
 Options of KltTracker (C++ KltOptions, its defaults): max_features, min_distance (px), quality,
 block_size (px), window (px), pyramid_levels, forward_backward_px, redetect_fraction, border_px,
-gate_sigmas, sigma_px (px), min_depth (m).)doc")
+gate_sigmas, sigma_px (px), min_depth (m), min_ncc (the appearance check; 0: none), jump_sigmas (the
+jump check; 0: none).)doc")
       .def(py::init<>())
       .def_readwrite("max_features", &KltOptions::max_features)
       .def_readwrite("min_distance", &KltOptions::min_distance)
@@ -128,6 +131,8 @@ gate_sigmas, sigma_px (px), min_depth (m).)doc")
       .def_readwrite("gate_sigmas", &KltOptions::gate_sigmas)
       .def_readwrite("sigma_px", &KltOptions::sigma_px)
       .def_readwrite("min_depth", &KltOptions::min_depth)
+      .def_readwrite("min_ncc", &KltOptions::min_ncc)
+      .def_readwrite("jump_sigmas", &KltOptions::jump_sigmas)
       .def("validate", &KltOptions::validate);
 
   py::class_<KltTracker>(m, "KltTracker", R"doc(
@@ -157,7 +162,7 @@ previous camera in the current one, for the epipolar gate, with its 1-sigma rota
 translation (m, per axis); None: no gate. Returns (K, 3) float64 [id, u (px), v (px)].)doc")
       .def_property_readonly("lastStats", [](const KltTracker &t) { return statsOf(t.lastStats()); },
                              "What the last track() did: dict of tracked, lost_flow, lost_fb, lost_border, "
-                             "lost_epipolar, detected.");
+                             "lost_epipolar, detected, lost_appearance, split_jump.");
 
   m.def("trackSequence",
         [](const CameraModel &camera, const YawRig &rig, const MotionLog &motion, const NoiseModel &noise,

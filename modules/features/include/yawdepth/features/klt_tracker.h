@@ -25,6 +25,16 @@
   or jumps to a repeated texture leaves this band and is cut rather than averaged into a depth.
   With a camera that does not translate the segment shrinks to a point: the gate is then the
   rotation's prediction.
+
+  Two more checks that a track is still one static point (track_checks.h in the module's sources):
+  - **appearance** (`min_ncc`): each feature's patch (the LK window) after the step against its patch
+    at detection, by zero-mean NCC; a corner on an occlusion edge or a T-junction changes as its two
+    sides move with different parallax, even when it stays inside the band. Below `min_ncc` the
+    feature is cut and trackSequence() drops its whole track (lastAppearanceCuts()).
+  - **jumps** (`jump_sigmas`, with a motion): a step whose position along the epipolar line says an
+    inverse depth `jump_sigmas` sigmas from the one the feature's earlier steps say (a jump to a
+    repeated texture, to the other side of a junction) splits the feature: the track so far ends,
+    and the new position goes on as a new feature (new id).
 */
 #include <functional>
 #include <limits>
