@@ -228,7 +228,7 @@ PipelineOptions pipelineOptions(Method m, const NoiseModel &noise, bool reestima
 
 int main(int argc, char **argv)
 {
-  int frames = 60, draws = 10, worst = 5, max_features = 300;
+  int frames = 60, draws = 10, worst = 3, max_features = 300;
   double min_ncc = KltOptions().min_ncc, jump_sigmas = KltOptions().jump_sigmas;
   double sigma_odom = 4e-4, sigma_rot = 3e-4;
   bench::CommandLine cli("[--frames N (>= 3)] [--draws D] [--worst K] [--max-features N] [--min-ncc X] [--jump-sigmas K] [--sigma-odom M] [--sigma-rot R]");
