@@ -746,6 +746,16 @@ TEST_CASE("klt: bad input", "[features][klt]")
   bad = KltOptions();
   bad.min_depth = 0;
   CHECK_THROWS_AS(bad.validate(), Error);
+  bad = KltOptions();
+  bad.min_ncc = 1.0; // no patch correlates better than 1: every feature would be cut
+  CHECK_THROWS_AS(bad.validate(), Error);
+  bad.min_ncc = std::nan("");
+  CHECK_THROWS_AS(bad.validate(), Error);
+  bad = KltOptions();
+  bad.jump_sigmas = -1;
+  CHECK_THROWS_AS(bad.validate(), Error);
+  bad.jump_sigmas = 0; // off
+  CHECK_NOTHROW(bad.validate());
   // A blank image has no corners: no features, and no crash on the next frame either.
   const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(128));
   CHECK(tracker.track(blank).empty());

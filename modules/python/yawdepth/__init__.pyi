@@ -302,6 +302,8 @@ class KltOptions:
     gate_sigmas: float
     sigma_px: float
     min_depth: float
+    min_ncc: float
+    jump_sigmas: float
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
