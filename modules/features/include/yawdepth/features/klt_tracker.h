@@ -70,7 +70,7 @@ struct KltOptions {
       detection below this is cut, and trackSequence() drops its whole track (a corner on an
       occlusion boundary or a T-junction changes as its two sides move with different parallax, and
       slid in its earlier frames too). 0 (or less): no appearance check. */
-  double min_ncc = 0.9;
+  double min_ncc = 0.95;
   /*! Jump check (track_checks.h, with a motion): a step whose position along the epipolar line is
       further than `jump_sigmas` sigmas from what the feature's own earlier steps say (its inverse
       depth) splits the feature: the track so far ends, the new position starts a new feature (new
