@@ -174,7 +174,9 @@ using FrameSource = std::function<cv::Mat(std::size_t row)>;
   \brief KLT tracks through a sequence of images with known motion: KltTracker on each image in turn,
   each step gated by the motion's increment, its uncertainty from `noise` (the increment's
   translation, incrementTranslationSigma(); its rotation, sigma_heading or sigma_rot with two yaw
-  readings), unless `gate` is false.
+  readings), unless `gate` is false. A feature the tracker cut for its appearance
+  (KltOptions::min_ncc, KltTracker::lastAppearanceCuts()) is left out whole: its earlier frames slid
+  too. A feature split at a jump is two tracks (two ids).
   \param camera The camera (with its image size). \param rig The rig. \param samples The motion, one row per image.
   \param images The image files (8-bit gray, or converted), one per row.
   \param noise The motion's noise model. \param options Tracking options. \param gate Use the epipolar gate.
