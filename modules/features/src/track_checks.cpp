@@ -19,16 +19,27 @@ cv::Mat patchAt(const cv::Mat &image, const cv::Point2f &p, int size)
 double zeroMeanNcc(const cv::Mat &a, const cv::Mat &b)
 {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-  constexpr double kFlat = 0.5; // gray levels: a patch this flat has no appearance to compare
+  constexpr double kFlatVariance = 0.25; // gray levels^2 (a standard deviation of 0.5): no appearance to compare
   if (a.empty() || a.size() != b.size() || a.type() != CV_32F || b.type() != CV_32F)
     return kNaN;
-  cv::Scalar ma, sa, mb, sb;
-  cv::meanStdDev(a, ma, sa);
-  cv::meanStdDev(b, mb, sb);
-  if (!(sa[0] >= kFlat && sb[0] >= kFlat))
+  // One pass, no allocation: this runs for every live feature in every frame.
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  for (int r = 0; r < a.rows; ++r) {
+    const float *pa = a.ptr<float>(r), *pb = b.ptr<float>(r);
+    for (int c = 0; c < a.cols; ++c) {
+      const double x = pa[c], y = pb[c];
+      sa += x;
+      sb += y;
+      saa += x * x;
+      sbb += y * y;
+      sab += x * y;
+    }
+  }
+  const double n = static_cast<double>(a.total());
+  const double va = saa / n - (sa / n) * (sa / n), vb = sbb / n - (sb / n) * (sb / n);
+  if (!(va >= kFlatVariance && vb >= kFlatVariance))
     return kNaN;
-  const cv::Mat za = a - ma[0], zb = b - mb[0];
-  return za.dot(zb) / (static_cast<double>(a.total()) * sa[0] * sb[0]);
+  return (sab / n - (sa / n) * (sb / n)) / std::sqrt(va * vb);
 }
 
 EpipolarStep epipolarStep(const CameraModel &camera, const Eigen::Vector2d &uv_prev, const Eigen::Vector2d &uv,
@@ -89,11 +100,13 @@ void checkTracks(const CameraModel &camera, const KltOptions &options, const cv:
   if (!appearance && !jumps)
     return;
   std::size_t kept = 0;
+  cv::Mat patch; // the current patch, its buffer reused
   for (std::size_t i = 0; i < points.size(); ++i) {
     const long id = ids[i];
     KltFeatureState &s = state[id];
     if (appearance && !s.reference.empty()) {
-      const double ncc = zeroMeanNcc(s.reference, patchAt(image, points[i], options.window));
+      cv::getRectSubPix(image, cv::Size(options.window, options.window), points[i], patch, CV_32F);
+      const double ncc = zeroMeanNcc(s.reference, patch);
       if (ncc < options.min_ncc) { // NaN (a flat patch) is not evidence of a change
         ++stats.lost_appearance;
         cut.push_back(id);
