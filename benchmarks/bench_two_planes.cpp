@@ -3,7 +3,7 @@
   one textured plane stands in front of another (occlusion boundaries, T-junctions)? (Issue 35.)
 
     bench_two_planes [--frames N] [--draws D] [--worst K] [--max-features N] [--min-ncc X] [--jump-sigmas K]
-                     [--sigma-odom M] [--sigma-rot R]
+                     [--sigma-odom M] [--sigma-rot R] [--sigma-px S]
 
   Data (our render, seeded, no file read): 640x480, f = 600 px, no distortion. A far wall 2.0 m in
   front of the first camera (smoothed uniform noise, blur 2 px) and, in front of it, a near plane at
@@ -19,7 +19,8 @@
 
   Tracking and estimation as `measure --features klt`: trackSequence (KltTracker with the epipolar
   gate and every track check), estimatePoints with the residual check and --max-depth-sigma 0.05,
-  for each method fused, window, refine, the pixel noise model measure's default (0.3 px); and
+  for each method fused, window, refine, the pixel noise model measure's default (0.3 px, --sigma-px);
+  and
   (a) exact motion: the log is the truth, given as 0.1 mm and 0.1 mrad per pose (as bench_klt);
   (b) dead reckoning: each of D seeded draws (seeds 1..D) perturbs the log as odometry does
       (per increment 0.4 mm per axis, heading 0.3 mrad; each yaw reading 0.3 mrad; --sigma-odom,
@@ -230,11 +231,11 @@ int main(int argc, char **argv)
 {
   int frames = 60, draws = 10, worst = 3, max_features = 300;
   double min_ncc = KltOptions().min_ncc, jump_sigmas = KltOptions().jump_sigmas;
-  double sigma_odom = 4e-4, sigma_rot = 3e-4;
-  bench::CommandLine cli("[--frames N (>= 3)] [--draws D] [--worst K] [--max-features N] [--min-ncc X] [--jump-sigmas K] [--sigma-odom M] [--sigma-rot R]");
+  double sigma_odom = 4e-4, sigma_rot = 3e-4, sigma_px = NoiseModel().sigma_px;
+  bench::CommandLine cli("[--frames N (>= 3)] [--draws D] [--worst K] [--max-features N] [--min-ncc X] [--jump-sigmas K] [--sigma-odom M] [--sigma-rot R] [--sigma-px S]");
   cli.option("--frames", frames).option("--draws", draws).option("--worst", worst).option("--max-features", max_features);
   cli.option("--min-ncc", min_ncc).option("--jump-sigmas", jump_sigmas);
-  cli.option("--sigma-odom", sigma_odom).option("--sigma-rot", sigma_rot);
+  cli.option("--sigma-odom", sigma_odom).option("--sigma-rot", sigma_rot).option("--sigma-px", sigma_px);
   if (!cli.parse(argc, argv))
     return 2;
   if (frames < 3 || draws < 1 || worst < 0 || max_features < 1) {
@@ -253,19 +254,21 @@ int main(int argc, char **argv)
                 "photo-like), 640x480, %d frames, 4 mm sideways and 1.5 mrad pan per frame\n",
                 frames);
     std::printf("Reproduce: build/benchmarks/bench_two_planes --frames %d --draws %d --worst %d --max-features %d "
-                "--min-ncc %g --jump-sigmas %g --sigma-odom %g --sigma-rot %g\n",
-                frames, draws, worst, max_features, min_ncc, jump_sigmas, sigma_odom, sigma_rot);
+                "--min-ncc %g --jump-sigmas %g --sigma-odom %g --sigma-rot %g --sigma-px %g\n",
+                frames, draws, worst, max_features, min_ncc, jump_sigmas, sigma_odom, sigma_rot, sigma_px);
 
     NoiseModel exact;
     exact.motion_noise = MotionNoise::Absolute;
     exact.sigma_odom = 1e-4;
     exact.sigma_heading = 1e-4;
     exact.sigma_yaw = 0;
+    exact.sigma_px = sigma_px;
     NoiseModel dr;
     dr.motion_noise = MotionNoise::Increment;
     dr.sigma_odom = sigma_odom;
     dr.sigma_heading = sigma_rot;
     dr.sigma_yaw = sigma_rot;
+    dr.sigma_px = sigma_px;
 
     const Method methods[] = {Method::Fused, Method::Window, Method::Refine};
     std::printf("| motion | method | ok points | largest error / sigma | beyond %.0f sigma | within 2 sigma | RMS rel. "
