@@ -284,10 +284,10 @@ int main(int argc, char **argv)
                 "--max-depth-sigma %g --guided %s%s\n",
                 a.frames, a.max_features, a.sigma_px, a.method.c_str(), a.max_depth_sigma, a.guided.c_str(),
                 a.no_residual_check ? " --no-residual-check" : "");
-    std::printf("%d frames; %zu tracks over 2+ frames (%d detected; cut: %d epipolar, %d forward-backward); %d ok "
-                "points, %d without depth truth (background, occluding edge)\n",
-                a.frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb, ok,
-                no_truth);
+    std::printf("%d frames; %zu tracks over 2+ frames (%d detected; cut: %d epipolar, %d forward-backward, %d "
+                "appearance; %d split at a jump); %d ok points, %d without depth truth (background, occluding edge)\n",
+                a.frames, seq.tracks.size(), seq.totals.detected, seq.totals.lost_epipolar, seq.totals.lost_fb,
+                seq.totals.lost_appearance, seq.totals.split_jump, ok, no_truth);
     if (ko.guided != KltGuided::Off)
       std::printf("guided search: %d steps continued by it; %d cut as ambiguous; %d lost (no match or flow)\n",
                   seq.totals.guided, seq.totals.lost_ambiguous, seq.totals.lost_flow);

@@ -2,7 +2,7 @@
   bench_wide_baseline: KLT matching across a wide step (disparities of 50 to 150 px), plain pyramidal
   LK against the search guided by the known motion (KltOptions::guided, issue 35).
 
-    bench_wide_baseline [--data DIR] [--max-features N] [--no-castle] [--min-ncc C] [--ambiguity-margin M]
+    bench_wide_baseline [--data DIR] [--max-features N] [--no-castle] [--guided-min-ncc C] [--ambiguity-margin M]
                         [--guided-levels L]
 
   Each row is a set of image pairs: the tracker (KltTracker, default options but --max-features and
@@ -273,10 +273,10 @@ int main(int argc, char **argv)
   int max_features = 300;
   bool no_castle = false;
   KltOptions base; // the search's settings (KltOptions' defaults unless given)
-  bench::CommandLine cli("[--data DIR] [--max-features N] [--no-castle] [--min-ncc C] [--ambiguity-margin M] "
+  bench::CommandLine cli("[--data DIR] [--max-features N] [--no-castle] [--guided-min-ncc C] [--ambiguity-margin M] "
                          "[--guided-levels L]");
   cli.option("--data", data).option("--max-features", max_features).flag("--no-castle", no_castle);
-  cli.option("--min-ncc", base.min_ncc).option("--ambiguity-margin", base.ambiguity_margin);
+  cli.option("--guided-min-ncc", base.guided_min_ncc).option("--ambiguity-margin", base.ambiguity_margin);
   cli.option("--guided-levels", base.guided_levels);
   if (!cli.parse(argc, argv))
     return 2;
@@ -291,9 +291,9 @@ int main(int argc, char **argv)
                 "epipolar segment (auto, on); one core\n");
     base.max_features = max_features;
     base.validate();
-    std::printf("Reproduce: build/benchmarks/bench_wide_baseline --max-features %d --min-ncc %g --ambiguity-margin %g "
+    std::printf("Reproduce: build/benchmarks/bench_wide_baseline --max-features %d --guided-min-ncc %g --ambiguity-margin %g "
                 "--guided-levels %d%s\n",
-                max_features, base.min_ncc, base.ambiguity_margin, base.guided_levels, no_castle ? " --no-castle" : "");
+                max_features, base.guided_min_ncc, base.ambiguity_margin, base.guided_levels, no_castle ? " --no-castle" : "");
     printHeader();
     bool met = true;
     // (a) the renders.

@@ -746,6 +746,16 @@ TEST_CASE("klt: bad input", "[features][klt]")
   bad = KltOptions();
   bad.min_depth = 0;
   CHECK_THROWS_AS(bad.validate(), Error);
+  bad = KltOptions();
+  bad.min_ncc = 1.0; // no patch correlates better than 1: every feature would be cut
+  CHECK_THROWS_AS(bad.validate(), Error);
+  bad.min_ncc = std::nan("");
+  CHECK_THROWS_AS(bad.validate(), Error);
+  bad = KltOptions();
+  bad.jump_sigmas = -1;
+  CHECK_THROWS_AS(bad.validate(), Error);
+  bad.jump_sigmas = 0; // off
+  CHECK_NOTHROW(bad.validate());
   // A blank image has no corners: no features, and no crash on the next frame either.
   const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(128));
   CHECK(tracker.track(blank).empty());
@@ -1031,6 +1041,173 @@ TEST_CASE("video: bad input is one line, never a crash", "[features][klt]")
   });
   CHECK(what.find("frame 1") != std::string::npos);
   CHECK(what.find("320x240") != std::string::npos);
+}
+
+namespace {
+
+// Two textured planes: a near one (Z = 1 m in the first camera) over u <= kEdgeU of the first image,
+// in front of a far one (Z = 2 m); the camera steps 5 mm sideways per frame. Each image is the two
+// textures warped by their homographies and composited by the near plane's mask (anti-aliased).
+struct TwoPlanes {
+  static constexpr double kEdgeU = 320;
+  PlaneScene near_plane, far_plane;
+  cv::Mat near_texture, far_texture;
+  TwoPlanes()
+  {
+    near_plane.depth = 1.0;
+    far_plane.depth = 2.0;
+    near_texture = near_plane.texture(31);
+    far_texture = far_plane.texture(37);
+  }
+  static vpHomogeneousMatrix pose(int k) { return vpHomogeneousMatrix(-0.005 * k, 0.0, 0.0, 0.0, 0.0, 0.0); }
+  cv::Mat frame(int k) const
+  {
+    cv::Mat mask(480, 640, CV_32F, cv::Scalar(0));
+    mask(cv::Rect(0, 0, static_cast<int>(kEdgeU) + 1, 480)).setTo(1.0);
+    cv::Mat wn, wf, wm;
+    cv::warpPerspective(near_texture, wn, cv::Mat(near_plane.homography(pose(k))), mask.size(), cv::INTER_CUBIC,
+                        cv::BORDER_REFLECT);
+    cv::warpPerspective(far_texture, wf, cv::Mat(far_plane.homography(pose(k))), mask.size(), cv::INTER_CUBIC,
+                        cv::BORDER_REFLECT);
+    cv::warpPerspective(mask, wm, cv::Mat(near_plane.homography(pose(k))), mask.size(), cv::INTER_LINEAR,
+                        cv::BORDER_REPLICATE);
+    cv::Mat fn, ff, out;
+    wn.convertTo(fn, CV_32F);
+    wf.convertTo(ff, CV_32F);
+    cv::Mat composed = fn.mul(wm) + ff.mul(1.0 - wm);
+    composed.convertTo(out, CV_8U);
+    return out;
+  }
+  /* How far (px) a track is from moving as one point of either plane: for each plane, the largest
+     distance of an observation from its first observation carried by that plane's motion; the
+     smaller of the two. */
+  double slide(const Track &t) const
+  {
+    double best = 1e9;
+    for (const PlaneScene *p : {&near_plane, &far_plane}) {
+      const Observation &o0 = t.observations.front();
+      const vpHomogeneousMatrix c0 = pose(static_cast<int>(o0.frame)).inverse();
+      double worst = 0;
+      for (const Observation &o : t.observations) {
+        const Eigen::Vector2d q = p->map(pose(static_cast<int>(o.frame)) * c0, o0.u, o0.v);
+        worst = std::max(worst, std::hypot(o.u - q.x(), o.v - q.y()));
+      }
+      best = std::min(best, worst);
+    }
+    return best;
+  }
+};
+
+} // namespace
+
+TEST_CASE("klt: a corner on an occlusion edge (T-junction) is cut by its appearance, corners on a plane are kept",
+          "[features][klt]")
+{
+  constexpr int kFrames = 16;
+  // A track of one static point stays this close to its plane's motion: measured 0.72 px for a corner
+  // 9 px from the edge whose 21 px LK window takes in a column of the other plane (the NCC hardly
+  // sees it; the Lucas-Kanade alignment is pulled by it).
+  constexpr double kOnePointPx = 1.0;
+  constexpr double kSlidPx = 2.0;     // a T-junction slides 1.5 px per frame: this much is no tracker noise
+  constexpr double kNearEdgePx = 3;   // a corner this close to the edge in its first frame is on the boundary
+  constexpr double kOnPlanePx = 15;   // and this far from it, on one plane (the LK window's half is 10 px)
+  const TwoPlanes scene;
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < kFrames; ++k)
+    frames.push_back(scene.frame(k));
+  const std::vector<MotionSample> log = sidewaysLog(kFrames);
+  const auto run = [&](double min_ncc) {
+    KltOptions o;
+    o.min_ncc = min_ncc;
+    return trackSequence(scene.near_plane.camera, YawRig(), log, [&](std::size_t i) { return frames[i]; },
+                         NoiseModel(), o);
+  };
+  const auto edgeDistance = [&](const Track &t) { // in the first camera, px
+    const Observation &o0 = t.observations.front();
+    return std::abs(o0.u - TwoPlanes::kEdgeU - 0.005 * 600 / 1.0 * static_cast<double>(o0.frame));
+  };
+  // Without the appearance check the scene has tracks that are not one point: corners on the edge.
+  const SequenceTracks unchecked = run(0.0);
+  double worst_unchecked = 0;
+  int on_edge_unchecked = 0;
+  for (const Track &t : unchecked.tracks) {
+    worst_unchecked = std::max(worst_unchecked, scene.slide(t));
+    on_edge_unchecked += edgeDistance(t) < kNearEdgePx && t.observations.size() == kFrames ? 1 : 0;
+  }
+  CHECK(unchecked.totals.lost_appearance == 0);
+  CHECK(worst_unchecked > kSlidPx);
+  CHECK(on_edge_unchecked >= 1);
+  // With it (the default): every track left is one point of one plane, the edge's corners are cut,
+  // and the corners on either plane are kept through every frame.
+  const SequenceTracks checked = run(KltOptions().min_ncc);
+  CHECK(checked.totals.lost_appearance >= 1);
+  int whole_on_plane = 0, whole_on_edge = 0;
+  double worst = 0;
+  for (const Track &t : checked.tracks) {
+    worst = std::max(worst, scene.slide(t));
+    const bool whole = t.observations.size() == kFrames;
+    whole_on_plane += whole && edgeDistance(t) > kOnPlanePx ? 1 : 0;
+    whole_on_edge += whole && edgeDistance(t) < kNearEdgePx ? 1 : 0;
+  }
+  CHECK(worst < kOnePointPx);
+  CHECK(whole_on_edge == 0);
+  int whole_on_plane_unchecked = 0;
+  for (const Track &t : unchecked.tracks)
+    whole_on_plane_unchecked += t.observations.size() == kFrames && edgeDistance(t) > kOnPlanePx ? 1 : 0;
+  CHECK(whole_on_plane >= 100);
+  CHECK(whole_on_plane >= whole_on_plane_unchecked - 5); // the check hardly touches corners on a plane
+}
+
+TEST_CASE("klt: a track that jumps along its epipolar line is split into two features", "[features][klt]")
+{
+  constexpr int kFrames = 8, kJumpFrame = 4;
+  constexpr double kJumpPx = 6;      // along the parallax (as if nearer): inside the epipolar band
+  constexpr double kStepTolPx = 3.5; // a step this far from the plane's motion is a jump
+  const PlaneScene scene;
+  const cv::Mat first = scene.texture(13);
+  const cv::Rect region(220, 140, 200, 200);
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < kFrames; ++k) {
+    cv::Mat f = scene.warp(first, vpHomogeneousMatrix(-0.005 * k, 0.0, 0.0, 0.0, 0.0, 0.0));
+    if (k >= kJumpFrame) { // from here the region's content sits kJumpPx further left
+      const cv::Mat shifted = f(region + cv::Point(static_cast<int>(kJumpPx), 0)).clone();
+      shifted.copyTo(f(region));
+    }
+    frames.push_back(f);
+  }
+  const std::vector<MotionSample> log = sidewaysLog(kFrames);
+  const auto run = [&](double jump_sigmas) {
+    KltOptions o;
+    o.jump_sigmas = jump_sigmas;
+    return trackSequence(scene.camera, YawRig(), log, [&](std::size_t i) { return frames[i]; }, NoiseModel(), o);
+  };
+  // The largest step of any track away from the plane's motion.
+  const auto worstStep = [&](const SequenceTracks &s) {
+    double worst = 0;
+    for (const Track &t : s.tracks)
+      for (std::size_t j = 1; j < t.observations.size(); ++j) {
+        const Observation &a = t.observations[j - 1], &b = t.observations[j];
+        const vpHomogeneousMatrix bMa = vpHomogeneousMatrix(-0.005 * static_cast<double>(b.frame), 0, 0, 0, 0, 0) *
+                                        vpHomogeneousMatrix(-0.005 * static_cast<double>(a.frame), 0, 0, 0, 0, 0).inverse();
+        const Eigen::Vector2d q = scene.map(bMa, a.u, a.v);
+        worst = std::max(worst, std::hypot(b.u - q.x(), b.v - q.y()));
+      }
+    return worst;
+  };
+  const SequenceTracks unsplit = run(0.0);
+  CHECK(unsplit.totals.split_jump == 0);
+  CHECK(worstStep(unsplit) > kJumpPx - 1); // the epipolar band lets the jumps through
+  const SequenceTracks split = run(KltOptions().jump_sigmas);
+  CHECK(split.totals.split_jump >= 10);
+  CHECK(worstStep(split) < kStepTolPx);
+  // The features that jumped go on under new ids: about as many tracks reach the last frame.
+  const auto reachingEnd = [&](const SequenceTracks &s) {
+    int n = 0;
+    for (const Track &t : s.tracks)
+      n += t.observations.back().frame == kFrames - 1 ? 1 : 0;
+    return n;
+  };
+  CHECK(reachingEnd(split) >= reachingEnd(unsplit) - 5);
 }
 
 namespace {

@@ -59,6 +59,7 @@ castle	"$B/benchmarks/bench_castle"
 wide-baseline	"$B/benchmarks/bench_wide_baseline"
 klt-accuracy	"$B/benchmarks/bench_klt" --no-cost
 klt-cost	"$B/benchmarks/bench_klt" --repeat 3 --max-features 340 --no-accuracy
+two-planes	"$B/benchmarks/bench_two_planes"
 import-bag-1gb	benchmarks/bench_import_bag.sh "$Y" 1024
 franka-measure	examples/franka_measure.sh "$Y"
 ros-calibration	/usr/bin/python3 benchmarks/ros_calibration_compare.py --yawdepth "$Y" --data tests/data/franka-eye-in-hand

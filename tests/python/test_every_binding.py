@@ -100,11 +100,12 @@ def test_the_leftovers(tmp_path):
     k.max_features, k.min_distance, k.quality, k.block_size, k.window = 100, 10.0, 0.01, 7, 21
     k.pyramid_levels, k.forward_backward_px, k.redetect_fraction, k.border_px = 3, 0.5, 0.8, 8.0
     k.gate_sigmas, k.sigma_px, k.min_depth = 4.0, 0.5, 0.1
-    k.max_depth, k.min_ncc, k.ambiguity_margin, k.guided_levels = float("inf"), 0.7, 0.1, 1
+    k.max_depth, k.guided_min_ncc, k.ambiguity_margin, k.guided_levels = float("inf"), 0.7, 0.1, 1
     assert k.guided == "auto"
     k.guided = "on"
     with pytest.raises(yawdepth.Error):
         k.guided = "sometimes"
+    k.min_ncc, k.jump_sigmas = 0.9, 4.0
     k.validate()
     tracker = yawdepth.KltTracker(camera, k)
     image = (np.indices((480, 640)).sum(axis=0) % 255).astype(np.uint8)
@@ -114,6 +115,7 @@ def test_the_leftovers(tmp_path):
     second = tracker.track(image, cMp=np.eye(4), sigma_rot=0.001, sigma_trans=0.001)
     assert first.shape[1] == 3 and second.shape[1] == 3
     assert {"guided", "lost_ambiguous"} <= set(tracker.lastStats)
+    assert tracker.lastStats["lost_appearance"] >= 0 and tracker.lastStats["split_jump"] >= 0
     c = yawdepth.CameraCalibrationOptions()
     c.fix_aspect_ratio, c.fix_principal_point, c.distortion, c.try_fisheye = False, False, "k5", False
     c.cv_folds, c.simpler_within, c.zero_tangential, c.drop_outliers = 5, 0.01, False, False

@@ -51,6 +51,16 @@ void addKltOptions(CLI::App *sub, KltArgs &args)
          "it or moved it farther than LK follows, and every feature of a frame where that is most (auto), for every "
          "feature (on), or never (off) [auto]")
       ->check(CLI::IsMember({"auto", "on", "off"}));
+  sub->add_option("--min-ncc", args.klt.min_ncc,
+                  "KLT: cut a feature whose patch's zero-mean NCC with its patch at detection falls below this, and "
+                  "drop its whole track (a corner on an occlusion edge or a T-junction); 0: no appearance check")
+      ->check(CLI::Range(0.0, 0.999))
+      ->capture_default_str();
+  sub->add_option("--jump-sigmas", args.klt.jump_sigmas,
+                  "KLT: split a feature (new id) whose step along its epipolar line is this many sigmas from its own "
+                  "earlier steps; 0: no jump check")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
   sub->add_flag("--no-gate", args.no_gate, "KLT: do not gate the tracks with the motion (no epipolar band)");
   sub->add_option("--video", args.video,
                   "Take the images from a video file (ViSP's vpVideoReader) or a numbered image sequence (one %d or %0Nd, "
@@ -125,7 +135,8 @@ std::vector<Track> kltTracks(const CameraModel &camera, const YawRig &rig, const
               << " tracked over 2 frames or more; cut: " << t.lost_epipolar << " outside the epipolar band, "
               << t.lost_fb << " forward-backward, " << t.lost_flow << " lost, " << t.lost_border
               << " left the image" << (t.lost_ambiguous ? ", " + std::to_string(t.lost_ambiguous) + " ambiguous" : "")
-              << (t.guided ? "; " + std::to_string(t.guided) + " steps by the guided search" : "") << "\n";
+              << ", " << t.lost_appearance << " changed appearance (whole track dropped); split: " << t.split_jump
+              << " jumped" << (t.guided ? "; " + std::to_string(t.guided) + " steps by the guided search" : "") << "\n";
   if (gray)
     *gray = std::move(seq.gray);
   if (last_image)

@@ -228,7 +228,7 @@ GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, 
   }
   GuidedSettings gs;
   gs.window = options.window;
-  gs.min_ncc = options.min_ncc;
+  gs.min_ncc = options.guided_min_ncc;
   gs.ambiguity_margin = options.ambiguity_margin;
   gs.levels = options.guided_levels;
   gs.forward_backward_px = options.forward_backward_px;

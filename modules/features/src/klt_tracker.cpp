@@ -5,10 +5,12 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
+#include <set>
 #include <string>
 #include <yawdepth/error.h>
 
 #include "epipolar_search.h"
+#include "track_checks.h"
 
 namespace yawdepth {
 
@@ -64,12 +66,16 @@ void KltOptions::validate() const
     throw Error("klt: min_depth must be finite and positive");
   if (!(max_depth > min_depth)) // infinity allowed: the point at infinity
     throw Error("klt: max_depth must be greater than min_depth");
-  if (!(std::isfinite(min_ncc) && min_ncc > -1 && min_ncc < 1))
-    throw Error("klt: min_ncc must be in (-1, 1)");
+  if (!(std::isfinite(guided_min_ncc) && guided_min_ncc > -1 && guided_min_ncc < 1))
+    throw Error("klt: guided_min_ncc must be in (-1, 1)");
   if (!(std::isfinite(ambiguity_margin) && ambiguity_margin >= 0 && ambiguity_margin < 2))
     throw Error("klt: ambiguity_margin must be in [0, 2)");
   if (guided_levels < 0 || guided_levels > 8)
     throw Error("klt: guided_levels must be in [0, 8]");
+  if (!(std::isfinite(min_ncc) && min_ncc < 1))
+    throw Error("klt: min_ncc must be finite and under 1 (0 or less: no appearance check)");
+  if (!(std::isfinite(jump_sigmas) && jump_sigmas >= 0))
+    throw Error("klt: jump_sigmas must be finite and non-negative (0: no jump check)");
 }
 
 KltTracker::KltTracker(const CameraModel &camera, const KltOptions &options) : camera_(camera), options_(options)
@@ -323,6 +329,16 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
   LiveFeatures kept;
   if (!points_.empty() && !previous_.empty())
     kept = followFeatures(*this, options_, previous_, image, points_, ids_, motion, hints_, interior, stats_);
+  // Still one static point? Appearance and jumps (track_checks.h).
+  appearance_cuts_.clear();
+  {
+    std::map<long, cv::Point2f> previous;
+    for (std::size_t i = 0; i < ids_.size(); ++i)
+      previous.emplace(ids_[i], points_[i]);
+    track_checks::checkTracks(camera_, options_, image, motion, previous, kept.points, kept.ids, state_, next_id_,
+                              stats_, appearance_cuts_);
+    stats_.tracked = static_cast<int>(kept.points.size());
+  }
 
   // New corners where the tracks thinned out, away from the live ones.
   const int alive = static_cast<int>(kept.points.size());
@@ -340,7 +356,10 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
       if (!interior.contains(c) || !std::isfinite(c.x) || !std::isfinite(c.y) || crowded(c))
         continue;
       kept.points.push_back(c);
-      kept.ids.push_back(next_id_++);
+      kept.ids.push_back(next_id_);
+      if (options_.min_ncc > 0) // the appearance check's reference
+        state_[next_id_].reference = track_checks::patchAt(image, c, options_.window);
+      ++next_id_;
       ++stats_.detected;
     }
   }
@@ -348,6 +367,12 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
   ids_ = std::move(kept.ids);
   for (auto h = hints_.begin(); h != hints_.end();) // a hint lives as long as its feature
     h = std::binary_search(ids_.begin(), ids_.end(), h->first) ? std::next(h) : hints_.erase(h);
+  if (!state_.empty()) { // forget the features that ended
+    std::vector<long> live = ids_;
+    std::sort(live.begin(), live.end());
+    for (auto it = state_.begin(); it != state_.end();)
+      it = std::binary_search(live.begin(), live.end(), it->first) ? std::next(it) : state_.erase(it);
+  }
   previous_ = image.clone();
   std::vector<FeatureObservation> out;
   out.reserve(points_.size());
@@ -393,6 +418,7 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
   SequenceTracks out;
   std::vector<FrameDetection> detections;
   detections.reserve(n);
+  std::set<long> dropped; // cut for their appearance: the whole track is not one point
   for (std::size_t i = 0; i < n; ++i) {
     const MotionSample &s = samples[i];
     const cv::Mat image = frames(i);
@@ -425,6 +451,9 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
     out.totals.detected += st.detected;
     out.totals.guided += st.guided;
     out.totals.lost_ambiguous += st.lost_ambiguous;
+    out.totals.lost_appearance += st.lost_appearance;
+    out.totals.split_jump += st.split_jump;
+    dropped.insert(tracker.lastAppearanceCuts().begin(), tracker.lastAppearanceCuts().end());
     d.found = !d.features.empty();
     detections.push_back(std::move(d));
     if (i + 1 == n)
@@ -433,7 +462,7 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
       progress(i + 1, n);
   }
   for (Track &t : PatternDetector::toTracks(detections))
-    if (t.observations.size() >= 2) // a feature seen once measures nothing
+    if (t.observations.size() >= 2 && dropped.count(t.id) == 0) // a feature seen once measures nothing
       out.tracks.push_back(std::move(t));
   return out;
 }

@@ -178,7 +178,10 @@ namespace {
      modelled variance (so that the motion's stand-in cannot be what made the residuals small), the
      tracks' errors are not correlated (persistent errors hide in the fit), and s0^2 is below 1 by
      more than kEvidence of its standard errors and by more than kReestimate; the pixel variance then
-     the part of s0^2 the pixels explain, the motion's part taken as modelled.
+     the part of s0^2 the pixels explain, the motion's part taken as modelled, s0^2 taken at the upper
+     end of its evidence (s0^2 + kEvidence standard errors), and no change at all when that leaves the
+     pixels no variance (the residuals then say the motion model is too large, not by how much the
+     pixels' is).
    The pixel noise never below kMinPixelNoise. */
 constexpr double kMinPixelNoise = 0.01; // px: no tracker is more precise than this
 constexpr double kReestimate = 1.1;
@@ -216,8 +219,14 @@ Reestimated noiseFromResiduals(const CameraModel &camera, const YawRig &rig, con
   const bool strong = f2 < 1 / (kReestimate * kReestimate) && f2 + kEvidence * c.variance_factor_sigma < 1;
   if (!strong || c.pixel_share < kPixelShareToTighten || c.correlation >= kMaxCorrelationToTighten)
     return out;
-  const double px2 = (f2 - (1 - c.pixel_share)) / c.pixel_share;
-  const double k = std::sqrt(std::max(px2, 0.0));
+  // The residuals bound the pixels' part from above only: take it at the largest s0^2 they do not rule
+  // out (kEvidence standard errors above). When even that leaves the pixels nothing, the residuals are
+  // smaller than the motion's modelled part alone: the motion model is what is too large, and how
+  // small the pixel noise is cannot be told from them (a floor would be a guess): no change.
+  const double px2 = (f2 + kEvidence * c.variance_factor_sigma - (1 - c.pixel_share)) / c.pixel_share;
+  if (!(px2 > 0))
+    return out;
+  const double k = std::sqrt(px2);
   out.noise.sigma_px = std::max(kMinPixelNoise, n.sigma_px * k);
   out.pixel_scale = out.noise.sigma_px / n.sigma_px;
   out.gate_scale = 1 / (out.pixel_scale * out.pixel_scale);

@@ -63,6 +63,8 @@ py::dict statsOf(const KltStats &s)
   d["detected"] = s.detected;
   d["guided"] = s.guided;
   d["lost_ambiguous"] = s.lost_ambiguous;
+  d["lost_appearance"] = s.lost_appearance;
+  d["split_jump"] = s.split_jump;
   return d;
 }
 
@@ -117,7 +119,8 @@ PatternDetector(pattern, options=DetectorOptions()): pattern as the CLI's --patt
 Options of KltTracker (C++ KltOptions, its defaults): max_features, min_distance (px), quality,
 block_size (px), window (px), pyramid_levels, forward_backward_px, redetect_fraction, border_px,
 gate_sigmas, sigma_px (px), min_depth (m), max_depth (m, inf: none), guided ("off", "auto", "on": the search
-along the epipolar segment), min_ncc, ambiguity_margin, guided_levels.)doc")
+along the epipolar segment), guided_min_ncc, ambiguity_margin, guided_levels, min_ncc (the appearance check;
+0: none), jump_sigmas (the jump check; 0: none).)doc")
       .def(py::init<>())
       .def_readwrite("max_features", &KltOptions::max_features)
       .def_readwrite("min_distance", &KltOptions::min_distance)
@@ -135,9 +138,10 @@ along the epipolar segment), min_ncc, ambiguity_margin, guided_levels.)doc")
       .def_property(
           "guided", [](const KltOptions &o) { return std::string(toString(o.guided)); },
           [](KltOptions &o, const std::string &s) { o.guided = kltGuidedFromString(s); })
-      .def_readwrite("min_ncc", &KltOptions::min_ncc)
+      .def_readwrite("guided_min_ncc", &KltOptions::guided_min_ncc)
       .def_readwrite("ambiguity_margin", &KltOptions::ambiguity_margin)
       .def_readwrite("guided_levels", &KltOptions::guided_levels)
+      .def_readwrite("jump_sigmas", &KltOptions::jump_sigmas)
       .def("validate", &KltOptions::validate);
 
   py::class_<KltTracker>(m, "KltTracker", R"doc(
@@ -167,7 +171,8 @@ previous camera in the current one, for the epipolar gate, with its 1-sigma rota
 translation (m, per axis); None: no gate. Returns (K, 3) float64 [id, u (px), v (px)].)doc")
       .def_property_readonly("lastStats", [](const KltTracker &t) { return statsOf(t.lastStats()); },
                              "What the last track() did: dict of tracked, lost_flow, lost_fb, lost_border, "
-                             "lost_epipolar, detected, guided (continued by the guided search), lost_ambiguous.")
+                             "lost_epipolar, detected, guided (continued by the guided search), lost_ambiguous, "
+                             "lost_appearance, split_jump.")
       .def("setDepthHint", &KltTracker::setDepthHint, py::arg("id"), py::arg("depth"), py::arg("sigma"),
            "Depth (m) of live feature `id` in its last camera, to narrow its guided search to depth +- 3 sigma; "
            "sigma <= 0 removes it.");

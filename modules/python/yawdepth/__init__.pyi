@@ -304,9 +304,11 @@ class KltOptions:
     min_depth: float
     max_depth: float
     guided: str
-    min_ncc: float
+    guided_min_ncc: float
     ambiguity_margin: float
     guided_levels: int
+    min_ncc: float
+    jump_sigmas: float
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 

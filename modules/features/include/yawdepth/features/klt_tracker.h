@@ -34,7 +34,7 @@
   segment every pixel (a rectified strip along it), scores each position by the zero-mean normalised
   cross-correlation (NCC) of a `window` x `window` patch around the feature in the previous image,
   takes the best (sub-pixel by a parabola), refuses the match when it is weak (NCC under
-  `min_ncc`) or ambiguous (a second, separate peak within `ambiguity_margin` of the best: repeated
+  `guided_min_ncc`) or ambiguous (a second, separate peak within `ambiguity_margin` of the best: repeated
   texture; the best peak's lobe longer than the window: an edge along the line; or such a copy of
   the patch along the same line in its own image, as far as the segment reaches before the image
   cuts it: a repeated texture whose other copies the border hides), then refines it by LK started
@@ -56,6 +56,15 @@
   Its cost: two NCC strips per searched feature (the segment in the new image, the line in the
   previous one): about 0.6 ms per feature whose segment crosses a 640x480 image, one core
   (bench_wide_baseline prints the time per pair).
+  Two more checks that a track is still one static point (track_checks.h in the module's sources):
+  - **appearance** (`min_ncc`): each feature's patch (the LK window) after the step against its patch
+    at detection, by zero-mean NCC; a corner on an occlusion edge or a T-junction changes as its two
+    sides move with different parallax, even when it stays inside the band. Below `min_ncc` the
+    feature is cut and trackSequence() drops its whole track (lastAppearanceCuts()).
+  - **jumps** (`jump_sigmas`, with a motion): a step whose position along the epipolar line says an
+    inverse depth `jump_sigmas` sigmas from the one the feature's earlier steps say (a jump to a
+    repeated texture, to the other side of a junction) splits the feature: the track so far ends,
+    and the new position goes on as a new feature (new id).
 */
 #include <functional>
 #include <limits>
@@ -102,9 +111,20 @@ struct KltOptions {
       [min_depth, infinity). */
   double max_depth = std::numeric_limits<double>::infinity();
   KltGuided guided = KltGuided::Auto; //!< when to search the epipolar segment (see the file)
-  double min_ncc = 0.7;               //!< guided: the best NCC of an accepted match
+  double guided_min_ncc = 0.7;        //!< guided: the best NCC of an accepted match
   double ambiguity_margin = 0.1;      //!< guided: refuse when a separate peak is within this NCC of the best
   int guided_levels = 1;              //!< guided: pyramid levels of the LK refinement from the NCC match
+  /*! Appearance check (track_checks.h): a feature whose `window` x `window` patch, after the
+      Lucas-Kanade alignment, has a zero-mean normalised cross-correlation with its patch at
+      detection below this is cut, and trackSequence() drops its whole track (a corner on an
+      occlusion boundary or a T-junction changes as its two sides move with different parallax, and
+      slid in its earlier frames too). 0 (or less): no appearance check. */
+  double min_ncc = 0.95;
+  /*! Jump check (track_checks.h, with a motion): a step whose position along the epipolar line is
+      further than `jump_sigmas` sigmas from what the feature's own earlier steps say (its inverse
+      depth) splits the feature: the track so far ends, the new position starts a new feature (new
+      id). 0: no jump check. */
+  double jump_sigmas = 4.0;
   /*! \brief Throws yawdepth::Error for invalid options. */
   void validate() const;
 };
@@ -126,6 +146,16 @@ struct KltStats {
   int detected = 0;         //!< new features
   int guided = 0;           //!< of `tracked`: continued by the guided search (epipolar segment + NCC + LK)
   int lost_ambiguous = 0;   //!< cut: the guided search found two matches (repeated texture) or an edge
+  int lost_appearance = 0;  //!< cut: its patch no longer matches its patch at detection (min_ncc); whole track dropped
+  int split_jump = 0;       //!< split: a step inconsistent with its own earlier steps (jump_sigmas); new id
+};
+
+/*! \brief Per-feature state of the track checks (appearance, jumps; see track_checks.h in the
+    module's sources). Internal to KltTracker. */
+struct KltFeatureState {
+  cv::Mat reference;        //!< the feature's patch at detection (32-bit float, `window` x `window`)
+  double rho_weight = 0;    //!< sum of 1 / sigma^2 of its steps' inverse depths (0: no step yet)
+  double rho_weighted = 0;  //!< sum of rho / sigma^2 of its steps' inverse depths
 };
 
 /*!
@@ -147,6 +177,9 @@ public:
   std::vector<FeatureObservation> track(const cv::Mat &image, const KltMotion *motion = nullptr);
   /*! \brief What the last track() call did. */
   const KltStats &lastStats() const { return stats_; }
+  /*! \brief The features the last track() call cut for their appearance (KltOptions::min_ncc): their
+      whole tracks are not one point (trackSequence() drops them). */
+  const std::vector<long> &lastAppearanceCuts() const { return appearance_cuts_; }
   /*!
     \brief Distance (px) of `uv` from the epipolar segment of `uv_prev` (see the file); NaN when the
     segment is not defined (a point that would be behind the camera at every depth).
@@ -180,6 +213,8 @@ private:
   long next_id_ = 0;
   KltStats stats_;
   std::map<long, std::pair<double, double>> hints_; // id -> (depth, sigma)
+  std::map<long, KltFeatureState> state_; // per live feature, for the track checks
+  std::vector<long> appearance_cuts_;
 };
 
 /*! \brief Gray level (0-255) at a sub-pixel position of an 8-bit gray image, bilinear; -1 outside
@@ -205,7 +240,9 @@ using FrameSource = std::function<cv::Mat(std::size_t row)>;
   \brief KLT tracks through a sequence of images with known motion: KltTracker on each image in turn,
   each step gated by the motion's increment, its uncertainty from `noise` (the increment's
   translation, incrementTranslationSigma(); its rotation, sigma_heading or sigma_rot with two yaw
-  readings), unless `gate` is false.
+  readings), unless `gate` is false. A feature the tracker cut for its appearance
+  (KltOptions::min_ncc, KltTracker::lastAppearanceCuts()) is left out whole: its earlier frames slid
+  too. A feature split at a jump is two tracks (two ids).
   \param camera The camera (with its image size). \param rig The rig. \param samples The motion, one row per image.
   \param images The image files (8-bit gray, or converted), one per row.
   \param noise The motion's noise model. \param options Tracking options. \param gate Use the epipolar gate.

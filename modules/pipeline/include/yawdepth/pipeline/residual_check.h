@@ -57,8 +57,11 @@
     is trusted only for the pixels and only when they hold at least 80 % of the modelled variance,
     s0^2 is below 1/1.1^2 by more than three of its standard errors, and the residuals' correlation is
     under 0.5 (errors that persist from frame to frame hide in the fit): the pixel noise is then made
-    the part of s0^2 the pixels explain, so that a tracker better than the model gets sigmas that say
-    so, and a correct model is never made overconfident. A tighter model does not tighten the gate:
+    the part of s0^2 the pixels explain, s0^2 taken at the upper end of its evidence (plus three
+    standard errors), so that a tracker better than the model gets sigmas that say so, and a correct
+    model is never made overconfident. When even that leaves the pixels no variance (the residuals
+    are smaller than the motion's modelled part alone: the motion model is what is too large), the
+    model is left as given. A tighter model does not tighten the gate:
     what counts as a track that is not one point stays what the model given says.
 
   `paper` and `exact` use only the last two observations, so the rest of their track says nothing
