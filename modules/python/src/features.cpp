@@ -141,6 +141,7 @@ along the epipolar segment), guided_min_ncc, ambiguity_margin, guided_levels, mi
       .def_readwrite("guided_min_ncc", &KltOptions::guided_min_ncc)
       .def_readwrite("ambiguity_margin", &KltOptions::ambiguity_margin)
       .def_readwrite("guided_levels", &KltOptions::guided_levels)
+      .def_readwrite("min_ncc", &KltOptions::min_ncc)
       .def_readwrite("jump_sigmas", &KltOptions::jump_sigmas)
       .def("validate", &KltOptions::validate);
 
