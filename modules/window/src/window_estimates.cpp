@@ -155,7 +155,7 @@ void Impl::ensureCache() const
     const Eigen::Matrix3d Linv = L.triangularView<Eigen::Lower>().solve(Eigen::Matrix3d::Identity());
     p.Ainv = Linv.transpose() * Linv;
     if (sys.P > 0) // Q = Jf A^-1 E - JY = Jf L^-T U - JY
-      Qs.push_back(p.Jf * (Linv.transpose() * sys.U.middleRows<3>(3 * p.i)) - JY);
+      Qs.emplace_back(p.Jf * (Linv.transpose() * sys.U.middleRows<3>(3 * p.i)) - JY);
     pending.push_back(p);
   }
   Eigen::MatrixXd Z(sys.P, 3 * static_cast<Eigen::Index>(Qs.size()));

@@ -187,7 +187,7 @@ struct WindowState {
   double costOf(double s, Phase phase) const;
   static bool observationResidual(const Feature &ft, const Frame &f, const Obs &ob, Eigen::Vector2d &r,
                                   Eigen::Matrix<double, 2, 10> *J);
-  bool observationJacobian(const Feature &ft, const Frame &f, const Frame *fej, const Obs &ob, Eigen::Vector2d &r,
+  bool observationJacobian(const Feature &ft, const Frame &f, const Frame *fj, const Obs &ob, Eigen::Vector2d &r,
                            Eigen::Matrix<double, 2, 10> &J) const;
   Eigen::VectorXd priorDeltaY() const;
   double motionFactors(int only_frame, Fill fill, const std::vector<Frame> &fej_frames, const std::vector<int> &offset,

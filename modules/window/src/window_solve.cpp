@@ -104,7 +104,7 @@ struct NewFrameProblem {
   bool factor() { return dampedCholesky(H, llt); }
   Eigen::VectorXd step(double *gain) const
   {
-    const Eigen::VectorXd dx = llt.solve(-g);
+    Eigen::VectorXd dx = llt.solve(-g);
     *gain = -0.5 * g.dot(dx);
     return dx;
   }
