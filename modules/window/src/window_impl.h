@@ -21,6 +21,7 @@
   Cholesky each: the Schur complement) and factorises only the reduced system: the cost is linear in
   the features. The prior keeps that structure (window_marginalisation.cpp says how).
 */
+#include "information.h"
 #include "refine_model.h"
 #include "window_model.h"
 
