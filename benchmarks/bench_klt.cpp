@@ -40,6 +40,7 @@
 #include <yawdepth/window/stream_estimator.h>
 
 #include "bench_common.h"
+#include "photo_like.h"
 
 using namespace yawdepth;
 using Clock = std::chrono::steady_clock;
@@ -89,7 +90,7 @@ Sequence renderSequence(int frames)
     m.heading = 0.0175 * std::sin(k / 8.0);
     s.motion.push_back(m);
     const vpHomogeneousMatrix cMc0 = wMc(rig, m).inverse() * wMc(rig, s.motion.front());
-    cv::Mat warped, blurred, frame_noise(480, 640, CV_32F), out;
+    cv::Mat warped, blurred, frame_noise(480, 640, CV_32F);
     cv::warpPerspective(texture, warped, cv::Mat(wallHomography(cMc0)), texture.size(), cv::INTER_CUBIC,
                         cv::BORDER_REFLECT);
     cv::GaussianBlur(warped, blurred, cv::Size(0, 0), 0.8);
@@ -97,13 +98,8 @@ Sequence renderSequence(int frames)
     cv::Mat f;
     blurred.convertTo(f, CV_32F);
     f = f.mul(vignetting) + frame_noise;
-    // The camera's response curve (gamma 2.2 on linear light) and a JPEG round trip at quality 85.
-    cv::Mat linear = cv::max(f, 0.0) / 255.0, curved;
-    cv::pow(linear, 1.0 / 2.2, curved);
-    curved.convertTo(out, CV_8U, 255.0);
-    std::vector<unsigned char> jpeg;
-    cv::imencode(".jpg", out, jpeg, {cv::IMWRITE_JPEG_QUALITY, 85});
-    s.images.push_back(cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE));
+    // The camera's response curve and a JPEG round trip (photo_like.h).
+    s.images.push_back(bench::photoFinish(f));
   }
   return s;
 }

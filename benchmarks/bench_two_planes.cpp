@@ -53,6 +53,7 @@
 #include <yawdepth/simulation/scene.h>
 
 #include "bench_common.h"
+#include "photo_like.h"
 
 using namespace yawdepth;
 
@@ -137,16 +138,10 @@ Scene2 renderScene(const CameraModel &camera, int frames)
     cv::Mat ff, fn;
     wf.convertTo(ff, CV_32F);
     wn.convertTo(fn, CV_32F);
-    cv::Mat composed = fn.mul(wm) + ff.mul(1.0 - wm), blurred, frame_noise(480, 640, CV_32F), out;
+    cv::Mat composed = fn.mul(wm) + ff.mul(1.0 - wm), blurred, frame_noise(480, 640, CV_32F);
     cv::GaussianBlur(composed, blurred, cv::Size(0, 0), 0.8);
     rng.fill(frame_noise, cv::RNG::NORMAL, 0.0, 2.0);
-    cv::Mat f = blurred.mul(vignetting) + frame_noise;
-    cv::Mat linear = cv::max(f, 0.0) / 255.0, curved;
-    cv::pow(linear, 1.0 / 2.2, curved);
-    curved.convertTo(out, CV_8U, 255.0);
-    std::vector<unsigned char> jpeg;
-    cv::imencode(".jpg", out, jpeg, {cv::IMWRITE_JPEG_QUALITY, 85});
-    s.images.push_back(cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE));
+    s.images.push_back(bench::photoFinish(blurred.mul(vignetting) + frame_noise));
   }
   return s;
 }

@@ -150,7 +150,7 @@ void Impl::blanketLayout(SchurSystem &s) const
 /* Eliminate the leaving features from the blanket system (exactly: they couple to no other feature). */
 void Impl::eliminateFeatures(SchurSystem &s, const std::vector<long> &leaving) const
 {
-  for (int i = 0; i < s.N(); ++i) {
+  for (int i = 0; s.P > 0 && i < s.N(); ++i) { // without frames or directions, nothing to carry
     if (std::find(leaving.begin(), leaving.end(), s.ids[static_cast<std::size_t>(i)]) == leaving.end())
       continue;
     const Eigen::MatrixXd T = pseudoInverseFactor(Eigen::Matrix3d(s.A.middleRows<3>(3 * i)));
@@ -197,7 +197,7 @@ void Impl::condensePrior(const SchurSystem &s, const std::vector<long> &leaving)
   // its own information (A_i^-1/2 G_i), so that a dropped direction's part of the feature-feature term
   // is at most kAuxTolerance of any feature's own information.
   Eigen::MatrixXd GtG = Eigen::MatrixXd::Zero(G.cols(), G.cols());
-  for (std::size_t k = 0; k < rows.size(); k += 3) {
+  for (std::size_t k = 0; G.cols() > 0 && k < rows.size(); k += 3) {
     const Eigen::MatrixXd Ti = pseudoInverseFactor(Eigen::Matrix3d(s.A.middleRows<3>(rows[k])));
     const Eigen::MatrixXd Gi = Ti.transpose() * G.middleRows(static_cast<Eigen::Index>(k), 3);
     GtG.noalias() += Gi.transpose() * Gi;
@@ -220,8 +220,11 @@ void Impl::condensePrior(const SchurSystem &s, const std::vector<long> &leaving)
     std::copy(ft.p, ft.p + 3, ft.x0);
     ft.D = s.A.middleRows<3>(rows[k]);
     ft.gp = bK.segment<3>(row);
-    ft.B.resize(3, nK + r);
-    ft.B << EK.middleRows<3>(row), Gr.middleRows<3>(row);
+    ft.B.resize(3, nK + r); // (a block of a matrix without columns has no data: not taken)
+    if (nK > 0)
+      ft.B.leftCols(nK) = EK.middleRows<3>(row);
+    if (r > 0)
+      ft.B.rightCols(r) = Gr.middleRows<3>(row);
   }
 }
 
