@@ -58,12 +58,7 @@ struct Sequence {
 /* The wall's homography from the first camera's pixels to the camera at `cMc0`'s. */
 cv::Matx33d wallHomography(const vpHomogeneousMatrix &cMc0)
 {
-  const cv::Matx33d K(kFocal, 0, kU0, 0, kFocal, kV0, 0, 0, 1);
-  cv::Matx33d A;
-  for (unsigned i = 0; i < 3; ++i)
-    for (unsigned j = 0; j < 3; ++j)
-      A(i, j) = cMc0[i][j] + (j == 2 ? cMc0[i][3] / kWallDepth : 0.0);
-  return K * A * K.inv();
+  return bench::planeHomography(cMc0, kWallDepth, kFocal, kU0, kV0);
 }
 
 Sequence renderSequence(int frames)

@@ -71,12 +71,7 @@ constexpr double kSigmaLimit = 5, kCoverLo = 0.90, kCoverHi = 0.98;
    pixels to those of the camera at `cMc0`. */
 cv::Matx33d planeHomography(const vpHomogeneousMatrix &cMc0, double depth)
 {
-  const cv::Matx33d K(kFocal, 0, kU0, 0, kFocal, kV0, 0, 0, 1);
-  cv::Matx33d A;
-  for (unsigned i = 0; i < 3; ++i)
-    for (unsigned j = 0; j < 3; ++j)
-      A(i, j) = cMc0[i][j] + (j == 2 ? cMc0[i][3] / depth : 0.0);
-  return K * A * K.inv();
+  return bench::planeHomography(cMc0, depth, kFocal, kU0, kV0);
 }
 
 cv::Mat texture(std::uint64_t seed, double blur)
