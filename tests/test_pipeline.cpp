@@ -483,13 +483,16 @@ TEST_CASE("residual check: correlated tracker errors raise the sigmas they make 
   }
   const PipelineResult plain = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(kSigma, false, Method::Window));
   const PipelineResult r = estimatePoints(camera, rig, s.measured, s.tracks, residualOptions(kSigma, true, Method::Window));
-  CHECK(r.residuals.correlation > 0.5);
-  CHECK(r.residuals.correlation_scaled > 20);
+  // The correlation measured (the whitened residuals' zero), and window run with it: its own sigmas
+  // are then honest, the floor has little to raise.
+  constexpr double kCorrelationTolerance = 0.1;
+  INFO("correlation measured " << r.residuals.correlation << ", " << r.residuals.correlation_scaled << " raised");
+  CHECK(std::abs(r.residuals.correlation - kRho) < kCorrelationTolerance);
   int ok_plain = 0, ok_checked = 0;
   const double before = depthCoverage(s, plain.points, ok_plain), after = depthCoverage(s, r.points, ok_checked);
   INFO("2-sigma coverage " << before << " (" << ok_plain << " ok) -> " << after << " (" << ok_checked << " ok)");
   CHECK(before < 0.85);
-  CHECK(after >= 0.85);
+  CHECK(after >= 0.90);
   CHECK(ok_checked >= ok_plain - 3);
   // White errors: no correlation found, nothing raised (the first test case's scene).
   const Scene w = residualScene(0.3, 21);

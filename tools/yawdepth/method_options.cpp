@@ -39,6 +39,11 @@ void addMotionNoiseOptions(CLI::App *sub, MethodArgs &args)
                   "Rotation noise per metre travelled (rad/m): wheel slip turning the heading (increment noise only)")
       ->check(FiniteNonNegative)
       ->capture_default_str();
+  sub->add_option("--pixel-correlation", args.noise.pixel_correlation,
+                  "window: correlation of the tracker's errors from one image of a track to the next (AR(1), 0 to 0.99); "
+                  "0: independent, or measured from the residuals when the residual check is on")
+      ->check(CLI::Range(0.0, kMaxPixelCorrelation))
+      ->capture_default_str();
   sub->add_option_function<std::string>(
          "--motion-noise", [&args](const std::string &w) { args.noise.motion_noise = motionNoiseFromString(w); },
          "How the motion log errs: increment (odometry, VIO: --sigma-odom/--sigma-heading/--sigma-rot per increment, "

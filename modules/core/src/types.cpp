@@ -96,6 +96,8 @@ void NoiseModel::validate() const
   checkSigma(odom_per_metre, "odom-per-metre");
   checkSigma(rot_per_radian, "rot-per-radian");
   checkSigma(rot_per_metre, "rot-per-metre");
+  if (!(pixel_correlation >= 0 && pixel_correlation <= kMaxPixelCorrelation))
+    throw Error("pixel-correlation must be in [0, 0.99]");
   if (motion_noise != MotionNoise::Increment && motion_noise != MotionNoise::Absolute)
     throw Error("invalid motion noise model");
   if (motion_noise == MotionNoise::Absolute && (odom_per_metre > 0 || rot_per_radian > 0 || rot_per_metre > 0))

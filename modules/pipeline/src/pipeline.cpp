@@ -156,12 +156,17 @@ void PipelineOptions::validate() const
     throw Error("method window needs a window of at least 2 frames");
   if (threads < 1)
     throw Error("refine needs at least one thread");
+  if (noise.pixel_correlation > 0 && !modelsTrackerCorrelation(method))
+    throw Error("method " + name + " does not model correlated tracker errors (pixel-correlation " +
+                figure(noise.pixel_correlation) + "): use window, or 0");
   residual_check.validate();
   if (!(std::isfinite(max_depth_sigma) && max_depth_sigma >= 0))
     throw Error("the largest relative depth sigma must be finite and non-negative (0: no gate)");
 }
 
 bool methodAvailable(Method m) { return m != Method::Refine || refineAvailable(); }
+
+bool modelsTrackerCorrelation(Method m) { return m == Method::Window; }
 
 Method bestMethod() { return refineAvailable() ? Method::Refine : Method::Fused; }
 
@@ -192,15 +197,44 @@ struct Reestimated {
   NoiseModel noise;
   double pixel_scale = 1; // sigma_px's factor
   double gate_scale = 1;  // the gate at the model given, never tighter
+  bool changed(const NoiseModel &given) const
+  {
+    return pixel_scale != 1.0 || noise.pixel_correlation != given.pixel_correlation;
+  }
 };
+Reestimated pixelNoiseFromResiduals(const ResidualCheckResult &c, const PipelineOptions &options);
+
+/* The tracker's errors' correlation below which a method that models it is run as if they were independent. */
+constexpr double kMinModelledCorrelation = 0.05;
+
+/* The noise model the residuals say: the pixel noise (pixelNoiseFromResiduals) and, for a method that
+   models it and a model that does not set it, the correlation of the tracker's errors along a track
+   (checkResiduals' estimate). */
 Reestimated noiseFromResiduals(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                                const std::vector<Track> &tracks, const PipelineResult &r, const PipelineOptions &options)
 {
-  Reestimated out{options.noise};
   ResidualCheckOptions probe = options.residual_check;
   probe.scale_sigma = false;
   std::vector<PointEstimate> points = r.points; // the probe's gate must not change the result
   const ResidualCheckResult c = checkResiduals(camera, rig, motion, tracks, r.outliers, options.noise, probe, points);
+  Reestimated out = pixelNoiseFromResiduals(c, options);
+  if (modelsTrackerCorrelation(options.method) && options.noise.pixel_correlation == 0 &&
+      options.residual_check.correlated && c.correlation >= kMinModelledCorrelation) {
+    out.noise.pixel_correlation = c.correlation;
+    // The AR(1) model's pixel noise is what its whitened residuals say (their innovations are what
+    // the model weighs), never below the model given.
+    if (c.correlated_variance_factor > 1) {
+      out.pixel_scale = std::max(out.pixel_scale, std::sqrt(c.correlated_variance_factor));
+      out.noise.sigma_px = options.noise.sigma_px * out.pixel_scale;
+    }
+  }
+  return out;
+}
+
+/* The pixel noise the residuals say (the comment above kMinPixelNoise). */
+Reestimated pixelNoiseFromResiduals(const ResidualCheckResult &c, const PipelineOptions &options)
+{
+  Reestimated out{options.noise};
   const double f2 = c.variance_factor;
   if (c.tracks_used < options.residual_check.min_tracks || !(f2 > 0))
     return out;
@@ -313,7 +347,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
     Reestimated model{options.noise};
     if (options.residual_check.reestimate_noise)
       model = noiseFromResiduals(camera, rig, motion, tracks, r, options);
-    if (model.pixel_scale != 1.0) {
+    if (model.changed(options.noise)) {
       PipelineOptions again = options;
       again.noise = model.noise;
       r = runUsable(camera, rig, motion, tracks, again);

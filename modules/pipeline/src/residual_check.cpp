@@ -246,6 +246,7 @@ struct TrackFit {
   std::vector<Eigen::Vector2d> r; // the track's least-squares point's residuals (empty: that fit failed)
   std::vector<Eigen::Matrix<double, 2, 3>> J;
   std::vector<bool> pixel_dominated;
+  std::vector<long> rows; // the observations' motion-log rows
   double pixel_share_sum = 0; // sum over the observations of the pixels' share of their variance
 };
 
@@ -275,6 +276,8 @@ TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motio
     return fit;
   std::sort(used.begin(), used.end(), [](const auto &a, const auto &b) { return a.first < b.first; });
   fit.J.assign(used.size(), Eigen::Matrix<double, 2, 3>::Zero());
+  for (const auto &u : used)
+    fit.rows.push_back(static_cast<long>(u.first));
   fit.pixel_dominated.assign(used.size(), false);
   const double f = std::max(camera.kx(), camera.ky()), var_px = noise.sigma_px * noise.sigma_px;
   double chi2 = 0, sum2 = 0;
@@ -319,31 +322,136 @@ TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motio
   return fit;
 }
 
-/* The tracks' pooled lag-one correlation of consecutive residuals (both axes), over the pairs whose
-   pixel noise dominates, from tracks of at least kMinCorrelationObs observations; 0 with fewer than
-   `min_tracks` such tracks; clamped to [0, kMaxCorrelation]. */
+/*
+  The AR(1) correlation phi of the tracker's errors (NoiseModel::pixel_correlation) the tracks say:
+  the phi under which the tracks' residuals, refitted with that model (generalised least squares,
+  linearised at the least-squares point) and whitened (the first observation as it is, each next one
+  as its innovation, (r_k - a r_k') / sqrt(1 - a^2), a = phi^gap), have no lag-one correlation, pooled
+  over consecutive innovations whose pixel noise dominates, from tracks of at least kMinCorrelationObs
+  observations. The raw residuals' correlation would say less: the fit absorbs the slow part of
+  errors that persist. 0 with fewer than `min_tracks` such tracks; at most kMaxPixelCorrelation.
+*/
 constexpr std::size_t kMinCorrelationObs = 5;
-constexpr double kMaxCorrelation = 0.99;
 
-double pooledCorrelation(const std::vector<TrackFit> &fits, int min_tracks)
+/* The whitened GLS residuals under phi (see above): their lag-one products and squares added to num
+   and den; returns their sum of squares (px^2; NaN when the fit fails). */
+double whitenedCorrelation(const TrackFit &fit, double phi, double &num, double &den)
 {
-  double num = 0, den = 0;
-  int tracks = 0;
+  const std::size_t n = fit.r.size();
+  std::vector<Eigen::Vector2d> wr(n);
+  std::vector<Eigen::Matrix<double, 2, 3>> wJ(n);
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < n; ++k) {
+    const double a = k == 0 || phi <= 0 ? 0.0 : std::pow(phi, static_cast<double>(fit.rows[k] - fit.rows[k - 1]));
+    const double scale = 1.0 / std::sqrt(1.0 - a * a);
+    wr[k] = scale * (fit.r[k] - (k > 0 ? Eigen::Vector2d(a * fit.r[k - 1]) : Eigen::Vector2d::Zero()));
+    wJ[k] = scale * (fit.J[k] - (k > 0 ? Eigen::Matrix<double, 2, 3>(a * fit.J[k - 1]) : Eigen::Matrix<double, 2, 3>::Zero()));
+    H += wJ[k].transpose() * wJ[k];
+    g += wJ[k].transpose() * wr[k];
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0))
+    return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Vector3d delta = ldlt.solve(g);
+  double sum = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    wr[k] -= wJ[k] * delta;
+    sum += wr[k].squaredNorm();
+  }
+  for (std::size_t k = 1; k + 1 < n; ++k) // innovations only (the first has another variance)
+    if (fit.pixel_dominated[k] && fit.pixel_dominated[k + 1]) {
+      num += wr[k].dot(wr[k + 1]);
+      den += 0.5 * (wr[k].squaredNorm() + wr[k + 1].squaredNorm());
+    }
+  return sum;
+}
+
+double trackerCorrelation(const std::vector<TrackFit> &fits, int min_tracks)
+{
+  std::vector<const TrackFit *> used;
   for (const TrackFit &fit : fits) {
     if (fit.r.size() < kMinCorrelationObs)
       continue;
-    bool any = false;
-    for (std::size_t u = 0; u + 1 < fit.r.size(); ++u)
+    for (std::size_t u = 1; u + 1 < fit.r.size(); ++u)
       if (fit.pixel_dominated[u] && fit.pixel_dominated[u + 1]) {
-        num += fit.r[u].dot(fit.r[u + 1]);
-        den += 0.5 * (fit.r[u].squaredNorm() + fit.r[u + 1].squaredNorm());
-        any = true;
+        used.push_back(&fit);
+        break;
       }
-    tracks += any ? 1 : 0;
   }
-  if (tracks < min_tracks || !(den > 0))
+  if (static_cast<int>(used.size()) < min_tracks)
     return 0.0;
-  return std::clamp(num / den, 0.0, kMaxCorrelation);
+  auto correlation = [&](double phi) {
+    double num = 0, den = 0;
+    for (const TrackFit *fit : used)
+      whitenedCorrelation(*fit, phi, num, den);
+    return den > 0 ? num / den : 0.0;
+  };
+  if (!(correlation(0.0) > 0))
+    return 0.0;
+  if (correlation(kMaxPixelCorrelation) > 0)
+    return kMaxPixelCorrelation;
+  double lo = 0, hi = kMaxPixelCorrelation; // correlation(lo) > 0 >= correlation(hi)
+  for (int it = 0; it < 30; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (correlation(mid) > 0 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+struct TrackerErrors {
+  double phi = 0;             // the AR(1) correlation
+  double variance_factor = 0; // the whitened residuals' variance over sigma_px^2 (0: not estimated)
+};
+
+/* The variance factor of the tracks' whitened residuals under phi: the median over the tracks whose
+   every observation's pixel noise dominates of chi2 / median(chi2 with 2N - 3 dof), chi2 their sum
+   of squares over sigma_px^2 (as varianceFactor(): robust to tracks that are not one point). */
+double whitenedVarianceFactor(const std::vector<const TrackFit *> &used, double phi, double sigma_px)
+{
+  std::vector<double> ratios;
+  for (const TrackFit *fit : used) {
+    if (std::find(fit->pixel_dominated.begin(), fit->pixel_dominated.end(), false) != fit->pixel_dominated.end())
+      continue;
+    double num = 0, den = 0;
+    const double sum = whitenedCorrelation(*fit, phi, num, den);
+    const int dof = 2 * static_cast<int>(fit->r.size()) - 3;
+    if (std::isfinite(sum))
+      ratios.push_back(sum / (sigma_px * sigma_px) / chiSquareMedian(dof));
+  }
+  if (ratios.empty())
+    return 0.0;
+  std::nth_element(ratios.begin(), ratios.begin() + static_cast<long>(ratios.size() / 2), ratios.end());
+  return ratios[ratios.size() / 2];
+}
+
+TrackerErrors trackerErrors(const std::vector<TrackFit> &fits, int min_tracks, double sigma_px)
+{
+  TrackerErrors out;
+  out.phi = trackerCorrelation(fits, min_tracks);
+  std::vector<const TrackFit *> used;
+  for (const TrackFit &fit : fits)
+    if (fit.r.size() >= kMinCorrelationObs)
+      used.push_back(&fit);
+  if (out.phi > 0 && static_cast<int>(used.size()) >= min_tracks)
+    out.variance_factor = whitenedVarianceFactor(used, out.phi, sigma_px);
+  return out;
+}
+
+/* A track's own pixel variance over the pooled one (var_px), never below 1: its residuals whitened
+   under phi, chi2 over its 2N - 3 degrees of freedom, shrunk toward the pool by kPoolDof degrees of
+   freedom (a short track says little on its own). */
+constexpr double kPoolDof = 4;
+double trackVarianceFactor(const TrackFit &fit, double phi, double var_px)
+{
+  if (fit.r.size() < 3)
+    return 1.0;
+  double num = 0, den = 0;
+  const double sum = whitenedCorrelation(fit, phi, num, den);
+  if (!std::isfinite(sum))
+    return 1.0;
+  const double dof = 2.0 * static_cast<double>(fit.r.size()) - 3.0;
+  return std::max(1.0, (sum / var_px + kPoolDof) / (dof + kPoolDof));
 }
 
 /* Depth variance (per unit pixel variance) of the point from its track when each axis' tracker errors
@@ -469,9 +577,13 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
   const double factor = std::max(1.0, out.variance_factor);
   if (options.scale_sigma)
     out.sigma_scale = std::sqrt(factor);
-  if (options.correlated)
-    out.correlation = pooledCorrelation(fits, std::max(1, options.min_tracks / 2));
-  const double var_px = factor * noise.sigma_px * noise.sigma_px;
+  if (options.correlated) {
+    const TrackerErrors e = trackerErrors(fits, std::max(1, options.min_tracks / 2), noise.sigma_px);
+    out.correlation = e.phi;
+    out.correlated_variance_factor = e.variance_factor;
+  }
+  // The pixel variance the correlation floor takes: the whitened residuals', when they say more.
+  const double var_px = std::max(factor, out.correlated_variance_factor) * noise.sigma_px * noise.sigma_px;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const TrackResidual &t = out.tracks[i];
     if (!points[i].ok())
@@ -483,9 +595,14 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
       continue;
     }
     points[i].c_cov *= out.sigma_scale * out.sigma_scale;
-    if (out.correlation > 0 && fits[i].J.size() >= 3) {
-      // Correlated tracker errors: the depth cannot be better known than the pixels allow with them.
-      const double var_z = var_px * depthVarianceAr1(fits[i], out.correlation);
+    if (out.correlation > 0 && fits[i].J.size() >= 2) {
+      // Correlated tracker errors: the depth cannot be better known than the pixels allow with them,
+      // at this track's own pixel noise (a corner's texture sets it: tracks differ by ten times). A
+      // track too short to show its own errors (the tracker lost it early: a hard corner) is not
+      // given the long tracks' small innovations: its errors count as independent.
+      const bool known = fits[i].r.size() >= kMinCorrelationObs;
+      const double var_z = var_px * (known ? trackVarianceFactor(fits[i], out.correlation, var_px) : 1.0) *
+                           depthVarianceAr1(fits[i], known ? out.correlation : 0.0);
       if (std::isfinite(var_z) && var_z > points[i].c_cov(2, 2)) {
         points[i].c_cov *= var_z / points[i].c_cov(2, 2);
         ++out.correlation_scaled;

@@ -25,7 +25,8 @@ void bindEstimation(py::module_ &m)
 Noise of the inputs (1-sigma): sigma_px (px, per pixel coordinate), sigma_odom (m per increment per
 axis), sigma_heading (rad per increment, planar logs), sigma_yaw (rad per yaw reading), sigma_rot
 (rad per increment per axis, 6-DoF logs), odom_per_metre (m/m), rot_per_radian (rad/rad),
-rot_per_metre (rad/m), motion_noise ('increment' or 'absolute'). NoiseModel() has the C++ defaults
+rot_per_metre (rad/m), motion_noise ('increment' or 'absolute'), pixel_correlation (the tracker's
+errors' AR(1) correlation from one image of a track to the next, 0 to 0.99; method 'window'). NoiseModel() has the C++ defaults
 (the command line's).)doc")
       .def(py::init<>())
       .def_readwrite("sigma_px", &NoiseModel::sigma_px)
@@ -36,6 +37,7 @@ rot_per_metre (rad/m), motion_noise ('increment' or 'absolute'). NoiseModel() ha
       .def_readwrite("odom_per_metre", &NoiseModel::odom_per_metre)
       .def_readwrite("rot_per_radian", &NoiseModel::rot_per_radian)
       .def_readwrite("rot_per_metre", &NoiseModel::rot_per_metre)
+      .def_readwrite("pixel_correlation", &NoiseModel::pixel_correlation)
       .def_property("motion_noise", [](const NoiseModel &n) { return std::string(toString(n.motion_noise)); },
                     [](NoiseModel &n, const std::string &w) { n.motion_noise = motionNoiseFromString(w); },
                     "'increment' (odometry: errors accumulate) or 'absolute' (kinematics: per pose).")

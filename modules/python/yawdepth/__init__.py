@@ -30,7 +30,7 @@ __all__ = [n for n in dir(_yawdepth) if not n.startswith("_")] + ["estimatePoint
 _PIPELINE = ("method", "robust_threshold_px", "outlier_threshold_px", "window", "threads", "drop_unusable",
              "max_depth_sigma", "noise", "gates")
 _NOISE = ("sigma_px", "sigma_odom", "sigma_heading", "sigma_yaw", "sigma_rot", "odom_per_metre",
-          "rot_per_radian", "rot_per_metre", "motion_noise")
+          "rot_per_radian", "rot_per_metre", "motion_noise", "pixel_correlation")
 _GATES = ("min_baseline", "min_parallax_px")
 
 
@@ -45,7 +45,7 @@ def estimatePoints(camera, rig, motion, tracks, options=None, **keywords):
     options: PipelineOptions (None: PipelineOptions(), the C++ defaults), then any of these keywords,
         named as the command line's options: method ('paper', 'exact', 'fused', 'window', 'refine'),
         sigma_px, sigma_odom, sigma_heading, sigma_yaw, sigma_rot, odom_per_metre, rot_per_radian,
-        rot_per_metre, motion_noise, min_baseline, min_parallax_px, robust_threshold_px,
+        rot_per_metre, motion_noise, pixel_correlation, min_baseline, min_parallax_px, robust_threshold_px,
         outlier_threshold_px, window, threads, drop_unusable, residual_check (bool), max_depth_sigma,
         noise (NoiseModel), gates (GateOptions).
     `noise` and `gates` objects are applied before the single values, whatever the order given.

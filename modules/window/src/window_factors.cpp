@@ -175,68 +175,170 @@ Eigen::VectorXd Impl::priorDeltaY() const
   return d;
 }
 
-/* The observations of the state's features (every frame's, or only window frame only_frame's). Each
-   frame's information is gathered over all 7 parameters in fixed-size blocks, then its free
-   components are scattered into the system. */
+/* Per window frame, the information and gradient of the observation factors over all 7 parameters
+   (fixed-size blocks), and between two frames that a chain's pair factor couples; scattered into
+   the system's free components at the end. */
+struct FrameBlocks {
+  using Mat7 = Eigen::Matrix<double, kFrameDim, kFrameDim>;
+  using Vec7 = Eigen::Matrix<double, kFrameDim, 1>;
+  std::size_t n = 0;
+  std::vector<Mat7, Eigen::aligned_allocator<Mat7>> H, cross; // cross: n x n, (earlier, later)
+  std::vector<Vec7, Eigen::aligned_allocator<Vec7>> g;
+  FrameBlocks(std::size_t frames, bool pairs) : n(frames), H(frames, Mat7::Zero()), g(frames, Vec7::Zero())
+  {
+    if (pairs)
+      cross.assign(frames * frames, Mat7::Zero());
+  }
+  void scatter(const std::deque<Impl::Frame> &frames, const SchurSystem &s, Eigen::MatrixXd &Hs, Eigen::VectorXd &gs,
+               bool full) const
+  {
+    for (std::size_t a = 0; a < n; ++a) {
+      const int oa = s.frame_offset[a];
+      const int *la = frames[a].local;
+      for (int i = 0; oa >= 0 && i < kFrameDim; ++i) {
+        if (la[i] < 0)
+          continue;
+        gs(oa + la[i]) += g[a](i);
+        for (int j = 0; full && j < kFrameDim; ++j)
+          if (la[j] >= 0)
+            Hs(oa + la[i], oa + la[j]) += H[a](i, j);
+        for (std::size_t b = 0; full && !cross.empty() && b < n; ++b) {
+          const int ob = s.frame_offset[b];
+          const Mat7 &M = a < b ? cross[a * n + b] : cross[b * n + a];
+          for (int j = 0; a != b && ob >= 0 && j < kFrameDim; ++j)
+            if (frames[b].local[j] >= 0)
+              Hs(oa + la[i], ob + frames[b].local[j]) += a < b ? M(i, j) : M(j, i);
+        }
+      }
+    }
+  }
+};
+
+/* A whitened factor r with Jacobians Jp (the point, row block i) and Jx (window frame fi) into the
+   system and the frame blocks (inline: the inner loop of every solve). */
+static inline void addFactor(SchurSystem &s, int i, const Impl::Frame &f, std::size_t fi, const Eigen::Matrix<double, 2, 3> &Jp,
+                      const Eigen::Matrix<double, 2, kFrameDim> &Jx, const Eigen::Vector2d &r, double w, bool full,
+                      FrameBlocks &fb)
+{
+  s.b.segment<3>(3 * i) += w * Jp.transpose() * r;
+  fb.g[fi].noalias() += w * Jx.transpose() * r;
+  if (!full)
+    return;
+  s.A.middleRows<3>(3 * i).noalias() += w * Jp.transpose() * Jp;
+  fb.H[fi].noalias() += w * Jx.transpose() * Jx;
+  const int off = s.frame_offset[fi];
+  if (off < 0)
+    return;
+  const Eigen::Matrix<double, 3, kFrameDim> Ex = w * Jp.transpose() * Jx;
+  for (int j = 0; j < kFrameDim; ++j)
+    if (f.local[j] >= 0)
+      s.E.block<3, 1>(3 * i, off + f.local[j]) += Ex.col(j);
+}
+
+/* phi^gap (window_impl.h's ChainLink). */
+double Impl::chainCoefficient(int gap) const
+{
+  const double phi = o.noise.pixel_correlation;
+  return phi > 0 && gap > 0 ? std::pow(phi, gap) : 0.0;
+}
+
+/* The observation before ft.obs[k] in its track's chain (outliers skipped in the inlier phase), or
+   none: the chain starts at k. */
+const Impl::Obs *Impl::chainPrevious(const Feature &ft, std::size_t k, Phase phase) const
+{
+  if (o.noise.pixel_correlation <= 0)
+    return nullptr;
+  for (std::size_t j = k; j-- > 0;) {
+    const Obs &ob = ft.obs[j];
+    if (ob.frame < ft.chain_frame)
+      return nullptr;
+    if (phase == Phase::Robust || !ob.outlier)
+      return &ob;
+  }
+  return nullptr;
+}
+
+/* One feature's observation factors (each an AR(1) innovation of its chain: ChainLink) into its
+   point block (row i of the system) and the frame blocks. */
+double Impl::featureFactors(SchurSystem &s, int i, Phase phase, Fill fill, const std::vector<Frame> &fej,
+                            int only_frame, FrameBlocks &fb) const
+{
+  const Feature &ft = features.at(s.ids[static_cast<std::size_t>(i)]);
+  const bool pairs = o.noise.pixel_correlation > 0;
+  double cost = 0;
+  ChainLink prev;
+  for (const Obs &ob : ft.obs) {
+    if (ob.frame < ft.chain_frame || (phase == Phase::Inliers && ob.outlier))
+      continue;
+    ChainLink cur;
+    cur.fi = frameIndex(ob.frame);
+    const bool own = ob.frame != ft.chain_frame; // else its factor is in the prior
+    const bool wanted = own && (only_frame < 0 || cur.fi == only_frame || (prev.valid && prev.fi == only_frame));
+    if (!wanted && !pairs)
+      continue;
+    const Frame &f = frames[static_cast<std::size_t>(cur.fi)];
+    cur.valid = fill == Fill::Cost ? observationResidual(ft, f, ob, cur.r, nullptr)
+                                   : observationJacobian(ft, f, &fej[static_cast<std::size_t>(cur.fi)], ob, cur.r, cur.J);
+    if (!wanted || !cur.valid) { // behind: a fixed penalty, no gradient
+      cost += wanted && phase == Phase::Robust ? costOf(1e6, phase) : 0.0;
+      if (pairs)
+        prev = cur;
+      continue;
+    }
+    const double a = prev.valid ? chainCoefficient(cur.fi - prev.fi) : 0.0;
+    if (a == 0) { // the chain's first, or independent errors
+      const double sq = cur.r.squaredNorm();
+      cost += costOf(sq, phase);
+      if (fill != Fill::Cost)
+        addFactor(s, i, f, static_cast<std::size_t>(cur.fi), cur.J.rightCols<3>(), cur.J.leftCols<kFrameDim>(), cur.r,
+                  weightOf(sq, phase), fill == Fill::Full, fb);
+    } else {
+      const double scale = 1.0 / std::sqrt(1.0 - a * a);
+      const Eigen::Vector2d r = scale * (cur.r - a * prev.r);
+      const double sq = r.squaredNorm();
+      cost += costOf(sq, phase);
+      if (fill != Fill::Cost)
+        accumulatePair(s, i, f, prev, cur, a, scale, r, weightOf(sq, phase), fill == Fill::Full, fb);
+    }
+    if (pairs)
+      prev = cur;
+  }
+  return cost;
+}
+
+/* A pair factor (cur's innovation given prev, a and scale as in ChainLink; r its whitened residual)
+   into point block i, both frames' blocks and their coupling. */
+void Impl::accumulatePair(SchurSystem &s, int i, const Frame &f, const ChainLink &prev, const ChainLink &cur, double a,
+                          double scale, const Eigen::Vector2d &r, double w, bool full, FrameBlocks &fb) const
+{
+  const Eigen::Matrix<double, 2, 3> Jp = scale * (cur.J.rightCols<3>() - a * prev.J.rightCols<3>());
+  const Eigen::Matrix<double, 2, kFrameDim> Jx = scale * cur.J.leftCols<kFrameDim>();
+  const Eigen::Matrix<double, 2, kFrameDim> Jq = -a * scale * prev.J.leftCols<kFrameDim>();
+  const std::size_t fi = static_cast<std::size_t>(cur.fi), pi = static_cast<std::size_t>(prev.fi);
+  addFactor(s, i, f, fi, Jp, Jx, r, w, full, fb);
+  fb.g[pi].noalias() += w * Jq.transpose() * r;
+  if (!full)
+    return;
+  fb.H[pi].noalias() += w * Jq.transpose() * Jq;
+  fb.cross[pi * fb.n + fi].noalias() += w * Jq.transpose() * Jx; // prev is the earlier frame
+  const int off = s.frame_offset[pi];
+  const Eigen::Matrix<double, 3, kFrameDim> Eq = w * Jp.transpose() * Jq;
+  for (int j = 0; off >= 0 && j < kFrameDim; ++j)
+    if (frames[pi].local[j] >= 0)
+      s.E.block<3, 1>(3 * i, off + frames[pi].local[j]) += Eq.col(j);
+}
+
+/* The observations of the state's features (every frame's factors, or only those that involve
+   window frame only_frame), over the point blocks and the frames' free components. */
 double Impl::observationFactors(SchurSystem &s, Phase phase, Fill fill, const std::vector<Frame> &fej,
                                 int only_frame) const
 {
-  using Mat7 = Eigen::Matrix<double, kFrameDim, kFrameDim>;
-  using Vec7 = Eigen::Matrix<double, kFrameDim, 1>;
-  std::vector<Mat7, Eigen::aligned_allocator<Mat7>> Hf(frames.size(), Mat7::Zero());
-  std::vector<Vec7, Eigen::aligned_allocator<Vec7>> gf(frames.size(), Vec7::Zero());
+  FrameBlocks fb(frames.size(), o.noise.pixel_correlation > 0 && fill == Fill::Full);
   double cost = 0;
-  for (int i = 0; i < s.N(); ++i) {
-    const Feature &ft = features.at(s.ids[static_cast<std::size_t>(i)]);
-    for (const Obs &ob : ft.obs) {
-      if (phase == Phase::Inliers && ob.outlier)
-        continue;
-      const int fi = frameIndex(ob.frame);
-      if (only_frame >= 0 && fi != only_frame)
-        continue;
-      const Frame &f = frames[static_cast<std::size_t>(fi)];
-      Eigen::Vector2d r;
-      Eigen::Matrix<double, 2, 10> J;
-      const bool front = fill == Fill::Cost ? observationResidual(ft, f, ob, r, nullptr)
-                                            : observationJacobian(ft, f, &fej[static_cast<std::size_t>(fi)], ob, r, J);
-      if (!front) { // behind: a fixed penalty, no gradient
-        cost += phase == Phase::Robust ? costOf(1e6, phase) : 0.0;
-        continue;
-      }
-      const double sq = r.squaredNorm();
-      cost += costOf(sq, phase);
-      if (fill == Fill::Cost)
-        continue;
-      const double w = weightOf(sq, phase);
-      const Eigen::Matrix<double, 2, 3> Jp = J.rightCols<3>();
-      const Eigen::Matrix<double, 2, kFrameDim> Jx = J.leftCols<kFrameDim>();
-      s.b.segment<3>(3 * i) += w * Jp.transpose() * r;
-      gf[static_cast<std::size_t>(fi)].noalias() += w * Jx.transpose() * r;
-      if (fill != Fill::Full)
-        continue;
-      s.A.middleRows<3>(3 * i).noalias() += w * Jp.transpose() * Jp;
-      Hf[static_cast<std::size_t>(fi)].noalias() += w * Jx.transpose() * Jx;
-      const int off = s.frame_offset[static_cast<std::size_t>(fi)];
-      if (off < 0)
-        continue;
-      const Eigen::Matrix<double, 3, kFrameDim> Ex = w * Jp.transpose() * Jx;
-      for (int j = 0; j < kFrameDim; ++j)
-        if (f.local[j] >= 0)
-          s.E.block<3, 1>(3 * i, off + f.local[j]) += Ex.col(j);
-    }
-  }
-  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
-    const int off = s.frame_offset[fi];
-    const int *local = frames[fi].local;
-    for (int a = 0; off >= 0 && a < kFrameDim; ++a) {
-      if (local[a] < 0)
-        continue;
-      s.g(off + local[a]) += gf[fi](a);
-      for (int b = 0; fill == Fill::Full && b < kFrameDim; ++b)
-        if (local[b] >= 0)
-          s.H(off + local[a], off + local[b]) += Hf[fi](a, b);
-    }
-  }
+  for (int i = 0; i < s.N(); ++i)
+    cost += featureFactors(s, i, phase, fill, fej, only_frame, fb);
+  if (fill != Fill::Cost)
+    fb.scatter(frames, s, s.H, s.g, fill == Fill::Full);
   return cost;
 }
 
@@ -342,14 +444,23 @@ double Impl::linearizeNewFrame(Phase phase, Fill fill, Eigen::MatrixXd &H, Eigen
     const Feature &ft = kv.second;
     if (!ft.in_state)
       continue;
-    for (const Obs &ob : ft.obs) {
+    for (std::size_t k = 0; k < ft.obs.size(); ++k) {
+      const Obs &ob = ft.obs[k];
       if (ob.frame != f.row.frame || (phase == Phase::Inliers && ob.outlier))
         continue;
-      Eigen::Vector2d r;
+      Eigen::Vector2d r, r_prev;
       Eigen::Matrix<double, 2, 10> J;
       if (!observationResidual(ft, f, ob, r, fill == Fill::Cost ? nullptr : &J)) {
         cost += phase == Phase::Robust ? costOf(1e6, phase) : 0.0;
         continue;
+      }
+      const Obs *prev = chainPrevious(ft, k, phase); // the chain's innovation (ChainLink), the others held
+      if (prev && observationResidual(ft, frameOf(prev->frame), *prev, r_prev, nullptr)) {
+        const double a = chainCoefficient(last - frameIndex(prev->frame));
+        const double scale = 1.0 / std::sqrt(1.0 - a * a);
+        r = scale * (r - a * r_prev);
+        if (fill != Fill::Cost)
+          J *= scale;
       }
       cost += costOf(r.squaredNorm(), phase);
       if (fill != Fill::Cost)

@@ -160,6 +160,7 @@ void Impl::enterState(Feature &ft)
 void Impl::restartFeature(Feature &ft)
 {
   dropFromPrior(ft);
+  ft.chain_frame = kNoChain; // what its chain put in the prior left with it
   for (Obs &ob : ft.obs)
     ob.outlier = false;
   ft.in_state = false;

@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <deque>
+#include <limits>
 #include <map>
 #include <set>
 #include <vector>
@@ -93,6 +94,26 @@ struct SchurSystem {
   int dimension() const { return P + 3 * N(); }
 };
 
+struct FrameBlocks; // window_factors.cpp
+
+/* Feature::chain_frame when no observation of the track's chain is in the prior. */
+constexpr long kNoChain = std::numeric_limits<long>::min();
+
+/*
+  The tracker's correlated errors (NoiseModel::pixel_correlation phi, window_factors.cpp): each
+  observation's whitened residual r_k (Jacobian J_k) enters as the innovation of an AR(1) process
+  along its track, r~ = (r_k - a r_prev) / sqrt(1 - a^2), a = phi^gap, r_prev the residual of the
+  track's previous observation in the chain (gap: window frames between them); the first
+  observation of a chain enters as r_k. A pair factor couples the point and two frames: the Schur
+  structure is kept.
+*/
+struct ChainLink {
+  Eigen::Vector2d r;             // set when valid
+  Eigen::Matrix<double, 2, 10> J; // (frame's 7, point's 3), set when valid and a Jacobian was asked for
+  int fi = -1;                   // window frame index
+  bool valid = false;            // a residual (the point is in front)
+};
+
 /* The estimator's state and parts (WindowEstimator::Impl is this). */
 struct WindowState {
   using ObservationResult = WindowEstimator::ObservationResult;
@@ -138,6 +159,10 @@ struct WindowState {
     Eigen::Vector3d first_ray = Eigen::Vector3d::Zero(), first_centre = Eigen::Vector3d::Zero();
     Eigen::Vector3d last_centre = Eigen::Vector3d::Zero(); // of the last marginalised inlier
     double old_parallax = 0;
+    /* The tracker's correlated errors (NoiseModel::pixel_correlation): the observation at this
+       frame ends the part of the track's chain already in the prior (its factor is there, it only
+       conditions the next); observations before it are frozen (flags final, no factor). */
+    long chain_frame = kNoChain;
   };
   enum class Phase { Robust, Inliers };
   enum class Fill { Cost, Gradient, Full }; // what a linearisation computes besides the cost
@@ -197,9 +222,16 @@ struct WindowState {
   double linearizeState(SchurSystem &s, Phase phase, Fill fill) const;
   double observationFactors(SchurSystem &s, Phase phase, Fill fill, const std::vector<Frame> &fej,
                             int only_frame) const;
+  double featureFactors(SchurSystem &s, int i, Phase phase, Fill fill, const std::vector<Frame> &fej, int only_frame,
+                        FrameBlocks &fb) const;
+  void accumulatePair(SchurSystem &s, int i, const Frame &f, const ChainLink &prev, const ChainLink &cur, double a,
+                      double scale, const Eigen::Vector2d &r, double w, bool full, FrameBlocks &fb) const;
   double linearizeOldest(SchurSystem &s) const;
   double priorFactor(SchurSystem &s, Fill fill) const;
   double linearizeNewFrame(Phase phase, Fill fill, Eigen::MatrixXd &H, Eigen::VectorXd &g) const;
+  double chainCoefficient(int gap) const;
+  const Obs *chainPrevious(const Feature &ft, std::size_t k, Phase phase) const;
+  const Obs *chainSuccessor(const Feature &ft, long frame0) const;
   void layoutSystem(SchurSystem &s) const;
 
   // ---- Solves (window_solve.cpp).
@@ -231,6 +263,7 @@ struct WindowState {
   void blanketLayout(SchurSystem &s) const;
   void eliminateFeatures(SchurSystem &s, const std::vector<long> &leaving) const;
   void condensePrior(const SchurSystem &s, const std::vector<long> &leaving);
+  void advanceChains(long frame0);
 
   // ---- Estimates (window_estimates.cpp).
   double parallaxPx(const Eigen::Vector3d &ray_w, const Frame &f, const Obs &ob) const;

@@ -261,6 +261,8 @@ bool Impl::flagOutliers()
     if (!ft.in_state)
       continue;
     for (Obs &ob : ft.obs) {
+      if (ob.frame <= ft.chain_frame)
+        continue; // its factor or its chain's link is in the prior: the flag is final
       Eigen::Vector2d r;
       const bool front = observationResidual(ft, frameOf(ob.frame), ob, r, nullptr);
       const bool outlier = !front || r.squaredNorm() > c_outlier_sq;

@@ -123,6 +123,10 @@ const char *toString(MotionNoise m);
 /*! \brief Parse "increment" or "absolute"; throws yawdepth::Error otherwise. */
 MotionNoise motionNoiseFromString(const std::string &word);
 
+/*! \brief Largest NoiseModel::pixel_correlation: beyond it an error is a drift, not noise (a track's
+    innovations would weigh over seven times its first observation). */
+constexpr double kMaxPixelCorrelation = 0.99;
+
 /*!
   \brief Noise model of the inputs (1-sigma), used for uncertainty and for weighting.
 */
@@ -142,6 +146,13 @@ struct NoiseModel {
   double rot_per_metre = 0.0;
   /*! How the motion log's poses err: per increment (odometry, the default) or per pose (kinematics). */
   MotionNoise motion_noise = MotionNoise::Increment;
+  /*! The tracker's errors from one image of a track to the next: an AR(1) process per pixel axis,
+      \f$ e_k = \phi^{g} e_{k'} + \sqrt{1 - \phi^{2g}}\, \sigma_{px} n_k \f$ (k' the track's previous
+      observation, g the frames between them, n white), stationary 1-sigma sigma_px. 0 (the default):
+      independent errors, as a detector that finds each corner anew (a board) makes them; a tracker
+      that follows a corner from image to image makes errors that persist (estimatePoints() measures
+      phi from the residuals for `window`). At most 0.99. */
+  double pixel_correlation = 0.0;
   /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative (and the per-metre
       and per-radian terms are 0 for MotionNoise::Absolute). */
   void validate() const;

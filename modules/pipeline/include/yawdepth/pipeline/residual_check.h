@@ -38,15 +38,19 @@
   - **Correlated tracker errors**: a tracker that follows a corner from frame to frame makes errors
     that persist (the corner's appearance changes slowly with the view); the fit absorbs much of
     them, and its covariance, computed as if each frame's error were new, is then too small for a
-    long track. The pooled lag-one correlation \f$ \rho \f$ of consecutive residuals (both axes;
-    tracks of 5 observations or more; only the observations whose pixel noise dominates their
-    variance, the motion's part under a quarter, so that modelled pose drift is not taken for the
-    tracker's) gives an AR(1) model of the tracker's errors; for each ok track of 3 observations or
-    more, the depth variance that model allows with the Jacobians J of its pixels,
+    long track. An AR(1) model of the tracker's errors (per axis, \f$ \rho \f$ from one image to the
+    next) is measured from the tracks (those of 5 observations or more; only the observations whose
+    pixel noise dominates their variance, the motion's part under a quarter, so that modelled pose
+    drift is not taken for the tracker's): \f$ \rho \f$ is the correlation under which each track's
+    residuals, refitted with that model (generalised least squares) and whitened (each observation's
+    innovation given the previous), have no lag-one correlation, pooled. (The raw residuals' own
+    correlation says less: the fit absorbs the slow part of what persists.) For each ok track of 3
+    observations or more, the depth variance that model allows with the Jacobians J of its pixels,
     \f[ \sigma_Z^2 \ge \max(1, s_0^2)\, \sigma_{px}^2 \left[(J^\top C_\rho^{-1} J)^{-1}\right]_{ZZ}, \f]
     (\f$ C_\rho \f$ the AR(1) correlation along the track, per axis), raises its covariance when the
     method's is smaller (the whole matrix scaled). White errors give \f$ \rho \approx 0 \f$: nothing
-    changes.
+    changes. estimatePoints() gives \f$ \rho \f$ to a method that models it
+    (NoiseModel::pixel_correlation, modelsTrackerCorrelation()).
 
   - **The noise model from the residuals** (estimatePoints(), `reestimate_noise`): when the residuals
     see all of the modelled noise (per-pose motion noise is white and shows in them; per-increment
@@ -112,7 +116,11 @@ struct ResidualCheckResult {
   double sigma_scale = 1.0;     //!< factor applied to every ok point's sigma (1 or s0)
   int tracks_used = 0;          //!< ok tracks with dof >= 1
   int inconsistent = 0;         //!< ok points the gate turned `inconsistent`
-  double correlation = 0;       //!< rho: pooled lag-one correlation of the tracks' residuals (0: not estimated)
+  double correlation = 0;       //!< rho: the AR(1) correlation of the tracker's errors the tracks say (0: not estimated)
+  /*! The variance factor of the tracks' residuals whitened under rho (refitted, each observation's
+      innovation; the median over tracks whose pixels dominate, as variance_factor): the AR(1) model's
+      pixel noise is sqrt of it times the model's (0: not estimated). */
+  double correlated_variance_factor = 0;
   int correlation_scaled = 0;   //!< ok points whose covariance the correlation made larger
   double pixel_share = 0;       //!< mean share of the pixels in the checked observations' modelled variance
   double noise_scale = 1;       //!< estimatePoints(): the factor the noise model was scaled by before the final run (1: none)
