@@ -96,6 +96,7 @@ struct SceneErrors {
   std::string name;
   std::vector<TrackErrors> tracks;
   std::size_t all_tracks = 0, no_truth = 0, gross = 0;
+  double largest_e0 = 0; // the largest |e_0| (px): 0 but for rounding, a check of the truth's arithmetic
 };
 
 /* The truth of a scene: `locate` the 3-D point (in whatever frame the scene uses) of a track's first
@@ -176,6 +177,7 @@ SceneErrors collectErrors(const std::string &name, const std::vector<Track> &tra
       ++s.gross;
       continue;
     }
+    s.largest_e0 = std::max(s.largest_e0, te.e.front().norm());
     te.score = scores.at(first.frame, first.u, first.v);
     s.tracks.push_back(std::move(te));
   }
@@ -497,8 +499,8 @@ void printDistance(const SceneErrors &s)
 void analyse(const SceneErrors &s)
 {
   std::printf("\n## %s: %zu tracks over 2+ frames; %zu without truth; %zu gross (|e| > %.0f px in some frame, left out); "
-              "%zu measured\n",
-              s.name.c_str(), s.all_tracks, s.no_truth, s.gross, kGrossPx, s.tracks.size());
+              "%zu measured; largest |e_0| %.1e px\n",
+              s.name.c_str(), s.all_tracks, s.no_truth, s.gross, kGrossPx, s.tracks.size(), s.largest_e0);
   if (s.tracks.empty())
     return;
   const Variogram v = variogram(s.tracks);
