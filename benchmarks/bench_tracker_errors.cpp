@@ -756,8 +756,8 @@ void frankaScene(const std::string &dir, const KltOptions &ko)
                 st.guided, st.lost_flow, st.lost_fb, st.lost_epipolar, st.lost_ambiguous, st.lost_appearance);
   }
   std::printf("all pairs: %zu board features tracked within %.0f px of the truth (median %.3f px, 95th pct %.3f px), %zu "
-              "gross (a lock onto another square)\n",
-              tracked, kGrossPx, bench::median(good), bench::quantile(good, 0.95), gross);
+              "gross (more than %.0f px off)\n",
+              tracked, kGrossPx, bench::median(good), bench::quantile(good, 0.95), gross, kGrossPx);
   std::printf("real pairs: one step each, so no temporal correlation (bias, drift, AR(1)) can be measured on them; the "
               "truth is a homography fitted to the detected corners, no better than its RMS column; the camera turns "
               "%.0f to %.0f degrees between these photos, beyond what translational LK and the appearance check (NCC "
