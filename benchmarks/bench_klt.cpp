@@ -4,10 +4,10 @@
 
     bench_klt [--frames N] [--repeat R] [--max-features N] [--no-accuracy] [--no-cost] [--method fused|window|refine]
 
-  Scene: a textured wall 2 m in front of the first camera (smoothed uniform noise, seeded; each
-  frame made photo-like: blur 0.8 px, vignetting 30 %, noise 2 gray levels, a gamma 2.2 response
-  curve, JPEG at quality 85), the camera stepping 4 mm sideways per
-  frame with a slow pan of +-1 degree; each image is the first warped by the wall's homography,
+  Scene (klt_wall.h, shared with bench_tracker_errors): a textured wall 2 m in front of the first
+  camera (smoothed uniform noise, seeded; each frame made photo-like: blur 0.8 px, vignetting 30 %,
+  noise 2 gray levels, a gamma 2.2 response curve, JPEG at quality 85), the camera stepping 4 mm
+  sideways per frame with a slow pan of +-1 degree; each image is the first warped by the wall's homography,
   rendered once before timing. One core: cv::setNumThreads(1), Eigen single-threaded by the build.
 
   Stages, each over the whole sequence R times after one warm-up pass (the median per frame printed;
@@ -40,64 +40,19 @@
 #include <yawdepth/window/stream_estimator.h>
 
 #include "bench_common.h"
-#include "photo_like.h"
+#include "klt_wall.h"
 
 using namespace yawdepth;
 using Clock = std::chrono::steady_clock;
 
 namespace {
 
-constexpr double kFocal = 600, kU0 = 320, kV0 = 240, kWallDepth = 2.0;
-
-/* The sequence: its motion rows and rendered images. */
-struct Sequence {
-  std::vector<MotionSample> motion;
-  std::vector<cv::Mat> images;
-};
-
-/* The wall's homography from the first camera's pixels to the camera at `cMc0`'s. */
-cv::Matx33d wallHomography(const vpHomogeneousMatrix &cMc0)
-{
-  return bench::planeHomography(cMc0, kWallDepth, kFocal, kU0, kV0);
-}
-
-Sequence renderSequence(int frames)
-{
-  cv::Mat noise(480, 640, CV_32F), smooth;
-  cv::RNG rng(11);
-  rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
-  cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 2.0);
-  cv::normalize(smooth, smooth, 20, 235, cv::NORM_MINMAX);
-  cv::Mat texture;
-  smooth.convertTo(texture, CV_8U);
-  Sequence s;
-  const YawRig rig;
-  // Vignetting: the light falls by 30 % towards the corners, quadratic in the radius.
-  cv::Mat vignetting(480, 640, CV_32F);
-  for (int v = 0; v < 480; ++v)
-    for (int u = 0; u < 640; ++u)
-      vignetting.at<float>(v, u) =
-          static_cast<float>(1.0 - 0.3 * ((u - kU0) * (u - kU0) + (v - kV0) * (v - kV0)) / (kU0 * kU0 + kV0 * kV0));
-  for (int k = 0; k < frames; ++k) {
-    MotionSample m;
-    m.frame = k;
-    m.x = 0.004 * k;
-    m.heading = 0.0175 * std::sin(k / 8.0);
-    s.motion.push_back(m);
-    const vpHomogeneousMatrix cMc0 = wMc(rig, m).inverse() * wMc(rig, s.motion.front());
-    cv::Mat warped, blurred, frame_noise(480, 640, CV_32F);
-    cv::warpPerspective(texture, warped, cv::Mat(wallHomography(cMc0)), texture.size(), cv::INTER_CUBIC,
-                        cv::BORDER_REFLECT);
-    cv::GaussianBlur(warped, blurred, cv::Size(0, 0), 0.8);
-    rng.fill(frame_noise, cv::RNG::NORMAL, 0.0, 2.0);
-    cv::Mat f;
-    blurred.convertTo(f, CV_32F);
-    f = f.mul(vignetting) + frame_noise;
-    // The camera's response curve and a JPEG round trip (photo_like.h).
-    s.images.push_back(bench::photoFinish(f));
-  }
-  return s;
-}
+using bench::wall::kFocal;
+using bench::wall::kU0;
+using bench::wall::kV0;
+using bench::wall::kWallDepth;
+using bench::wall::renderSequence;
+using bench::wall::Sequence;
 
 /* One pass over the sequence: tracking, and the estimator when `method` is fused or window. Returns
    the per-frame milliseconds of tracking and of estimation (summed over the frames), and the mean
