@@ -14,7 +14,7 @@
   (b) castle: Debian's visp-images-data mbt-depth/Castle-simu (someone else's renderer, castle_truth.h):
       the truth of a track is where the ray of its first pixel first meets that frame's depth map,
       moved by the poses; tracks without it (background, occluding edge) are skipped, as bench_castle.
-  (c) franka: the real photos of ../shared/data/franka-eye-in-hand (a 9x6 chessboard; consecutive
+  (c) franka: the real photos of tests/data/franka-eye-in-hand (a 9x6 chessboard; consecutive
       photos, wide baselines). Each pair is tracked by KltTracker (guided = auto, as bench_wide_baseline)
       with the motion from the board's pose in each photo (solvePnP on the chessboard corners); the truth
       is the board plane's homography between the two photos, from the 54 corners
@@ -770,7 +770,7 @@ struct Args {
   std::string scene = "all";
   int wall_frames = 60, castle_frames = 40, max_features = 300;
   std::string data = "/usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu";
-  std::string franka = YAWDEPTH_SOURCE_DIR "/../shared/data/franka-eye-in-hand";
+  std::string franka = YAWDEPTH_SOURCE_DIR "/tests/data/franka-eye-in-hand";
 };
 
 } // namespace

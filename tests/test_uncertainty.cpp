@@ -209,4 +209,12 @@ TEST_CASE("odometry noise per metre and per radian: the same as per-increment no
   bad = NoiseModel();
   bad.rot_per_metre = -1;
   CHECK_THROWS(bad.validate());
+  for (double phi : {-0.1, 0.995, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    bad = NoiseModel();
+    bad.pixel_correlation = phi;
+    CHECK_THROWS(bad.validate());
+  }
+  bad = NoiseModel();
+  bad.pixel_correlation = kMaxPixelCorrelation;
+  CHECK_NOTHROW(bad.validate());
 }

@@ -60,7 +60,12 @@ def test_the_leftovers(tmp_path):
     n = yawdepth.NoiseModel()
     n.motion_noise = "absolute"
     n.sigma_heading, n.sigma_rot, n.odom_per_metre, n.rot_per_radian, n.rot_per_metre = 0.01, 0.01, 0, 0, 0
+    n.pixel_correlation = 0.5
     n.validate()
+    n.pixel_correlation = 1.0
+    with pytest.raises(yawdepth.Error):
+        n.validate()
+    n.pixel_correlation = 0.0
     g = yawdepth.GateOptions()
     g.min_baseline = 1e-4
     r = yawdepth.ResidualCheckOptions()
