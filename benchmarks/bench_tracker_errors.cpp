@@ -6,7 +6,7 @@
                          [--max-features N] [--data DIR] [--franka DIR]
 
   The tracker is configured as `measure --features klt` by default (KltOptions' defaults, --max-features;
-  trackSequence with the epipolar gate, the motion given as 0.1 mm and 0.1 mrad), as bench_klt and
+  trackSequence with the epipolar gate, the motion given as exact), as bench_klt and
   bench_castle run it. Scenes:
   (a) wall: bench_klt's photo-like textured wall (klt_wall.h; our render). Truth: the wall's
       homography. A track whose first pixel lies within kTextureMarginPx of the texture's mirrored
@@ -513,14 +513,14 @@ void analyse(const SceneErrors &s)
 
 /* ---- scenes ---- */
 
-/* The gate's motion noise as bench_klt and bench_castle give it: absolute, 0.1 mm and 0.1 mrad. */
+/* The gate's motion noise as bench_klt and bench_castle give it: the poses exact (per-pose noise 0). */
 NoiseModel exactMotionNoise()
 {
   NoiseModel noise;
   noise.motion_noise = MotionNoise::Absolute;
-  noise.sigma_odom = 1e-4;
-  noise.sigma_rot = 1e-4;
-  noise.sigma_heading = 1e-4;
+  noise.sigma_odom = 0;
+  noise.sigma_rot = 0;
+  noise.sigma_heading = 0;
   noise.sigma_yaw = 0;
   return noise;
 }

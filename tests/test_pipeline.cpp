@@ -507,6 +507,8 @@ TEST_CASE("residual check: correlated tracker errors raise the sigmas they make 
   // White errors: no correlation found, nothing raised (the first test case's scene).
   const Scene w = residualScene(0.3, 21);
   const PipelineResult white = estimatePoints(camera, rig, w.measured, w.tracks, residualOptions(0.3, true, Method::Window));
+  INFO("white errors: model w " << white.residuals.error_model.white << ", phi " << white.residuals.error_model.phi
+                                 << ", variance " << white.residuals.error_model.variance);
   CHECK(white.residuals.correlation < 0.2);
   CHECK(white.residuals.correlation_scaled <= 3);
 }

@@ -246,6 +246,7 @@ struct TrackFit {
   std::vector<Eigen::Vector2d> r; // the track's least-squares point's residuals (empty: that fit failed)
   std::vector<Eigen::Matrix<double, 2, 3>> J;
   std::vector<bool> pixel_dominated;
+  bool pixels_only = true; // every observation's motion part under kPixelOnly of its pixel variance
   std::vector<long> rows; // the observations' motion-log rows
   double pixel_share_sum = 0; // sum over the observations of the pixels' share of their variance
 };
@@ -253,6 +254,11 @@ struct TrackFit {
 /* Share of an observation's variance that per-increment motion noise (a drift) may have for its
    residual to say something about the tracker's own errors (their correlation). */
 constexpr double kPixelDominated = 0.25;
+/* Share of an observation's variance the motion may have for its residual to say what the tracker's
+   errors look like over a whole track (TrackerErrorModel); per-increment motion noise may have none:
+   a drift, however small, persists in the residuals as the tracker's slow part does (a residual
+   check on odometry with 0.01 mm per increment found a "slow part" of 0.17 px that was the drift). */
+constexpr double kPixelOnly = 0.05;
 
 TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motion, const CameraPoses &poses,
                const Track &track, const std::vector<bool> &outliers, const PointEstimate &point, const NoiseModel &noise)
@@ -306,6 +312,8 @@ TrackFit fitOf(const CameraModel &camera, const std::vector<MotionSample> &motio
         sum2 += res.squaredNorm();
         // Pose errors per pose are white; per increment they drift, and would look like the tracker's.
         fit.pixel_dominated[u] = noise.motion_noise == MotionNoise::Absolute || var_motion < kPixelDominated * var_px;
+        fit.pixels_only = fit.pixels_only && var_motion < kPixelOnly * var_px &&
+                          (noise.motion_noise == MotionNoise::Absolute || !(var_motion > 0));
         fit.pixel_share_sum += var_px / (var_px + var_motion);
         fit.J[u] = J * poses.cMw[row].linear() * poses.cMw[kr].linear().transpose(); // d(pixel) / d(point in the point's camera)
       }
@@ -438,44 +446,126 @@ TrackerErrors trackerErrors(const std::vector<TrackFit> &fits, int min_tracks, d
   return out;
 }
 
-/* A track's own pixel variance over the pooled one (var_px), never below 1: its residuals whitened
-   under phi, chi2 over its 2N - 3 degrees of freedom, shrunk toward the pool by kPoolDof degrees of
-   freedom (a short track says little on its own). */
-constexpr double kPoolDof = 4;
-double trackVarianceFactor(const TrackFit &fit, double phi, double var_px)
+/*
+  The tracker's errors as a white part plus a persistent part (bench_tracker_errors: a corner tracked
+  from image to image errs by a little each time and drifts slowly), per pixel axis:
+    cov(e_j, e_k) = sigma^2 [ w delta_jk + (1 - w) phi^|row_j - row_k| ],
+  w the white share. (sigma^2, w, phi) by restricted maximum likelihood over the tracks (REML: the
+  likelihood of the residuals once each track's own point is fitted, which absorbs nothing the model
+  does not know it absorbs), on a grid of (w, phi), sigma^2 profiled. The tracks used: at least
+  kMinCorrelationObs observations, the motion's modelled part under kPixelOnly of every one's
+  variance, at most kMaxModelTracks (the first ones).
+*/
+constexpr int kMaxModelTracks = 150;
+constexpr double kPhiGrid[] = {0.5, 0.7, 0.8, 0.9, 0.95, 0.97, 0.98, 0.99, 0.995};
+constexpr double kWhiteGrid[] = {0.0, 0.1, 0.25, 0.5, 0.75};
+
+/* One axis' correlation matrix of the model at the track's rows. */
+Eigen::MatrixXd errorCorrelation(const std::vector<long> &rows, const TrackerErrorModel &m)
 {
-  if (fit.r.size() < 3)
-    return 1.0;
-  double num = 0, den = 0;
-  const double sum = whitenedCorrelation(fit, phi, num, den);
-  if (!std::isfinite(sum))
-    return 1.0;
-  const double dof = 2.0 * static_cast<double>(fit.r.size()) - 3.0;
-  return std::max(1.0, (sum / var_px + kPoolDof) / (dof + kPoolDof));
+  const Eigen::Index n = static_cast<Eigen::Index>(rows.size());
+  Eigen::MatrixXd C(n, n);
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const long gap = std::abs(rows[static_cast<std::size_t>(j)] - rows[static_cast<std::size_t>(k)]);
+      C(j, k) = (j == k ? m.white : 0.0) + (1.0 - m.white) * std::pow(m.phi, static_cast<double>(gap));
+    }
+  return C;
 }
 
-/* Depth variance (per unit pixel variance) of the point from its track when each axis' tracker errors
-   form an AR(1) sequence of correlation rho along the track: the ZZ element of (J^T C^-1 J)^-1, C^-1
-   the AR(1) inverse correlation (tridiagonal). rho = 0: white errors. NaN when not invertible. */
-double depthVarianceAr1(const TrackFit &fit, double rho)
-{
-  const std::size_t n = fit.J.size();
+/* A track under the model's correlation (unit variance): log|C| of both axes, log|J' C^-1 J|, the
+   REML quadratic r' P r, the information J' C^-1 J. False when not positive definite. */
+struct TrackReml {
+  double logdet_c = 0, logdet_info = 0, quadratic = 0;
   Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
-  const double scale = 1.0 / (1.0 - rho * rho);
-  for (int axis = 0; axis < 2; ++axis)
-    for (std::size_t i = 0; i < n; ++i) {
-      const Eigen::RowVector3d a = fit.J[i].row(axis);
-      const double d = (i == 0 || i + 1 == n) ? 1.0 : 1.0 + rho * rho;
-      info += scale * d * a.transpose() * a;
-      if (i + 1 < n) {
-        const Eigen::RowVector3d b = fit.J[i + 1].row(axis);
-        info -= scale * rho * (a.transpose() * b + b.transpose() * a);
+};
+bool trackReml(const TrackFit &fit, const TrackerErrorModel &m, TrackReml &out)
+{
+  const Eigen::LLT<Eigen::MatrixXd> llt(errorCorrelation(fit.rows, m));
+  if (llt.info() != Eigen::Success)
+    return false;
+  const Eigen::Index n = static_cast<Eigen::Index>(fit.r.size());
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  double rr = 0;
+  for (int axis = 0; axis < 2; ++axis) {
+    Eigen::MatrixXd X(n, 4); // the point's three columns, then the residuals
+    for (Eigen::Index k = 0; k < n; ++k) {
+      X.block<1, 3>(k, 0) = fit.J[static_cast<std::size_t>(k)].row(axis);
+      X(k, 3) = fit.r[static_cast<std::size_t>(k)](axis);
+    }
+    llt.matrixL().solveInPlace(X); // L^-1 X: the C^-1 products are plain ones
+    out.info += X.leftCols<3>().transpose() * X.leftCols<3>();
+    b += X.leftCols<3>().transpose() * X.col(3);
+    rr += X.col(3).squaredNorm();
+    out.logdet_c += 2.0 * llt.matrixLLT().diagonal().array().log().sum();
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(out.info);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0))
+    return false;
+  out.logdet_info = ldlt.vectorD().array().log().sum();
+  out.quadratic = rr - b.dot(ldlt.solve(b));
+  return true;
+}
+
+/* The tracks' restricted log-likelihood under m (sigma^2 profiled, set in m); -inf when a track fails. */
+double remlLogLikelihood(const std::vector<const TrackFit *> &used, TrackerErrorModel &m)
+{
+  double logdet = 0, quadratic = 0, dof = 0;
+  for (const TrackFit *fit : used) {
+    TrackReml t;
+    if (!trackReml(*fit, m, t))
+      return -std::numeric_limits<double>::infinity();
+    logdet += t.logdet_c + t.logdet_info;
+    quadratic += t.quadratic;
+    dof += 2.0 * static_cast<double>(fit->r.size()) - 3.0;
+  }
+  m.variance = quadratic / dof;
+  return -0.5 * (logdet + dof * std::log(m.variance));
+}
+
+TrackerErrorModel trackerErrorModel(const std::vector<TrackFit> &fits, int min_tracks)
+{
+  std::vector<const TrackFit *> used;
+  for (const TrackFit &fit : fits)
+    if (fit.r.size() >= kMinCorrelationObs && static_cast<int>(used.size()) < kMaxModelTracks && fit.pixels_only)
+      used.push_back(&fit);
+  TrackerErrorModel best;
+  if (static_cast<int>(used.size()) < min_tracks)
+    return best;
+  double best_l = remlLogLikelihood(used, best); // white (w 1)
+  for (double w : kWhiteGrid)
+    for (double phi : kPhiGrid) {
+      TrackerErrorModel m{w, phi, 0};
+      const double l = remlLogLikelihood(used, m);
+      if (l > best_l) {
+        best_l = l;
+        best = m;
       }
     }
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(info);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0))
+  return best;
+}
+
+/* The depth variance of an ok track under the tracker's error model (px^2 in it), at the track's own
+   noise (its REML quadratic over its degrees of freedom, shrunk toward the model's by kPoolDof, when
+   it is larger beyond doubt); a track too short to show its own errors counts them as independent at the model's
+   variance (the tracker lost it early: a hard corner). NaN when not computable. */
+constexpr double kPoolDof = 4;
+constexpr double kOwnNoiseProbability = 0.95;
+double depthVarianceModel(const TrackFit &fit, const TrackerErrorModel &m)
+{
+  const bool known = fit.r.size() >= kMinCorrelationObs;
+  const TrackerErrorModel use = known ? m : TrackerErrorModel{1.0, 0.0, m.variance};
+  TrackReml t;
+  if (fit.r.size() < 2 || !(m.variance > 0) || !trackReml(fit, use, t))
     return std::numeric_limits<double>::quiet_NaN();
-  return ldlt.solve(Eigen::Matrix3d::Identity())(2, 2);
+  const double dof = 2.0 * static_cast<double>(fit.r.size()) - 3.0;
+  // Its own noise only where its residuals show it larger (beyond the 95 % quantile): a floor of the
+  // larger of two noisy estimates would raise half of a correct model's sigmas.
+  const double chi2 = t.quadratic / m.variance;
+  const bool larger = known && chi2 > chiSquareQuantile(static_cast<int>(dof), kOwnNoiseProbability);
+  const double own = larger ? (chi2 + kPoolDof) / (dof + kPoolDof) : 1.0;
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(t.info);
+  return own * m.variance * ldlt.solve(Eigen::Matrix3d::Identity())(2, 2);
 }
 
 } // namespace
@@ -581,9 +671,8 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     const TrackerErrors e = trackerErrors(fits, std::max(1, options.min_tracks / 2), noise.sigma_px);
     out.correlation = e.phi;
     out.correlated_variance_factor = e.variance_factor;
+    out.error_model = trackerErrorModel(fits, std::max(1, options.min_tracks / 2));
   }
-  // The pixel variance the correlation floor takes: the whitened residuals', when they say more.
-  const double var_px = std::max(factor, out.correlated_variance_factor) * noise.sigma_px * noise.sigma_px;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const TrackResidual &t = out.tracks[i];
     if (!points[i].ok())
@@ -595,14 +684,10 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
       continue;
     }
     points[i].c_cov *= out.sigma_scale * out.sigma_scale;
-    if (out.correlation > 0 && fits[i].J.size() >= 2) {
-      // Correlated tracker errors: the depth cannot be better known than the pixels allow with them,
-      // at this track's own pixel noise (a corner's texture sets it: tracks differ by ten times). A
-      // track too short to show its own errors (the tracker lost it early: a hard corner) is not
-      // given the long tracks' small innovations: its errors count as independent.
-      const bool known = fits[i].r.size() >= kMinCorrelationObs;
-      const double var_z = var_px * (known ? trackVarianceFactor(fits[i], out.correlation, var_px) : 1.0) *
-                           depthVarianceAr1(fits[i], known ? out.correlation : 0.0);
+    if (out.error_model.variance > 0) {
+      // The tracker's errors as measured: the depth cannot be better known than the pixels allow
+      // with them, at this track's own noise (a corner's texture sets it: tracks differ by ten times).
+      const double var_z = depthVarianceModel(fits[i], out.error_model);
       if (std::isfinite(var_z) && var_z > points[i].c_cov(2, 2)) {
         points[i].c_cov *= var_z / points[i].c_cov(2, 2);
         ++out.correlation_scaled;

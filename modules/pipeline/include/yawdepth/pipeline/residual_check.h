@@ -109,6 +109,14 @@ struct TrackResidual {
   double rms_px = std::numeric_limits<double>::quiet_NaN(); //!< root mean square residual (px, per observation)
 };
 
+/*! \brief The tracker's errors along a track, per pixel axis (checkResiduals() measures it, see the
+    file): \f$ \mathrm{cov}(e_j, e_k) = \sigma^2 [w\,\delta_{jk} + (1 - w)\,\phi^{|j - k|}] \f$. */
+struct TrackerErrorModel {
+  double white = 1.0;    //!< w: the white share of the variance (1: independent errors)
+  double phi = 0.0;      //!< phi: the persistent part's correlation from one image to the next
+  double variance = 0.0; //!< sigma^2 (px^2; 0: not estimated)
+};
+
 /*! \brief What checkResiduals() found. */
 struct ResidualCheckResult {
   double variance_factor = 1.0; //!< s0^2 (1 with fewer than min_tracks tracks)
@@ -121,6 +129,9 @@ struct ResidualCheckResult {
       innovation; the median over tracks whose pixels dominate, as variance_factor): the AR(1) model's
       pixel noise is sqrt of it times the model's (0: not estimated). */
   double correlated_variance_factor = 0;
+  /*! The tracker's errors, white and persistent parts (restricted maximum likelihood over the tracks
+      whose pixels dominate): every ok depth's variance is at least what it allows the track. */
+  TrackerErrorModel error_model;
   int correlation_scaled = 0;   //!< ok points whose covariance the correlation made larger
   double pixel_share = 0;       //!< mean share of the pixels in the checked observations' modelled variance
   double noise_scale = 1;       //!< estimatePoints(): the factor the noise model was scaled by before the final run (1: none)
