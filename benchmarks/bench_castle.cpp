@@ -13,7 +13,7 @@
   The camera's motion is the given poses (world = the object's frame, wMc = cMo^-1, a 6-DoF log),
   exact and modelled as exact (the renderer's own; a model of 0.1 mm and 0.1 mrad per pose, which
   the data do not have, made the sigmas cautious where the tracker is good). Tracks: yawdepth::trackSequence (KLT with the epipolar
-  gate); points: yawdepth::estimatePoints as `measure --features klt` runs it by default (fused,
+  gate); points: yawdepth::estimatePoints as `measure --features klt` runs it by default (window,
   the residual check: noise from residuals, tracks that are not one point cut, residual_check.h;
   depths not resolved to 5 % degenerate), each point at its last frame; or with the --method given. The truth of an ok point is where the ray of its observed pixel in that frame first
   meets the surface of the frame's depth map (rendered from a second camera 5 cm beside the colour
@@ -88,7 +88,7 @@ struct Args {
   std::string data = "/usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu";
   int frames = 40, max_features = 300;
   double sigma_px = 0.3;
-  std::string method = "fused";   // measure --features klt's defaults: fused, the residual check, 5 %
+  std::string method = "window";  // measure --features klt's defaults: window, the residual check, 5 %
   double max_depth_sigma = 0.05;
   std::string points; // --points FILE: every compared point as CSV
   std::string guided = toString(KltOptions().guided); // --guided off|auto|on: KltOptions::guided
@@ -138,11 +138,13 @@ struct Row {
   long id, frame;      // the track and the point's frame
   std::size_t track;   // index in the tracks
   double z, z_true, u, v;
+  double bound; // the depth's 1-sigma under the tracker's error model, poses known (NaN: none)
 };
 
 /* Every ok point against the depth map of its last frame; `ok` counts them, `no_truth` those without truth there. */
 std::vector<Row> compareWithDepth(const std::vector<PointEstimate> &est, const std::vector<Track> &tracks,
-                                  const std::vector<DepthMap> &depth, int frames, int &ok, int &no_truth)
+                                  const std::vector<DepthMap> &depth, const ResidualCheckResult &check, int frames,
+                                  int &ok, int &no_truth)
 {
   std::vector<Row> rows;
   ok = no_truth = 0;
@@ -164,8 +166,9 @@ std::vector<Row> compareWithDepth(const std::vector<PointEstimate> &est, const s
       continue;
     }
     const double err = e.c_P.z() - z;
+    const double bound = i < check.tracks.size() ? check.tracks[i].sigma_z_bound : std::nan("");
     rows.push_back({std::abs(err) / z, e.sigmaZ() / e.c_P.z(), std::abs(err) <= 2 * e.sigmaZ(), t.id, e.frame, i,
-                    e.c_P.z(), z, obs->u, obs->v});
+                    e.c_P.z(), z, obs->u, obs->v, bound});
   }
   return rows;
 }
@@ -193,21 +196,28 @@ void writePoints(const std::string &path, const std::vector<Row> &rows, const st
 /* The table: every ok point with truth, then those whose own relative sigma is under 1 %. */
 void printTable(const std::vector<Row> &rows, int frames)
 {
-  std::printf("| points | count | per frame | median rel. error | 95th pct | within 2 sigma | largest |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+  std::printf("| points | count | per frame | median rel. error | 95th pct | within 2 sigma | largest | RMSE / bound "
+              "(points with one) |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
   for (int subset = 0; subset < 2; ++subset) {
     std::vector<double> rel;
-    int within = 0;
+    int within = 0, bounded = 0;
+    double sum_sq = 0;
     for (const Row &r : rows)
       if (subset == 0 || r.sigma_rel < 0.01) {
         rel.push_back(r.rel);
         within += r.within ? 1 : 0;
+        if (std::isfinite(r.bound) && r.bound > 0) {
+          sum_sq += std::pow((r.z - r.z_true) / r.bound, 2);
+          ++bounded;
+        }
       }
     const std::string label = subset == 0 ? "every ok point with truth" : "own sigma under 1 %";
-    std::printf("| %s | %zu | %.1f | %.3f %% | %.3f %% | %.3f | %.2f %% |\n", label.c_str(), rel.size(),
+    std::printf("| %s | %zu | %.1f | %.3f %% | %.3f %% | %.3f | %.2f %% | %.2f (%d) |\n", label.c_str(), rel.size(),
                 static_cast<double>(rel.size()) / frames, 100 * bench::quantile(rel, 0.5), 100 * bench::quantile(rel, 0.95),
                 rel.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(rel.size()),
-                rel.empty() ? 0.0 : 100 * *std::max_element(rel.begin(), rel.end()));
+                rel.empty() ? 0.0 : 100 * *std::max_element(rel.begin(), rel.end()),
+                bounded > 0 ? std::sqrt(sum_sq / bounded) : std::nan(""), bounded);
   }
 }
 
@@ -275,7 +285,7 @@ int main(int argc, char **argv)
     const PipelineResult est = estimatePoints(camera, rig, q.motion, seq.tracks, po);
     const auto t2 = std::chrono::steady_clock::now();
     int ok = 0, no_truth = 0;
-    const std::vector<Row> rows = compareWithDepth(est.points, seq.tracks, q.depth, a.frames, ok, no_truth);
+    const std::vector<Row> rows = compareWithDepth(est.points, seq.tracks, q.depth, est.residuals, a.frames, ok, no_truth);
 
     const double track_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     const double est_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
@@ -303,6 +313,12 @@ int main(int argc, char **argv)
                   est.residuals.noise_scale, px * std::sqrt(est.residuals.variance_factor), px, est.residuals.sigma_scale,
                   est.residuals.correlation, est.residuals.correlation_scaled, est.residuals.inconsistent,
                   est.residuals.tracks_used);
+    const TrackerErrorModel &em = est.residuals.error_model;
+    if (po.residual_check.enabled && em.variance > 0)
+      std::printf("tracker's errors (restricted maximum likelihood over the tracks): %.2f px per axis, %.0f %% white, "
+                  "the rest correlated %.3f from one image to the next; the bound: each depth's sigma under that "
+                  "model with the poses known\n",
+                  std::sqrt(em.variance), 100 * em.white, em.phi);
     printTable(rows, a.frames);
     const auto [cons_median, cons_90] = depthMapConsistency(q.depth, q.motion);
     std::printf("the truth's own accuracy: the depth maps against the poses, smooth surfaces, frames 5 apart: median "

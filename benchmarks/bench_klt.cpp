@@ -21,7 +21,7 @@
   alone (issue 35; bench_window checks window's own cost per frame).
 
   Then (unless --no-accuracy) the depths `measure --features klt` would report on the same sequence
-  (trackSequence, then estimatePoints as `measure --features klt` by default: fused, or --method; the
+  (trackSequence, then estimatePoints as `measure --features klt` by default: window, or --method; the
   residual check; --max-depth-sigma 0.05; the
   motion log exact, and modelled as exact) against the wall: each ok point's truth is
   where the ray of its last observed pixel meets the wall. Printed as bench_castle prints Castle-simu.
@@ -134,11 +134,18 @@ void accuracyTable(const Sequence &s, const CameraModel &camera, const KltOption
               "correlation %.2f, %d inconsistent\n",
               toString(method), seq.tracks.size(), r.residuals.noise_scale, r.residuals.correlation,
               r.residuals.inconsistent);
+  const TrackerErrorModel &em = r.residuals.error_model;
+  if (em.variance > 0)
+    std::printf("tracker's errors (restricted maximum likelihood over the tracks): %.3f px per axis, %.0f %% white, the "
+                "rest correlated %.3f from one image to the next; the bound: each depth's sigma under that model with "
+                "the poses known\n",
+                std::sqrt(em.variance), 100 * em.white, em.phi);
   std::printf("| points | count | median rel. error | 95th pct | within 2 sigma | median error / sigma (0.67 when "
-              "honest) | largest |\n|---|---|---|---|---|---|---|\n");
+              "honest) | largest | RMSE / bound (points with one) |\n|---|---|---|---|---|---|---|---|\n");
   for (int subset = 0; subset < 2; ++subset) {
     std::vector<double> rel, ratio;
-    int within = 0;
+    int within = 0, bounded = 0;
+    double sum_sq = 0;
     for (std::size_t i = 0; i < seq.tracks.size(); ++i) {
       const PointEstimate &e = r.points[i];
       if (!e.ok() || (subset == 1 && !(e.sigmaZ() < 0.01 * e.c_P.z())))
@@ -151,12 +158,17 @@ void accuracyTable(const Sequence &s, const CameraModel &camera, const KltOption
       rel.push_back(std::abs(e.c_P.z() - z) / z);
       ratio.push_back(std::abs(e.c_P.z() - z) / e.sigmaZ());
       within += std::abs(e.c_P.z() - z) <= 2 * e.sigmaZ() ? 1 : 0;
+      const double bound = r.residuals.tracks[i].sigma_z_bound; // the tracker's error model, poses known
+      if (std::isfinite(bound) && bound > 0) {
+        sum_sq += std::pow((e.c_P.z() - z) / bound, 2);
+        ++bounded;
+      }
     }
     const double largest = rel.empty() ? 0.0 : *std::max_element(rel.begin(), rel.end());
-    std::printf("| %s | %zu | %.3f %% | %.3f %% | %.3f | %.2f | %.2f %% |\n",
+    std::printf("| %s | %zu | %.3f %% | %.3f %% | %.3f | %.2f | %.2f %% | %.2f (%d) |\n",
                 subset == 0 ? "every ok point" : "own sigma under 1 %", rel.size(), 100 * bench::quantile(rel, 0.5), 100 * bench::quantile(rel, 0.95),
                 rel.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(rel.size()),
-                bench::median(ratio), 100 * largest);
+                bench::median(ratio), 100 * largest, bounded > 0 ? std::sqrt(sum_sq / bounded) : std::nan(""), bounded);
   }
 }
 
@@ -211,7 +223,7 @@ int main(int argc, char **argv)
 {
   int frames = 60, repeat = 5, max_features = 300;
   bool no_accuracy = false, no_cost = false;
-  std::string method = "fused";
+  std::string method = "window";
   bench::CommandLine cli("[--frames N (>= 2)] [--repeat R] [--max-features N] [--no-accuracy] [--no-cost] [--method M]");
   cli.option("--frames", frames).option("--repeat", repeat).option("--max-features", max_features);
   cli.flag("--no-accuracy", no_accuracy).flag("--no-cost", no_cost).option("--method", method);

@@ -56,11 +56,13 @@ servo-yawing	examples/servo_table.sh "$B/examples/servo_ibvs_yawing_camera"
 servo-pioneer	examples/servo_table_pioneer.sh "$B/examples/servo_pioneer_pan" 10
 servo-4pts	examples/servo_table_4pts.sh "$B/examples/servo_ibvs_4pts" 8 5 0.3
 castle	"$B/benchmarks/bench_castle"
-castle-window	"$B/benchmarks/bench_castle" --method window
+castle-fused	"$B/benchmarks/bench_castle" --method fused
 castle-refine	"$B/benchmarks/bench_castle" --method refine
 tracker-errors	"$B/benchmarks/bench_tracker_errors"
 wide-baseline	"$B/benchmarks/bench_wide_baseline"
 klt-accuracy	"$B/benchmarks/bench_klt" --no-cost
+klt-accuracy-fused	"$B/benchmarks/bench_klt" --no-cost --method fused
+klt-accuracy-refine	"$B/benchmarks/bench_klt" --no-cost --method refine
 klt-cost	"$B/benchmarks/bench_klt" --repeat 3 --max-features 340 --no-accuracy
 two-planes	"$B/benchmarks/bench_two_planes"
 import-bag-1gb	benchmarks/bench_import_bag.sh "$Y" 1024

@@ -251,7 +251,7 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
 
   MethodArgs method = a.method;
   if (klt && method.method_option != nullptr && method.method_option->count() == 0)
-    method.method = "fused"; // natural features: hundreds of tracks, the method that keeps up with the tracker
+    method.method = "window"; // natural features: linear in the tracks, honest with the check, the most accurate (accuracy.md)
   if (klt && method.residual_option != nullptr && method.residual_option->count() == 0)
     method.residual_check = "on"; // natural features: T-junctions and silhouettes are not points
   if (klt && method.max_depth_sigma_option != nullptr && method.max_depth_sigma_option->count() == 0)
@@ -331,7 +331,7 @@ Runner addMeasure(CLI::App &app)
   addKltOptions(sub, a->klt);
   addMethodOptions(sub, a->method, bestMethod());
   sub->get_option("--method")->description(sub->get_option("--method")->get_description() +
-                                           ". With --features klt the default is fused");
+                                           ". With --features klt the default is window");
   sub->add_option("--out", a->out, "Output points CSV (default: standard output)");
   sub->add_option("--report", a->report,
                   "Folder for the paper's Fig. 3 report: report.txt, blocks.csv, plane.csv, figure.png; with --features "

@@ -548,10 +548,12 @@ TrackerErrorModel trackerErrorModel(const std::vector<TrackFit> &fits, int min_t
 /* The depth variance of an ok track under the tracker's error model (px^2 in it), at the track's own
    noise (its REML quadratic over its degrees of freedom, shrunk toward the model's by kPoolDof, when
    it is larger beyond doubt); a track too short to show its own errors counts them as independent at the model's
-   variance (the tracker lost it early: a hard corner). NaN when not computable. */
+   variance (the tracker lost it early: a hard corner). NaN when not computable. `bound`, when the
+   track is long enough: the depth's 1-sigma under the model at its pooled noise (the Cramer-Rao bound
+   with the poses known). */
 constexpr double kPoolDof = 4;
 constexpr double kOwnNoiseProbability = 0.95;
-double depthVarianceModel(const TrackFit &fit, const TrackerErrorModel &m)
+double depthVarianceModel(const TrackFit &fit, const TrackerErrorModel &m, double *bound)
 {
   const bool known = fit.r.size() >= kMinCorrelationObs;
   const TrackerErrorModel use = known ? m : TrackerErrorModel{1.0, 0.0, m.variance};
@@ -565,7 +567,10 @@ double depthVarianceModel(const TrackFit &fit, const TrackerErrorModel &m)
   const bool larger = known && chi2 > chiSquareQuantile(static_cast<int>(dof), kOwnNoiseProbability);
   const double own = larger ? (chi2 + kPoolDof) / (dof + kPoolDof) : 1.0;
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(t.info);
-  return own * m.variance * ldlt.solve(Eigen::Matrix3d::Identity())(2, 2);
+  const double var_z = m.variance * ldlt.solve(Eigen::Matrix3d::Identity())(2, 2);
+  if (bound && known)
+    *bound = std::sqrt(var_z);
+  return own * var_z;
 }
 
 } // namespace
@@ -673,6 +678,7 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     out.correlated_variance_factor = e.variance_factor;
     out.error_model = trackerErrorModel(fits, std::max(1, options.min_tracks / 2));
   }
+  const double var_model = noise.sigma_px * noise.sigma_px;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const TrackResidual &t = out.tracks[i];
     if (!points[i].ok())
@@ -684,10 +690,14 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
       continue;
     }
     points[i].c_cov *= out.sigma_scale * out.sigma_scale;
-    if (out.error_model.variance > 0) {
-      // The tracker's errors as measured: the depth cannot be better known than the pixels allow
-      // with them, at this track's own noise (a corner's texture sets it: tracks differ by ten times).
-      const double var_z = depthVarianceModel(fits[i], out.error_model);
+    // The tracker's errors as measured (white and persistent parts where the residuals show them
+    // whole; else the AR(1) correlation at the pixel variance the whitened residuals say): the depth
+    // cannot be better known than the pixels allow with them, at this track's own noise (a corner's
+    // texture sets it: tracks differ by ten times).
+    const TrackerErrorModel ar1{0.0, out.correlation, std::max(factor, out.correlated_variance_factor) * var_model};
+    const TrackerErrorModel &floor = out.error_model.variance > 0 ? out.error_model : ar1;
+    if (floor.variance > 0 && floor.phi > 0) {
+      const double var_z = depthVarianceModel(fits[i], floor, &out.tracks[i].sigma_z_bound);
       if (std::isfinite(var_z) && var_z > points[i].c_cov(2, 2)) {
         points[i].c_cov *= var_z / points[i].c_cov(2, 2);
         ++out.correlation_scaled;

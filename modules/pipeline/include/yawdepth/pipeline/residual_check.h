@@ -107,6 +107,11 @@ struct TrackResidual {
   double chi2 = std::numeric_limits<double>::quiet_NaN(); //!< see the file
   int dof = 0;                                            //!< 2N - 3 (N the observations used)
   double rms_px = std::numeric_limits<double>::quiet_NaN(); //!< root mean square residual (px, per observation)
+  /*! The depth's 1-sigma (m, the point's frame) that the tracker's error model allows this track with
+      the poses known, at the model's pooled noise: its Cramer-Rao bound under that model (the model:
+      ResidualCheckResult::error_model when estimated, else the AR(1) one of `correlation`; NaN: neither,
+      or a track under 5 observations). */
+  double sigma_z_bound = std::numeric_limits<double>::quiet_NaN();
 };
 
 /*! \brief The tracker's errors along a track, per pixel axis (checkResiduals() measures it, see the
