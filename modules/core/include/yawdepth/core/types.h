@@ -151,7 +151,7 @@ struct NoiseModel {
       observation, g the frames between them, n white), stationary 1-sigma sigma_px. 0 (the default):
       independent errors, as a detector that finds each corner anew (a board) makes them; a tracker
       that follows a corner from image to image makes errors that persist (estimatePoints() measures
-      phi from the residuals for `window`). At most 0.99. */
+      phi from the residuals for `window` and `refine`). At most 0.99. */
   double pixel_correlation = 0.0;
   /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative (and the per-metre
       and per-radian terms are 0 for MotionNoise::Absolute). */

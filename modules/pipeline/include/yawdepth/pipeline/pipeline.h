@@ -83,7 +83,7 @@ bool methodAvailable(Method m);
 /*! \brief The most accurate method this build has: refine with Ceres, else fused. */
 Method bestMethod();
 /*! \brief Whether the method models the tracker's correlated errors (NoiseModel::pixel_correlation):
-    estimatePoints() then measures that correlation from the residuals (when the model leaves it 0 and
+    window and refine. estimatePoints() then measures that correlation from the residuals (when the model leaves it 0 and
     the residual check runs) and runs the method with it; the others take only 0. */
 bool modelsTrackerCorrelation(Method m);
 
