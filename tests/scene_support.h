@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <random>
+#include <vector>
 #include <Eigen/Core>
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/core/types.h>
@@ -63,6 +65,27 @@ struct CrlbStats {
   double ratio() const { return std::sqrt(sum_norm2 / std::max(n, 1)); }
   double coverage() const { return double(covered) / std::max(n, 1); }
 };
+
+/* Each track's pixels with AR(1) errors along it (stationary 1-sigma sigma, correlation phi from one
+   frame to the next, NoiseModel::pixel_correlation): what a tracker that follows corners makes. */
+inline void addCorrelatedErrors(std::vector<Track> &tracks, double sigma, double phi, std::uint64_t seed)
+{
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (Track &t : tracks) {
+    double eu = sigma * n(rng), ev = sigma * n(rng);
+    long last = t.observations.empty() ? 0 : t.observations.front().frame;
+    for (Observation &ob : t.observations) {
+      const double a = std::pow(phi, static_cast<double>(ob.frame - last));
+      const double s = sigma * std::sqrt(1.0 - a * a);
+      eu = a * eu + s * n(rng);
+      ev = a * ev + s * n(rng);
+      last = ob.frame;
+      ob.u += eu;
+      ob.v += ev;
+    }
+  }
+}
 
 } // namespace test
 } // namespace yawdepth

@@ -511,27 +511,6 @@ TEST_CASE_METHOD(PaperSetup, "window does not drift over a long sequence (featur
   }
 }
 
-/* Each track's pixels with AR(1) errors along it (stationary 1-sigma sigma, correlation phi from one
-   frame to the next): what a tracker that follows corners makes. */
-static void addCorrelatedErrors(std::vector<Track> &tracks, double sigma, double phi, std::uint64_t seed)
-{
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> n(0.0, 1.0);
-  for (Track &t : tracks) {
-    double eu = sigma * n(rng), ev = sigma * n(rng);
-    long last = t.observations.empty() ? 0 : t.observations.front().frame;
-    for (Observation &ob : t.observations) {
-      const double a = std::pow(phi, static_cast<double>(ob.frame - last));
-      const double s = sigma * std::sqrt(1.0 - a * a);
-      eu = a * eu + s * n(rng);
-      ev = a * ev + s * n(rng);
-      last = ob.frame;
-      ob.u += eu;
-      ob.v += ev;
-    }
-  }
-}
-
 TEST_CASE_METHOD(PaperSetup, "window models the tracker's correlated errors (AR(1)): honest where independence is not",
                  "[window][montecarlo]")
 {

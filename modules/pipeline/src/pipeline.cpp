@@ -158,7 +158,7 @@ void PipelineOptions::validate() const
     throw Error("refine needs at least one thread");
   if (noise.pixel_correlation > 0 && !modelsTrackerCorrelation(method))
     throw Error("method " + name + " does not model correlated tracker errors (pixel-correlation " +
-                figure(noise.pixel_correlation) + "): use window, or 0");
+                figure(noise.pixel_correlation) + "): use window or refine, or 0");
   residual_check.validate();
   if (!(std::isfinite(max_depth_sigma) && max_depth_sigma >= 0))
     throw Error("the largest relative depth sigma must be finite and non-negative (0: no gate)");
@@ -166,7 +166,7 @@ void PipelineOptions::validate() const
 
 bool methodAvailable(Method m) { return m != Method::Refine || refineAvailable(); }
 
-bool modelsTrackerCorrelation(Method m) { return m == Method::Window; }
+bool modelsTrackerCorrelation(Method m) { return m == Method::Window || m == Method::Refine; }
 
 Method bestMethod() { return refineAvailable() ? Method::Refine : Method::Fused; }
 

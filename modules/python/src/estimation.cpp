@@ -26,7 +26,7 @@ Noise of the inputs (1-sigma): sigma_px (px, per pixel coordinate), sigma_odom (
 axis), sigma_heading (rad per increment, planar logs), sigma_yaw (rad per yaw reading), sigma_rot
 (rad per increment per axis, 6-DoF logs), odom_per_metre (m/m), rot_per_radian (rad/rad),
 rot_per_metre (rad/m), motion_noise ('increment' or 'absolute'), pixel_correlation (the tracker's
-errors' AR(1) correlation from one image of a track to the next, 0 to 0.99; method 'window'). NoiseModel() has the C++ defaults
+errors' AR(1) correlation from one image of a track to the next, 0 to 0.99; methods 'window' and 'refine'). NoiseModel() has the C++ defaults
 (the command line's).)doc")
       .def(py::init<>())
       .def_readwrite("sigma_px", &NoiseModel::sigma_px)

@@ -75,10 +75,12 @@ WhitenedObservation whitenedAtTruth(const CameraModel &camera, const Eigen::Vect
   return whitenObservation(mt, J, sigma_px);
 }
 
-/* Adds a track's true point and its observations at the truth to m; returns the point's index, or
-   -1 when the track has fewer than two observations or the point is behind a camera. */
+/* Adds a track's true point and its observations at the truth to m, each after the first linked to
+   the previous one by phi^gap (rows) when the tracker's errors are correlated (phi > 0, as refine's
+   innovations); returns the point's index, or -1 when the track has fewer than two observations or
+   the point is behind a camera. */
 int addTruePoint(Model &m, const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &truth,
-                 const Track &track, const Eigen::Vector3d &w_point, double sigma_px)
+                 const Track &track, const Eigen::Vector3d &w_point, double sigma_px, double phi)
 {
   if (track.observations.size() < 2)
     return -1;
@@ -110,7 +112,10 @@ int addTruePoint(Model &m, const CameraModel &camera, const YawRig &rig, const s
   m.points.push_back({Pa.x() / Pa.z(), Pa.y() / Pa.z(), 1.0 / Pa.z()});
   m.anchor_row.push_back(ra);
   m.report_row.push_back(rk);
+  const std::size_t first = m.observations.size();
   m.observations.insert(m.observations.end(), obs.begin(), obs.end());
+  for (std::size_t k = 1; phi > 0 && k < obs.size(); ++k)
+    m.setChainLink(first + k, first + k - 1, std::pow(phi, obs[k].row - obs[k - 1].row));
   return point;
 }
 
@@ -125,7 +130,8 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
   std::vector<double> out(tracks.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<int> point_of_track(tracks.size(), -1);
   for (std::size_t t = 0; t < tracks.size(); ++t)
-    point_of_track[t] = addTruePoint(m, camera, rig, truth, tracks[t], w_points[t], noise.sigma_px);
+    point_of_track[t] = addTruePoint(m, camera, rig, truth, tracks[t], w_points[t], noise.sigma_px,
+                                     noise.pixel_correlation);
 
   std::vector<Eigen::Matrix3d> cov;
   std::vector<char> ok;

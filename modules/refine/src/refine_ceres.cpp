@@ -1,4 +1,5 @@
 // refineWindow() with Ceres: MAP refinement of the points with the odometry and yaw readings.
+#include "chain_costs.h"
 #include "information.h"
 
 #include <Eigen/Geometry>
@@ -227,6 +228,9 @@ private:
   void addMotionBlocks(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering);
   void addMotionPriors(ceres::Problem &problem);
   int addObservations(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering, bool robust);
+  double chainCoefficient(int gap) const;
+  void addObservation(ceres::Problem &problem, TrackData &t, std::size_t j, std::size_t prev,
+                      ceres::LossFunction *loss);
   void chooseLinearSolver(ceres::Solver::Options &so) const;
   ceres::Solver::Options solverOptions(bool robust) const;
   ceres::Solver::Summary solve(bool robust, bool &solved);
@@ -544,8 +548,50 @@ void Refiner::addMotionPriors(ceres::Problem &problem)
                                nullptr, state_.frames[r].data());
 }
 
-/* The active points' blocks and their inlier observations (Cauchy loss when robust); returns the
-   number of observations added. */
+/* phi^gap for an observation gap motion-log rows after the previous one of its track's chain
+   (NoiseModel::pixel_correlation, chain_costs.h); 0: independent errors. */
+double Refiner::chainCoefficient(int gap) const
+{
+  const double phi = o_.noise.pixel_correlation;
+  return phi > 0 && gap > 0 ? std::pow(phi, gap) : 0.0;
+}
+
+/* Observation j of a track: its residual, or with correlated tracker errors (pixel_correlation > 0)
+   the innovation on the chain's previous inlier prev (chain_costs.h; prev = j: j starts the chain).
+   The anchor observation is the track's first (prepare()), so it is always its chain's first. */
+void Refiner::addObservation(ceres::Problem &problem, TrackData &t, std::size_t j, std::size_t prev,
+                             ceres::LossFunction *loss)
+{
+  const int a = t.anchor_row, k = t.rows[j], p = t.rows[prev];
+  double *fa = state_.frames[a].data(), *fk = state_.frames[k].data(), *fp = state_.frames[p].data();
+  double *point = t.point.data();
+  const double c = prev < j ? chainCoefficient(k - p) : 0.0;
+  if (k == a)
+    problem.AddResidualBlock(AnchorCost::Create(t.w[j]), loss, point);
+  else if (c == 0 && model_.general)
+    problem.AddResidualBlock(ReprojectionCostGeneral::Create(t.w[j], model_.Rref[a], model_.Rref[k], model_.mount),
+                             loss, fa, fk, point);
+  else if (c == 0)
+    problem.AddResidualBlock(ReprojectionCost::Create(t.w[j], t0_), loss, fa, fk, point);
+  else if (p == a && model_.general)
+    problem.AddResidualBlock(InnovationAfterAnchorCostGeneral::Create(t.w[prev], t.w[j], model_.Rref[a],
+                                                                      model_.Rref[k], model_.mount,
+                                                                      ChainCoefficient(c)),
+                             loss, fa, fk, point);
+  else if (p == a)
+    problem.AddResidualBlock(InnovationAfterAnchorCost::Create(t.w[prev], t.w[j], t0_, ChainCoefficient(c)), loss, fa,
+                             fk, point);
+  else if (model_.general)
+    problem.AddResidualBlock(InnovationCostGeneral::Create(t.w[prev], t.w[j], model_.Rref[a], model_.Rref[p],
+                                                           model_.Rref[k], model_.mount, ChainCoefficient(c)),
+                             loss, fa, fp, fk, point);
+  else
+    problem.AddResidualBlock(InnovationCost::Create(t.w[prev], t.w[j], t0_, ChainCoefficient(c)), loss, fa, fp, fk,
+                             point);
+}
+
+/* The active points' blocks and their inlier observations (Cauchy loss when robust, on the
+   innovation for correlated tracker errors); returns the number of observations added. */
 int Refiner::addObservations(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering, bool robust)
 {
   const double scale = o_.robust_threshold_px / std::max(o_.noise.sigma_px, kMinSigmaPx);
@@ -555,20 +601,13 @@ int Refiner::addObservations(ceres::Problem &problem, ceres::ParameterBlockOrder
       continue;
     problem.AddParameterBlock(t.point.data(), 3);
     ordering.AddElementToGroup(t.point.data(), 0);
-    const int a = t.anchor_row;
+    std::size_t prev = t.rows.size(); // the chain's previous inlier: none yet
     for (std::size_t j = 0; j < t.rows.size(); ++j) {
       if (t.outlier[j])
         continue;
       ceres::LossFunction *loss = robust ? new ceres::CauchyLoss(scale) : nullptr;
-      const int k = t.rows[j];
-      if (k == a)
-        problem.AddResidualBlock(AnchorCost::Create(t.w[j]), loss, t.point.data());
-      else if (model_.general)
-        problem.AddResidualBlock(ReprojectionCostGeneral::Create(t.w[j], model_.Rref[a], model_.Rref[k], model_.mount),
-                                 loss, state_.frames[a].data(), state_.frames[k].data(), t.point.data());
-      else
-        problem.AddResidualBlock(ReprojectionCost::Create(t.w[j], t0_), loss, state_.frames[a].data(),
-                                 state_.frames[k].data(), t.point.data());
+      addObservation(problem, t, j, prev < j ? prev : j, loss);
+      prev = j;
       ++observations;
     }
   }
@@ -658,6 +697,11 @@ RefineProgress Refiner::progressAt(RefineProgress::Stage stage) const
   return p;
 }
 
+/* An observation is an outlier when its reprojection error exceeds outlier_threshold_px. With
+   correlated tracker errors (pixel_correlation > 0) this stays a test of the observation's own error,
+   not of its innovation: the AR(1) process is stationary, each error's marginal 1-sigma is sigma_px
+   whatever phi, so the threshold means the same; an innovation would also blame the observation
+   after a gross error for it. */
 void Refiner::flagOutliers()
 {
   for (TrackData &t : data_) {
@@ -715,7 +759,9 @@ void Refiner::gateRefined()
 }
 
 /* Covariance of every active point in the final problem (cov[index[i]] for track i, index -1 for
-   an inactive one); an Ok point whose covariance fails becomes Degenerate. */
+   an inactive one), with the final problem's AR(1) links between a track's inliers when the
+   tracker's errors are correlated (Model::chain_prev); an Ok point whose covariance fails becomes
+   Degenerate. */
 void Refiner::computeCovariances(std::vector<Eigen::Matrix3d> &cov, std::vector<int> &index)
 {
   if (o_.progress)
@@ -730,9 +776,15 @@ void Refiner::computeCovariances(std::vector<Eigen::Matrix3d> &cov, std::vector<
     if (!t.active)
       continue;
     index[i] = static_cast<int>(m.points.size());
+    int prev_row = -1; // the chain's previous inlier (addObservations' innovations)
     for (std::size_t j = 0; j < t.rows.size(); ++j)
-      if (!t.outlier[j])
+      if (!t.outlier[j]) {
+        const double c = prev_row >= 0 ? chainCoefficient(t.rows[j] - prev_row) : 0.0;
+        if (c > 0)
+          m.setChainLink(m.observations.size(), m.observations.size() - 1, c);
         m.observations.push_back({index[i], t.rows[j], t.w[j]});
+        prev_row = t.rows[j];
+      }
     m.points.push_back(t.point);
     m.anchor_row.push_back(t.anchor_row);
     m.report_row.push_back(t.report_row);

@@ -7,6 +7,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numeric>
 #include <unsupported/Eigen/AutoDiff>
@@ -72,6 +73,16 @@ template <int PD> std::array<int, Layout<PD>::kLocal> motionColumns(const Model 
 }
 
 } // namespace
+
+void Model::setChainLink(std::size_t obs, std::size_t prev, double a)
+{
+  if (chain_prev.size() <= obs) {
+    chain_prev.resize(obs + 1, -1);
+    chain_a.resize(obs + 1, 0.0);
+  }
+  chain_prev[obs] = static_cast<int>(prev);
+  chain_a[obs] = a;
+}
 
 int Model::freePoseComponents() const
 {
@@ -374,14 +385,60 @@ int pointColumns(const Model &m, const std::vector<std::vector<int>> &by_point, 
   return band;
 }
 
+/* Observation o's whitened residual's Jacobian over its local parameters (Layout: point, frame_a,
+   frame_k) for point p. */
+template <int PD>
+Eigen::Matrix<double, 2, Layout<PD>::kLocal> observationJacobian(const Model &m, int p, const ModelObservation &o)
+{
+  using AD = typename Layout<PD>::AD;
+  constexpr int kLocal = Layout<PD>::kLocal;
+  const int ra = m.anchor_row[p];
+  Eigen::Matrix<double, 2, kLocal> J = Eigen::Matrix<double, 2, kLocal>::Zero();
+  if (o.row == ra) {
+    // (alpha, beta) against the observation: d r / d point = S [I2 0].
+    J(0, 0) = o.w.s00;
+    J(0, 1) = o.w.s01;
+    J(1, 1) = o.w.s11;
+  } else {
+    const Local<PD> x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[o.row].data(), m.yaws[o.row]);
+    AD q[3];
+    modelAnchoredPoint<PD>(m, ra, o.row, x.frameA(), x.frameK(), x.point(), q);
+    AD r[2];
+    whiten(o.w, AD(q[0] / q[2] - o.w.m[0]), AD(q[1] / q[2] - o.w.m[1]), r);
+    J.row(0) = r[0].derivatives().transpose();
+    J.row(1) = r[1].derivatives().transpose();
+  }
+  return J;
+}
+
+/* J^T J of a residual into a point's information (pointInformation): J's column b is point
+   component pt[b] (0..2) or -1, and motion column loc[b] (a place in the point's columns) or -1.
+   Columns that name the same parameter add up. */
+template <int N>
+void accumulateInformation(const Eigen::Matrix<double, 2, N> &J, const std::array<int, N> &pt,
+                           const std::array<int, N> &loc, Eigen::Matrix3d &Hpp, Eigen::MatrixXd &Hpl,
+                           Eigen::MatrixXd &Hll)
+{
+  const Eigen::Matrix<double, N, N> JtJ = J.transpose() * J;
+  for (int b = 0; b < N; ++b)
+    for (int a = 0; a < N; ++a) {
+      if (pt[a] >= 0 && pt[b] >= 0)
+        Hpp(pt[a], pt[b]) += JtJ(a, b);
+      if (pt[a] >= 0 && loc[b] >= 0)
+        Hpl(pt[a], loc[b]) += JtJ(a, b);
+      if (loc[a] >= 0 && loc[b] >= 0)
+        Hll(loc[a], loc[b]) += JtJ(a, b);
+    }
+}
+
 /* One point's information from its observations: Hpp (3x3), Hpl (3 x its motion columns cp) and
    Hll (over cp). `where` maps a global motion column to its place in cp; it is all -1 on entry and
-   on return. */
+   on return. An observation linked to its chain's previous (Model::chain_prev) enters as the AR(1)
+   innovation, whose Jacobian is scale (J_k - a J_prev) over both observations' parameters. */
 template <int PD>
 void pointInformation(const Model &m, int p, const std::vector<int> &observations, const std::vector<int> &cp,
                       std::vector<int> &where, Eigen::Matrix3d &Hpp, Eigen::MatrixXd &Hpl, Eigen::MatrixXd &Hll)
 {
-  using AD = typename Layout<PD>::AD;
   constexpr int kLocal = Layout<PD>::kLocal;
   const int ra = m.anchor_row[p];
   const int k = static_cast<int>(cp.size());
@@ -389,37 +446,36 @@ void pointInformation(const Model &m, int p, const std::vector<int> &observation
     where[static_cast<std::size_t>(cp[i])] = i;
   Hpl = Eigen::MatrixXd::Zero(3, k);
   Hll = Eigen::MatrixXd::Zero(k, k);
+  // Local column b's point component and place in cp, for an observation at row.
+  auto slots = [&](int row, std::array<int, kLocal> &pt, std::array<int, kLocal> &loc) {
+    const std::array<int, kLocal> col = motionColumns<PD>(m, ra, row);
+    for (int b = 0; b < kLocal; ++b) {
+      pt[b] = b < 3 ? b : -1;
+      loc[b] = b >= 3 && col[b] >= 0 ? where[static_cast<std::size_t>(col[b])] : -1;
+    }
+  };
   for (int oi : observations) {
     const ModelObservation &o = m.observations[oi];
-    Eigen::Matrix<double, 2, kLocal> J = Eigen::Matrix<double, 2, kLocal>::Zero();
-    if (o.row == ra) {
-      // (alpha, beta) against the observation: d r / d point = S [I2 0].
-      J(0, 0) = o.w.s00;
-      J(0, 1) = o.w.s01;
-      J(1, 1) = o.w.s11;
-    } else {
-      const Local<PD> x(m.points[p].data(), m.poses[ra].data(), m.yaws[ra], m.poses[o.row].data(), m.yaws[o.row]);
-      AD q[3];
-      modelAnchoredPoint<PD>(m, ra, o.row, x.frameA(), x.frameK(), x.point(), q);
-      AD r[2];
-      whiten(o.w, AD(q[0] / q[2] - o.w.m[0]), AD(q[1] / q[2] - o.w.m[1]), r);
-      J.row(0) = r[0].derivatives().transpose();
-      J.row(1) = r[1].derivatives().transpose();
+    const Eigen::Matrix<double, 2, kLocal> J = observationJacobian<PD>(m, p, o);
+    std::array<int, kLocal> pt, loc;
+    slots(o.row, pt, loc);
+    const int prev = m.chainPrevious(static_cast<std::size_t>(oi));
+    if (prev < 0) {
+      accumulateInformation<kLocal>(J, pt, loc, Hpp, Hpl, Hll);
+      continue;
     }
-    const std::array<int, kLocal> col = motionColumns<PD>(m, ra, o.row);
-    std::array<int, kLocal> loc;
-    for (int b = 0; b < kLocal; ++b)
-      loc[b] = col[b] >= 0 ? where[static_cast<std::size_t>(col[b])] : -1;
-    const Eigen::Matrix<double, kLocal, kLocal> JtJ = J.transpose() * J;
-    Hpp += JtJ.template topLeftCorner<3, 3>();
-    for (int b = 3; b < kLocal; ++b) {
-      if (loc[b] < 0)
-        continue;
-      Hpl.col(loc[b]) += JtJ.template block<3, 1>(0, b);
-      for (int a = 3; a < kLocal; ++a)
-        if (loc[a] >= 0)
-          Hll(loc[a], loc[b]) += JtJ(a, b);
-    }
+    const ModelObservation &op = m.observations[prev];
+    const double a = m.chain_a[oi], scale = 1.0 / std::sqrt(1.0 - a * a);
+    Eigen::Matrix<double, 2, 2 * kLocal> Jl;
+    Jl << scale * J, -scale * a * observationJacobian<PD>(m, p, op);
+    std::array<int, kLocal> pt_prev, loc_prev;
+    slots(op.row, pt_prev, loc_prev);
+    std::array<int, 2 * kLocal> pt2, loc2;
+    std::copy(pt.begin(), pt.end(), pt2.begin());
+    std::copy(pt_prev.begin(), pt_prev.end(), pt2.begin() + kLocal);
+    std::copy(loc.begin(), loc.end(), loc2.begin());
+    std::copy(loc_prev.begin(), loc_prev.end(), loc2.begin() + kLocal);
+    accumulateInformation<2 * kLocal>(Jl, pt2, loc2, Hpp, Hpl, Hll);
   }
   for (int c : cp)
     where[static_cast<std::size_t>(c)] = -1;

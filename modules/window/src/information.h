@@ -49,6 +49,12 @@ struct Model {
   double inv_sigma_yaw = 0;
   bool poses_free = false, yaws_free = false;
   bool rotation_free[3] = {false, true, false}; //!< general chain: which components of d are estimated
+  // The tracker's correlated errors (NoiseModel::pixel_correlation; refine's chain_costs.h): per
+  // observation, the index of its track's previous observation in the chain (same point, earlier
+  // row) or -1, and the AR(1) coefficient a on it; the observation then enters as the innovation
+  // (r - a r_prev) / sqrt(1 - a^2). Shorter than observations (empty: independent errors): -1 beyond.
+  std::vector<int> chain_prev;
+  std::vector<double> chain_a;
 
   int rows() const { return static_cast<int>(poses.size()); }
   /*! The first row whose pose is estimated: 1 (row 0 is the gauge) for increment noise, 0 for per-pose noise. */
@@ -63,6 +69,10 @@ struct Model {
   int freePoseComponents() const;
   /*! Whether component j of a pose is estimated (for rows >= 1, when poses are free). */
   bool componentFree(int j) const { return j < 3 || !general || rotation_free[j - 3]; }
+  /* Links observation obs to prev (its chain's previous) with coefficient a, 0 < a < 1. */
+  void setChainLink(std::size_t obs, std::size_t prev, double a);
+  /* Observation obs's chain predecessor, or -1. */
+  int chainPrevious(std::size_t obs) const { return obs < chain_prev.size() ? chain_prev[obs] : -1; }
 };
 
 /*!

@@ -150,8 +150,8 @@ struct NoiseModel {
       \f$ e_k = \phi^{g} e_{k'} + \sqrt{1 - \phi^{2g}}\, \sigma_{px} n_k \f$ (k' the track's previous
       observation, g the frames between them, n white), stationary 1-sigma sigma_px. 0 (the default):
       independent errors, as a detector that finds each corner anew (a board) makes them; a tracker
-      that follows a corner from image to image makes errors that persist (estimatePoints() measures
-      phi from the residuals for `window`). At most 0.99. */
+      that follows a corner from image to image makes errors that persist (estimatePoints() may
+      measure phi from the residuals for `window` and `refine`: modelsTrackerCorrelation()). At most 0.99. */
   double pixel_correlation = 0.0;
   /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative (and the per-metre
       and per-radian terms are 0 for MotionNoise::Absolute). */

@@ -83,8 +83,10 @@ bool methodAvailable(Method m);
 /*! \brief The most accurate method this build has: refine with Ceres, else fused. */
 Method bestMethod();
 /*! \brief Whether the method models the tracker's correlated errors (NoiseModel::pixel_correlation):
-    estimatePoints() then measures that correlation from the residuals (when the model leaves it 0 and
-    the residual check runs) and runs the method with it; the others take only 0. */
+    window and refine; the others take only 0. When the model leaves it 0, the residual check runs and
+    the residuals cannot show the tracker's errors whole (a drifting motion: no
+    ResidualCheckResult::error_model), estimatePoints() measures that correlation from them and runs
+    the method with it. */
 bool modelsTrackerCorrelation(Method m);
 
 /*!

@@ -121,9 +121,9 @@ RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const st
   \brief Cramér–Rao lower bound of each point's depth zc at its track's last frame.
 
   The Fisher information of the same model as refineWindow() (pixels of every observation in
-  `tracks`, priors on every increment (or pose) and yaw reading; for increment noise frame 0's pose
-  known), evaluated at the
-  truth, inverted, and projected on the depth. Only the frames of the observations are used, not
+  `tracks`, their errors an AR(1) process along each track when noise.pixel_correlation > 0, priors
+  on every increment (or pose) and yaw reading; for increment noise frame 0's pose known), evaluated
+  at the truth, inverted, and projected on the depth. Only the frames of the observations are used, not
   their pixel values. Returns the 1-sigma bound per track (NaN for tracks with < 2 observations).
   \param camera Camera model. \param rig Yaw rig.
   \param truth True motion rows. \param tracks The features (only their observations' frames are used).
