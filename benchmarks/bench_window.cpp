@@ -5,6 +5,7 @@
   consistency. Plain-text tables on stdout.
 
     bench_window [--quick] [--seed S] [--frames N] [--trials T] [--window K] [--no-cost] [--no-sequence]
+                 [--pixel-correlation PHI]
   --quick      fewer repetitions (cost: 20 frames timed per case; long sequence: 1 trial).
   --seed S     base seed (default 1).
   --frames N   long-sequence length (default 1000).
@@ -12,6 +13,8 @@
   --window K   long sequence: the window's length (default WindowOptions().window, 10).
   --no-cost    skip the cost table.
   --no-sequence  skip the long sequence.
+  --pixel-correlation PHI  the pixels' errors a tracker's (AR(1) along each track, PHI from one frame to
+               the next, the same 1-sigma), and the window told so (NoiseModel::pixel_correlation).
 
   Targets (issue 35), checked: `window` (addFrame) under 5 ms per frame at 300 features x 10 frames
   and under 0.5 ms at 30 x 10; exit 1 when one is missed.
@@ -67,7 +70,7 @@ std::vector<std::vector<FeatureObservation>> framesOf(const Scene &s)
 }
 
 /* 1. Cost per frame with N features always in view, once the window is full. */
-bool costTable(bool quick, std::uint64_t seed)
+bool costTable(bool quick, std::uint64_t seed, double phi)
 {
   bool met = true;
   const CameraModel camera = paperCamera();
@@ -96,10 +99,15 @@ bool costTable(bool quick, std::uint64_t seed)
       so.margin_px = 200;
       so.noise = paperNoise();
       so.seed = seed;
-      const Scene s = simulateScene(camera, rig, so);
+      if (phi > 0)
+        so.noise.sigma_px = 0; // the tracker's errors instead, below
+      Scene s = simulateScene(camera, rig, so);
+      if (phi > 0)
+        addTrackerErrors(s.tracks, paperNoise().sigma_px, phi, seed + 1000);
       const auto frames = framesOf(s);
       WindowOptions wo;
-      wo.noise = so.noise;
+      wo.noise = paperNoise();
+      wo.noise.pixel_correlation = phi;
       wo.window = K;
       WindowEstimator w(camera, rig, wo);
       FusedOptions fo;
@@ -262,7 +270,7 @@ void printSegments(const std::vector<Seg> &segs, int segment, int frames)
 }
 
 /* 2. A long sequence: a wall of points beside a straight path, the camera at side view. */
-void longSequence(int frames, int trials, std::uint64_t seed, int window, const NoiseModel &noise)
+void longSequence(int frames, int trials, std::uint64_t seed, int window, const NoiseModel &noise, double phi)
 {
   const CameraModel camera = paperCamera();
   const YawRig rig = paperRig();
@@ -278,9 +286,15 @@ void longSequence(int frames, int trials, std::uint64_t seed, int window, const 
   std::vector<Seg> segs(static_cast<std::size_t>((frames + segment - 1) / segment));
   double total_ms = 0;
   for (int t = 0; t < trials; ++t) {
-    const Scene s = wallScene(camera, rig, frames, step, seed + static_cast<std::uint64_t>(t), noise);
+    NoiseModel simulated = noise;
+    if (phi > 0)
+      simulated.sigma_px = 0; // the tracker's errors instead, below
+    Scene s = wallScene(camera, rig, frames, step, seed + static_cast<std::uint64_t>(t), simulated);
+    if (phi > 0)
+      addTrackerErrors(s.tracks, noise.sigma_px, phi, seed + 1000 + static_cast<std::uint64_t>(t));
     WindowOptions wo;
     wo.noise = noise;
+    wo.noise.pixel_correlation = phi;
     wo.window = window;
     const auto t0 = Clock::now();
     const std::vector<PointEstimate> est = windowTracks(camera, rig, s.measured, s.tracks, wo);
@@ -323,10 +337,12 @@ int main(int argc, char **argv)
   bool quick = false, skip_cost = false, skip_sequence = false;
   std::uint64_t seed = 1;
   int frames = 1000, trials = 4, window = WindowOptions().window;
+  double phi = 0;
   NoiseModel noise = paperNoise();
-  bench::CommandLine cli("[--quick] [--seed S] [--frames N] [--trials T] [--window K] [--no-cost] [--no-sequence]");
+  bench::CommandLine cli("[--quick] [--seed S] [--frames N] [--trials T] [--window K] [--no-cost] [--no-sequence] "
+                         "[--pixel-correlation PHI]");
   cli.flag("--quick", quick).flag("--no-cost", skip_cost).flag("--no-sequence", skip_sequence).option("--seed", seed).option("--frames", frames);
-  cli.option("--window", window).option("--trials", trials);
+  cli.option("--window", window).option("--trials", trials).option("--pixel-correlation", phi);
   cli.option("--noise", 4, [&noise](char **v) { // px, m, deg, deg
     noise.sigma_px = std::atof(v[0]);
     noise.sigma_odom = std::atof(v[1]);
@@ -335,17 +351,22 @@ int main(int argc, char **argv)
   });
   if (!cli.parse(argc, argv))
     return 2;
-  if (frames < 20 || trials < 1 || window < 2) {
-    std::fprintf(stderr, "bench_window: --frames must be >= 20, --trials >= 1, --window >= 2\n");
+  if (frames < 20 || trials < 1 || window < 2 || !(phi >= 0 && phi <= kMaxPixelCorrelation)) {
+    std::fprintf(stderr, "bench_window: --frames must be >= 20, --trials >= 1, --window >= 2, --pixel-correlation in [0, 0.99]\n");
     return 2;
   }
   if (quick)
     trials = 1;
   std::printf("yawdepth recursive estimators: cost per frame and a long sequence\n");
-  std::printf("Reproduce: build/benchmarks/bench_window%s --seed %llu --frames %d --trials %d --window %d\n",
-              quick ? " --quick" : "", static_cast<unsigned long long>(seed), frames, trials, window);
-  const bool met = skip_cost || costTable(quick, seed);
+  std::printf("Reproduce: build/benchmarks/bench_window%s --seed %llu --frames %d --trials %d --window %d "
+              "--pixel-correlation %g\n",
+              quick ? " --quick" : "", static_cast<unsigned long long>(seed), frames, trials, window, phi);
+  if (phi > 0)
+    std::printf("The pixels' errors: a tracker's (AR(1) along each track, %.2f from one frame to the next, %.2f px), "
+                "modelled so by the window (NoiseModel::pixel_correlation).\n",
+                phi, noise.sigma_px);
+  const bool met = skip_cost || costTable(quick, seed, phi);
   if (!skip_sequence)
-    longSequence(frames, trials, seed, window, noise);
+    longSequence(frames, trials, seed, window, noise, phi);
   return met ? 0 : 1;
 }

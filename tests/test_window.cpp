@@ -516,7 +516,7 @@ TEST_CASE_METHOD(PaperSetup, "window models the tracker's correlated errors (AR(
 {
   constexpr double kPhi = 0.9, kSigmaPx = 1.0; // the pixels' errors dominate the odometry's here
   // The marginalised chain against the whole track in the window: the same sigma to this share
-  // (first-estimate Jacobians and the prior's dropped directions, 1 % of a point's information).
+  // (first-estimate Jacobians and the prior's dropped directions, 1e-5 of a point's information here).
   constexpr double kSigmaAgreement = 0.03;
   constexpr double kHonestCoverage = 0.90; // docs/method.md's band is 0.90 to 0.98
   Stats white, modelled, whole_stats;

@@ -51,6 +51,7 @@ refine-scale-in-view	"$B/benchmarks/bench_refine_scale" --scene in-view --points
 window-30-frames	"$B/benchmarks/bench_accuracy" --trials 100 --frames 30
 window-cost	"$B/benchmarks/bench_window" --quick
 window-long	"$B/benchmarks/bench_window" --frames 1000 --trials 4 --no-cost
+window-long-correlated	"$B/benchmarks/bench_window" --no-cost --frames 600 --trials 4 --pixel-correlation 0.9
 active-yaw	"$B/benchmarks/bench_active_yaw" --seeds 20
 servo-yawing	examples/servo_table.sh "$B/examples/servo_ibvs_yawing_camera"
 servo-pioneer	examples/servo_table_pioneer.sh "$B/examples/servo_pioneer_pan" 10

@@ -41,7 +41,7 @@ void addMotionNoiseOptions(CLI::App *sub, MethodArgs &args)
       ->capture_default_str();
   sub->add_option("--pixel-correlation", args.noise.pixel_correlation,
                   "window, refine: correlation of the tracker's errors from one image of a track to the next (AR(1), 0 to 0.99); "
-                  "0: independent, or measured from the residuals when the residual check is on")
+                  "0: independent, or, with the residual check on and per-increment motion noise, measured from the residuals")
       ->check(CLI::Range(0.0, kMaxPixelCorrelation))
       ->capture_default_str();
   sub->add_option_function<std::string>(

@@ -225,9 +225,11 @@ Reestimated noiseFromResiduals(const CameraModel &camera, const YawRig &rig, con
   if (modelsTrackerCorrelation(options.method) && options.noise.pixel_correlation == 0 &&
       options.residual_check.correlated && c.correlation >= kMinModelledCorrelation && !(c.error_model.variance > 0)) {
     out.noise.pixel_correlation = c.correlation;
-    if (c.correlated_variance_factor > 1) {
-      out.pixel_scale = std::max(out.pixel_scale, std::sqrt(c.correlated_variance_factor));
-      out.noise.sigma_px = options.noise.sigma_px * out.pixel_scale;
+    if (c.correlated_variance_factor > 1 && std::sqrt(c.correlated_variance_factor) > out.pixel_scale) {
+      // The innovations say more noise than the model given: that, and the gate at the model given.
+      out.pixel_scale = std::sqrt(c.correlated_variance_factor);
+      out.noise.sigma_px = std::max(kMinPixelNoise, options.noise.sigma_px * out.pixel_scale);
+      out.gate_scale = 1;
     }
   }
   return out;

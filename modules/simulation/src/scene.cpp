@@ -290,4 +290,24 @@ std::vector<vpHomogeneousMatrix> armTrajectory(const YawRig &rig, ArmPath path, 
   return poses;
 }
 
+
+void addTrackerErrors(std::vector<Track> &tracks, double sigma, double phi, std::uint64_t seed)
+{
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (Track &t : tracks) {
+    double eu = sigma * n(rng), ev = sigma * n(rng);
+    long last = t.observations.empty() ? 0 : t.observations.front().frame;
+    for (Observation &ob : t.observations) {
+      const double a = std::pow(phi, static_cast<double>(ob.frame - last));
+      const double s = sigma * std::sqrt(1.0 - a * a);
+      eu = a * eu + s * n(rng);
+      ev = a * ev + s * n(rng);
+      last = ob.frame;
+      ob.u += eu;
+      ob.v += ev;
+    }
+  }
+}
+
 } // namespace yawdepth

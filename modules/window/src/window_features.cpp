@@ -160,7 +160,11 @@ void Impl::enterState(Feature &ft)
 void Impl::restartFeature(Feature &ft)
 {
   dropFromPrior(ft);
-  ft.chain_frame = kNoChain; // what its chain put in the prior left with it
+  // The observations up to its chain's link in the prior are in the prior's frame information still
+  // (dropFromPrior keeps that): they leave, or the restart would count them again.
+  ft.obs.erase(std::remove_if(ft.obs.begin(), ft.obs.end(), [&](const Obs &ob) { return ob.frame <= ft.chain_frame; }),
+               ft.obs.end());
+  ft.chain_frame = kNoChain;
   for (Obs &ob : ft.obs)
     ob.outlier = false;
   ft.in_state = false;

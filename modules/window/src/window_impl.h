@@ -108,10 +108,10 @@ constexpr long kNoChain = std::numeric_limits<long>::min();
   structure is kept.
 */
 struct ChainLink {
-  Eigen::Vector2d r;             // set when valid
-  Eigen::Matrix<double, 2, 10> J; // (frame's 7, point's 3), set when valid and a Jacobian was asked for
-  int fi = -1;                   // window frame index
-  bool valid = false;            // a residual (the point is in front)
+  Eigen::Vector2d r = Eigen::Vector2d::Zero();                            // read only when valid
+  Eigen::Matrix<double, 2, 10> J = Eigen::Matrix<double, 2, 10>::Zero(); // (frame's 7, point's 3)
+  int fi = -1;        // window frame index
+  bool valid = false; // a residual (the point is in front)
 };
 
 /* The estimator's state and parts (WindowEstimator::Impl is this). */

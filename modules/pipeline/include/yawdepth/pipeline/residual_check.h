@@ -35,22 +35,32 @@
     far one, a corner on a silhouette, a track that slid along its epipolar line, which the
     tracker's epipolar gate cannot see): its status becomes `inconsistent`.
 
-  - **Correlated tracker errors**: a tracker that follows a corner from frame to frame makes errors
-    that persist (the corner's appearance changes slowly with the view); the fit absorbs much of
-    them, and its covariance, computed as if each frame's error were new, is then too small for a
-    long track. An AR(1) model of the tracker's errors (per axis, \f$ \rho \f$ from one image to the
-    next) is measured from the tracks (those of 5 observations or more; only the observations whose
-    pixel noise dominates their variance, the motion's part under a quarter, so that modelled pose
-    drift is not taken for the tracker's): \f$ \rho \f$ is the correlation under which each track's
-    residuals, refitted with that model (generalised least squares) and whitened (each observation's
-    innovation given the previous), have no lag-one correlation, pooled. (The raw residuals' own
-    correlation says less: the fit absorbs the slow part of what persists.) For each ok track of 3
-    observations or more, the depth variance that model allows with the Jacobians J of its pixels,
-    \f[ \sigma_Z^2 \ge \max(1, s_0^2)\, \sigma_{px}^2 \left[(J^\top C_\rho^{-1} J)^{-1}\right]_{ZZ}, \f]
-    (\f$ C_\rho \f$ the AR(1) correlation along the track, per axis), raises its covariance when the
-    method's is smaller (the whole matrix scaled). White errors give \f$ \rho \approx 0 \f$: nothing
-    changes. estimatePoints() gives \f$ \rho \f$ to a method that models it
-    (NoiseModel::pixel_correlation, modelsTrackerCorrelation()).
+  - **The tracker's errors**: a tracker that follows a corner from frame to frame makes errors that
+    persist (the corner's appearance changes slowly with the view); the fit absorbs much of them,
+    and a covariance computed as if each frame's error were new is too small for a long track. Both
+    estimates below use every ok track of 5 observations or more, those the gate then calls
+    inconsistent too (the gate weighs the residuals as independent: a track whose errors persist
+    fails it as a T-junction does):
+    - where the residuals show only the pixels (the motion's modelled part under 5 % of every
+      observation's variance, and no per-increment drift, which persists as the tracker's slow part
+      does), a white part plus a persistent part per pixel axis,
+      \f$ \mathrm{cov}(e_j, e_k) = \sigma^2 [w\,\delta_{jk} + (1 - w)\,\phi^{|j - k|}] \f$, by restricted
+      maximum likelihood over the tracks (ResidualCheckResult::error_model; tracks of up to 120
+      observations, at most 150 of them);
+    - otherwise the AR(1) correlation \f$ \rho \f$ from one image to the next (only the observations
+      whose pixel noise dominates, the motion's part under a quarter): the \f$ \rho \f$ under which each
+      track's residuals, refitted with that model and whitened (each observation's innovation given
+      the previous), have no lag-one correlation, pooled (`correlation`; the raw residuals'
+      correlation says less: the fit absorbs the slow part), at the pixel variance of the whitened
+      residuals (`correlated_variance_factor`, never below the model's).
+    Every ok track's depth variance is then at least what that model allows it with its pixels'
+    Jacobians, \f$ \sigma_Z^2 \ge \sigma^2 [(J^\top C^{-1} J)^{-1}]_{ZZ} \f$, at the track's own noise where its
+    residuals show it larger beyond doubt (their chi-square beyond its 95 % quantile), a track too
+    short to show its own errors (under 5 observations) counting them as independent; a track over
+    120 observations is thinned for it (the floor then the larger). The whole covariance is scaled.
+    Independent errors give a white model or \f$ \rho \approx 0 \f$: nothing changes. estimatePoints()
+    gives \f$ \rho \f$ to a method that models it (NoiseModel::pixel_correlation, modelsTrackerCorrelation())
+    where no error_model is measured.
 
   - **The noise model from the residuals** (estimatePoints(), `reestimate_noise`): when the residuals
     see all of the modelled noise (per-pose motion noise is white and shows in them; per-increment
@@ -110,7 +120,7 @@ struct TrackResidual {
   /*! The depth's 1-sigma (m, the point's frame) that the tracker's error model allows this track with
       the poses known, at the model's pooled noise: its Cramer-Rao bound under that model (the model:
       ResidualCheckResult::error_model when estimated, else the AR(1) one of `correlation`; NaN: neither,
-      or a track under 5 observations). */
+      a model without correlation (white), or a track under 5 observations). */
   double sigma_z_bound = std::numeric_limits<double>::quiet_NaN();
 };
 

@@ -63,6 +63,14 @@ struct Scene {
 */
 Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOptions &options);
 
+/*!
+  \brief Add a tracker's errors to every track's pixels: per axis an AR(1) process along the track
+  (NoiseModel::pixel_correlation's model), stationary 1-sigma `sigma` (px), correlation `phi` from one
+  frame to the next (phi^gap across a gap), seeded. A scene simulated with sigma_px 0 then has the
+  errors of a tracker that follows its corners from image to image.
+*/
+void addTrackerErrors(std::vector<Track> &tracks, double sigma, double phi, std::uint64_t seed);
+
 /*! \brief Kinds of arm-like camera paths (armTrajectory()). */
 enum class ArmPath {
   Approach, //!< toward the target along the optical axis, drifting sideways, 30 % of the distance
