@@ -564,6 +564,62 @@ TEST_CASE_METHOD(PaperSetup, "window models the tracker's correlated errors (AR(
   CHECK(std::abs(median_ratio - 1.0) < kSigmaAgreement);
 }
 
+TEST_CASE_METHOD(PaperSetup, "window's AR(1) chains across gaps and gross outliers: the marginalised chain as the whole track",
+                 "[window][montecarlo]")
+{
+  // Every track loses a seeded 15 % of its observations (gaps: phi^gap) and 3 % are moved 40 px
+  // (flagged, the chain skips them). The estimate with 12 of the 20 frames marginalised must agree
+  // with the one that keeps every frame, and stay honest.
+  constexpr double kPhi = 0.9, kSigmaPx = 1.0, kDrop = 0.15, kGross = 0.03, kGrossPx = 40.0;
+  constexpr double kSigmaAgreement = 0.05; // wider than without gaps: flags can differ between the two runs
+  Stats marginalised;
+  std::vector<double> sigma_ratio;
+  std::mt19937_64 rng(91);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int t = 0; t < 20; ++t) {
+    SceneOptions so = paperScene(45 * kDeg, 0.5 * kDeg, 20, 500 + static_cast<std::uint64_t>(t));
+    so.noise.sigma_px = 0;
+    Scene s = simulateScene(camera, rig, so);
+    addTrackerErrors(s.tracks, kSigmaPx, kPhi, 900 + static_cast<std::uint64_t>(t));
+    for (Track &tr : s.tracks) {
+      std::vector<Observation> kept;
+      for (std::size_t k = 0; k < tr.observations.size(); ++k) {
+        Observation ob = tr.observations[k];
+        const bool end = k == 0 || k + 1 == tr.observations.size();
+        if (!end && u(rng) < kDrop)
+          continue;
+        if (!end && u(rng) < kGross)
+          ob.u += kGrossPx;
+        kept.push_back(ob);
+      }
+      tr.observations = kept;
+    }
+    const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
+    WindowOptions o;
+    o.noise = noise;
+    o.noise.sigma_px = kSigmaPx;
+    o.noise.pixel_correlation = kPhi;
+    o.window = 8;
+    const std::vector<PointEstimate> m = windowTracks(camera, rig, s.measured, s.tracks, o);
+    o.window = 25;
+    const std::vector<PointEstimate> whole = windowTracks(camera, rig, s.measured, s.tracks, o);
+    for (std::size_t i = 0; i < s.tracks.size(); ++i) {
+      if (!m[i].ok() || !whole[i].ok() || !(crlb[i] > 0) || !std::isfinite(crlb[i]))
+        continue;
+      marginalised.add(m[i].c_P.z() - truthAtLast(s, rig, s.tracks[i]).z(), crlb[i], m[i].sigmaZ());
+      sigma_ratio.push_back(m[i].sigmaZ() / whole[i].sigmaZ());
+    }
+  }
+  REQUIRE(marginalised.n > 300);
+  std::sort(sigma_ratio.begin(), sigma_ratio.end());
+  const double median_ratio = sigma_ratio[sigma_ratio.size() / 2];
+  INFO("coverage " << marginalised.coverage() << ", sigma marginalised / whole " << median_ratio << " over "
+                   << marginalised.n << " points");
+  CHECK(marginalised.coverage() > kMinCoverage);
+  CHECK(marginalised.coverage() < kMaxCoverage);
+  CHECK(std::abs(median_ratio - 1.0) < kSigmaAgreement);
+}
+
 TEST_CASE("window rejects bad input", "[window]")
 {
   const CameraModel camera = paperCamera();
