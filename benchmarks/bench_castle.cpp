@@ -95,30 +95,6 @@ struct Args {
   bool no_residual_check = false;
 };
 
-/* Frames 1..frames of the sequence: the camera's motion (world = the object's frame), the images' paths, the depth maps. */
-struct Sequence {
-  std::vector<MotionSample> motion;
-  std::vector<std::string> images;
-  std::vector<DepthMap> depth;
-};
-
-/* Reads frames 1..frames of the sequence in folder `data`. */
-Sequence readSequence(const std::string &data, int frames)
-{
-  Sequence q;
-  char name[64];
-  for (int k = 1; k <= frames; ++k) {
-    std::snprintf(name, sizeof name, "/CameraPose/Camera_%03d.txt", k);
-    const vpHomogeneousMatrix cMo = readPose(data + name);
-    q.motion.push_back(MotionSample::fromPose(k, cMo.inverse(), 0.0));
-    std::snprintf(name, sizeof name, "/Images/Image_%04d.pgm", k);
-    q.images.push_back(data + name);
-    std::snprintf(name, sizeof name, "/Depth/Depth_%04d.bin", k);
-    q.depth.push_back(readDepth(data + name));
-  }
-  return q;
-}
-
 /* The estimator's noise model: sigma_px on the pixels, the given poses exact (per-pose noise 0). */
 NoiseModel castleNoise(double sigma_px)
 {

@@ -555,19 +555,13 @@ SceneErrors wallScene(int frames, const KltOptions &ko)
 SceneErrors castleScene(const std::string &data, int frames, const KltOptions &ko)
 {
   using namespace bench::castle;
-  std::vector<MotionSample> motion;
-  std::vector<cv::Mat> images;
-  std::vector<DepthMap> depth;
   const CameraModel camera = CameraModel::brown(kFocal, kFocal, kU0, kV0, {0, 0, 0, 0}, 640, 480);
-  char name[64];
-  for (int k = 1; k <= frames; ++k) {
-    std::snprintf(name, sizeof name, "/CameraPose/Camera_%03d.txt", k);
-    motion.push_back(MotionSample::fromPose(k, readPose(data + name).inverse(), 0.0));
-    std::snprintf(name, sizeof name, "/Images/Image_%04d.pgm", k);
-    images.push_back(readGrayImage(data + name, camera));
-    std::snprintf(name, sizeof name, "/Depth/Depth_%04d.bin", k);
-    depth.push_back(readDepth(data + name));
-  }
+  const Sequence q = readSequence(data, frames);
+  const std::vector<MotionSample> &motion = q.motion;
+  const std::vector<DepthMap> &depth = q.depth;
+  std::vector<cv::Mat> images;
+  for (const std::string &path : q.images)
+    images.push_back(readGrayImage(path, camera));
   const SequenceTracks seq =
       trackSequence(camera, YawRig(), motion, [&](std::size_t i) { return images[i]; }, exactMotionNoise(), ko);
   const auto row = [](long frame) { return static_cast<std::size_t>(frame - 1); };

@@ -331,18 +331,12 @@ int main(int argc, char **argv)
       const CameraModel castle_camera = CameraModel::brown(kFocal, kFocal, bench::castle::kU0, bench::castle::kV0,
                                                            {0, 0, 0, 0}, 640, 480);
       const PipelineOptions castle_po = pipelineOptions(0.3);
+      const Sequence q = readSequence(data, 40);
+      const std::vector<MotionSample> &motion = q.motion;
+      const std::vector<DepthMap> &depth = q.depth;
       std::vector<cv::Mat> images;
-      std::vector<DepthMap> depth;
-      std::vector<MotionSample> motion;
-      char name[64];
-      for (int k = 1; k <= 40; ++k) {
-        std::snprintf(name, sizeof name, "/CameraPose/Camera_%03d.txt", k);
-        motion.push_back(MotionSample::fromPose(k, readPose(data + name).inverse(), 0.0));
-        std::snprintf(name, sizeof name, "/Images/Image_%04d.pgm", k);
-        images.push_back(readGrayImage(data + name, castle_camera));
-        std::snprintf(name, sizeof name, "/Depth/Depth_%04d.bin", k);
-        depth.push_back(readDepth(data + name));
-      }
+      for (const std::string &path : q.images)
+        images.push_back(readGrayImage(path, castle_camera));
       for (int skip : {2, 4, 8}) {
         std::vector<Pair> pairs;
         for (int k = 0; k + skip < 40; k += skip) {

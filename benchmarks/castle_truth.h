@@ -8,11 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
 #include <Eigen/Core>
 #include <visp3/core/vpHomogeneousMatrix.h>
+#include <yawdepth/core/types.h>
 #include <yawdepth/error.h>
 
 namespace yawdepth {
@@ -79,6 +81,30 @@ inline vpHomogeneousMatrix readPose(const std::string &path)
   if (!M.isAnHomogeneousMatrix(1e-6))
     throw Error(path + ": not a rigid transformation");
   return M;
+}
+
+/* Frames 1..frames of the sequence: the camera's motion (world = the object's frame, wMc = cMo^-1),
+   the images' paths, the depth maps. */
+struct Sequence {
+  std::vector<MotionSample> motion;
+  std::vector<std::string> images;
+  std::vector<DepthMap> depth;
+};
+
+/* Reads frames 1..frames of the sequence in folder `data` (the images are read by the caller). */
+inline Sequence readSequence(const std::string &data, int frames)
+{
+  Sequence q;
+  char name[64];
+  for (int k = 1; k <= frames; ++k) {
+    std::snprintf(name, sizeof name, "/CameraPose/Camera_%03d.txt", k);
+    q.motion.push_back(MotionSample::fromPose(k, readPose(data + name).inverse(), 0.0));
+    std::snprintf(name, sizeof name, "/Images/Image_%04d.pgm", k);
+    q.images.push_back(data + name);
+    std::snprintf(name, sizeof name, "/Depth/Depth_%04d.bin", k);
+    q.depth.push_back(readDepth(data + name));
+  }
+  return q;
 }
 
 

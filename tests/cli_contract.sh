@@ -793,6 +793,10 @@ refused out_is_rig "is the input --rig" estimate --camera "$XML" --rig "$F/rig.y
 cmp -s "$RIG" "$F/rig.yaml" && pass || fail "files: the rig input changed"
 refused outliers_empty "empty file name" "${EF[@]}" --method fused --outliers ""
 refused ply_is_motion "is the input --motion" "${EF[@]}" --ply "$F/m.csv" --out "$F/p.csv"
+# --pixel-correlation: only a method that models it, only in [0, 0.99].
+refused pixel_correlation_fused "does not model correlated tracker errors" "${EF[@]}" --method fused \
+  --pixel-correlation 0.5 --out "$F/p.csv"
+refused pixel_correlation_range "pixel-correlation" "${EF[@]}" --method window --pixel-correlation 1.5 --out "$F/p.csv"
 refused ply_is_out "are the same file" "${EF[@]}" --ply "$F/p.csv" --out "$F/p.csv"
 # Devices and endless inputs: refused at once, never read.
 for what in motion tracks camera rig; do

@@ -66,11 +66,17 @@ struct CrlbStats {
   double coverage() const { return double(covered) / std::max(n, 1); }
 };
 
-/* Each track's pixels with AR(1) errors along it (stationary 1-sigma sigma, correlation phi from one
-   frame to the next, NoiseModel::pixel_correlation): what a tracker that follows corners makes. */
-inline void addCorrelatedErrors(std::vector<Track> &tracks, double sigma, double phi, std::uint64_t seed)
+/* The paper's scene seen at 45 degrees, turning 0.5 degree per frame, 20 frames (seed), its pixels
+   with a tracker's errors instead of independent ones: AR(1) along each track, stationary 1-sigma
+   sigma, phi from one frame to the next (seed + 400; addTrackerErrors). */
+inline Scene trackerErrorScene(const CameraModel &camera, const YawRig &rig, double sigma, double phi, std::uint64_t seed)
 {
-  addTrackerErrors(tracks, sigma, phi, seed);
+  constexpr double deg = M_PI / 180.0;
+  SceneOptions so = paperScene(45 * deg, 0.5 * deg, 20, seed);
+  so.noise.sigma_px = 0; // the tracker's errors instead
+  Scene s = simulateScene(camera, rig, so);
+  addTrackerErrors(s.tracks, sigma, phi, seed + 400);
+  return s;
 }
 
 } // namespace test

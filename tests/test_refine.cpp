@@ -1088,10 +1088,7 @@ TEST_CASE_METHOD(PaperSetup, "refine models the tracker's correlated errors (AR(
   Stats white, modelled;
   double sum_sq_white = 0, sum_sq_modelled = 0;
   for (int t = 0; t < kTrials; ++t) {
-    SceneOptions so = paperScene(45 * kDeg, 0.5 * kDeg, 20, 300 + static_cast<std::uint64_t>(t));
-    so.noise.sigma_px = 0; // the pixels' errors are added below
-    Scene s = simulateScene(camera, rig, so);
-    addCorrelatedErrors(s.tracks, kSigmaPx, kPhi, 700 + static_cast<std::uint64_t>(t));
+    const Scene s = trackerErrorScene(camera, rig, kSigmaPx, kPhi, 300 + static_cast<std::uint64_t>(t));
     const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
     RefineOptions o;
     o.noise = noise;

@@ -523,10 +523,7 @@ TEST_CASE_METHOD(PaperSetup, "window models the tracker's correlated errors (AR(
   double sum_sq_white = 0, sum_sq_modelled = 0;
   std::vector<double> sigma_ratio;
   for (int t = 0; t < 30; ++t) {
-    SceneOptions so = paperScene(45 * kDeg, 0.5 * kDeg, 20, 300 + static_cast<std::uint64_t>(t));
-    so.noise.sigma_px = 0; // the pixels' errors are added below
-    Scene s = simulateScene(camera, rig, so);
-    addCorrelatedErrors(s.tracks, kSigmaPx, kPhi, 700 + static_cast<std::uint64_t>(t));
+    const Scene s = trackerErrorScene(camera, rig, kSigmaPx, kPhi, 300 + static_cast<std::uint64_t>(t));
     const std::vector<double> crlb = depthCramerRao(camera, rig, s.truth, s.tracks, s.w_points, noise, true);
     WindowOptions o;
     o.noise = noise;
@@ -577,10 +574,7 @@ TEST_CASE_METHOD(PaperSetup, "window's AR(1) chains across gaps and gross outlie
   std::mt19937_64 rng(91);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int t = 0; t < 20; ++t) {
-    SceneOptions so = paperScene(45 * kDeg, 0.5 * kDeg, 20, 500 + static_cast<std::uint64_t>(t));
-    so.noise.sigma_px = 0;
-    Scene s = simulateScene(camera, rig, so);
-    addTrackerErrors(s.tracks, kSigmaPx, kPhi, 900 + static_cast<std::uint64_t>(t));
+    Scene s = trackerErrorScene(camera, rig, kSigmaPx, kPhi, 500 + static_cast<std::uint64_t>(t));
     for (Track &tr : s.tracks) {
       std::vector<Observation> kept;
       for (std::size_t k = 0; k < tr.observations.size(); ++k) {
@@ -611,6 +605,9 @@ TEST_CASE_METHOD(PaperSetup, "window's AR(1) chains across gaps and gross outlie
     }
   }
   REQUIRE(marginalised.n > 300);
+  std::vector<Track> tracks;
+  CHECK_THROWS_AS(addTrackerErrors(tracks, -1.0, kPhi, 1), Error); // bad input: an Error, never a NaN
+  CHECK_THROWS_AS(addTrackerErrors(tracks, kSigmaPx, 1.0, 1), Error);
   std::sort(sigma_ratio.begin(), sigma_ratio.end());
   const double median_ratio = sigma_ratio[sigma_ratio.size() / 2];
   INFO("coverage " << marginalised.coverage() << ", sigma marginalised / whole " << median_ratio << " over "

@@ -104,6 +104,11 @@ void NoiseModel::validate() const
     throw Error("absolute (per pose) motion noise has no per-metre or per-radian terms: they describe increments");
 }
 
+double pixelCorrelationOver(double phi, long gap)
+{
+  return phi > 0 && gap > 0 ? std::pow(phi, static_cast<double>(gap)) : 0.0;
+}
+
 const char *toString(MotionNoise m) { return m == MotionNoise::Absolute ? "absolute" : "increment"; }
 
 MotionNoise motionNoiseFromString(const std::string &word)

@@ -351,7 +351,7 @@ double whitenedCorrelation(const TrackFit &fit, double phi, double &num, double 
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
   Eigen::Vector3d g = Eigen::Vector3d::Zero();
   for (std::size_t k = 0; k < n; ++k) {
-    const double a = k == 0 || phi <= 0 ? 0.0 : std::pow(phi, static_cast<double>(fit.rows[k] - fit.rows[k - 1]));
+    const double a = k == 0 ? 0.0 : pixelCorrelationOver(phi, fit.rows[k] - fit.rows[k - 1]);
     const double scale = 1.0 / std::sqrt(1.0 - a * a);
     wr[k] = scale * (fit.r[k] - (k > 0 ? Eigen::Vector2d(a * fit.r[k - 1]) : Eigen::Vector2d::Zero()));
     wJ[k] = scale * (fit.J[k] - (k > 0 ? Eigen::Matrix<double, 2, 3>(a * fit.J[k - 1]) : Eigen::Matrix<double, 2, 3>::Zero()));
@@ -468,12 +468,16 @@ constexpr double kWhiteGrid[] = {0.0, 0.1, 0.25, 0.5, 0.75};
 Eigen::MatrixXd errorCorrelation(const std::vector<long> &rows, const TrackerErrorModel &m)
 {
   const Eigen::Index n = static_cast<Eigen::Index>(rows.size());
+  // (1 - w) phi^gap for every gap the track spans (rows increase along it), by products, not powers.
+  std::vector<double> link(rows.empty() ? 1 : static_cast<std::size_t>(rows.back() - rows.front()) + 1, 0.0);
+  for (std::size_t g = 1; g < link.size(); ++g)
+    link[g] = g == 1 ? (1.0 - m.white) * pixelCorrelationOver(m.phi, 1) : link[g - 1] * m.phi;
   Eigen::MatrixXd C(n, n);
-  for (Eigen::Index j = 0; j < n; ++j)
-    for (Eigen::Index k = 0; k < n; ++k) {
-      const long gap = std::abs(rows[static_cast<std::size_t>(j)] - rows[static_cast<std::size_t>(k)]);
-      C(j, k) = (j == k ? m.white : 0.0) + (1.0 - m.white) * std::pow(m.phi, static_cast<double>(gap));
-    }
+  for (Eigen::Index j = 0; j < n; ++j) {
+    C(j, j) = 1.0;
+    for (Eigen::Index k = 0; k < j; ++k)
+      C(j, k) = C(k, j) = link[static_cast<std::size_t>(rows[static_cast<std::size_t>(j)] - rows[static_cast<std::size_t>(k)])];
+  }
   return C;
 }
 
@@ -552,20 +556,10 @@ TrackerErrorModel trackerErrorModel(const std::vector<TrackFit> &fits, int min_t
   return best;
 }
 
-/* The depth variance of an ok track under the tracker's error model (px^2 in it), at the track's own
-   noise (its REML quadratic over its degrees of freedom, shrunk toward the model's by kPoolDof, when
-   it is larger beyond doubt); a track too short to show its own errors counts them as independent at the model's
-   variance (the tracker lost it early: a hard corner). NaN when not computable. `bound`, when the
-   track is long enough: the depth's 1-sigma under the model at its pooled noise (the Cramer-Rao bound
-   with the poses known). */
-constexpr double kPoolDof = 4;
-constexpr double kOwnNoiseProbability = 0.95;
-/* The track with at most kMaxModelObs of its observations, evenly, the last kept. */
+/* The track with at most kMaxModelObs of its observations, evenly, the last kept (a longer one). */
 TrackFit thinned(const TrackFit &fit)
 {
   const std::size_t n = fit.r.size();
-  if (n <= kMaxModelObs)
-    return fit;
   TrackFit out;
   const std::size_t step = (n + kMaxModelObs - 1) / kMaxModelObs;
   for (std::size_t k = (n - 1) % step; k < n; k += step) {
@@ -577,9 +571,18 @@ TrackFit thinned(const TrackFit &fit)
   return out;
 }
 
+/* The depth variance of an ok track under the tracker's error model (px^2 in it), at the track's own
+   noise (its REML quadratic over its degrees of freedom, shrunk toward the model's by kPoolDof, when
+   it is larger beyond doubt); a track too short to show its own errors counts them as independent at
+   the model's variance (the tracker lost it early: a hard corner). NaN when not computable. `bound`,
+   when the track is long enough: the depth's 1-sigma under the model at its pooled noise (the
+   Cramer-Rao bound with the poses known). */
+constexpr double kPoolDof = 4;
+constexpr double kOwnNoiseProbability = 0.95;
 double depthVarianceModel(const TrackFit &whole, const TrackerErrorModel &m, double *bound)
 {
-  const TrackFit fit = thinned(whole);
+  TrackFit thin;
+  const TrackFit &fit = whole.r.size() > kMaxModelObs ? (thin = thinned(whole)) : whole;
   const bool known = fit.r.size() >= kMinCorrelationObs;
   const TrackerErrorModel use = known ? m : TrackerErrorModel{1.0, 0.0, m.variance};
   TrackReml t;
@@ -697,11 +700,6 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
   const double factor = std::max(1.0, out.variance_factor);
   if (options.scale_sigma)
     out.sigma_scale = std::sqrt(factor);
-  auto consistent = [&](std::size_t i) {
-    const TrackResidual &t = out.tracks[i];
-    const double gate_factor = options.gate_at_model ? 1.0 : factor;
-    return !(t.dof >= 1 && !(t.chi2 <= options.gate_scale * gate_factor * chiSquareQuantile(t.dof, options.gate_probability)));
-  };
   if (options.correlated) {
     // Measured on every ok track, those the gate will call inconsistent too: the gate weighs the
     // residuals as independent errors, so a track whose tracker's errors persist fails it as a
@@ -712,22 +710,24 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     out.correlated_variance_factor = e.variance_factor;
     out.error_model = trackerErrorModel(fits, std::max(1, options.min_tracks / 2));
   }
-  const double var_model = noise.sigma_px * noise.sigma_px;
+  // The tracker's errors as measured (white and persistent parts where the residuals show them whole;
+  // else the AR(1) correlation at the pixel variance the whitened residuals say): no depth better
+  // known than the pixels allow with them, at its track's own noise (a corner's texture sets it:
+  // tracks differ by ten times).
+  const TrackerErrorModel ar1{0.0, out.correlation,
+                              std::max(factor, out.correlated_variance_factor) * noise.sigma_px * noise.sigma_px};
+  const TrackerErrorModel &floor = out.error_model.variance > 0 ? out.error_model : ar1;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const TrackResidual &t = out.tracks[i];
     if (!points[i].ok())
       continue;
-    if (!consistent(i)) {
+    const double gate_factor = options.gate_at_model ? 1.0 : factor;
+    if (t.dof >= 1 && !(t.chi2 <= options.gate_scale * gate_factor * chiSquareQuantile(t.dof, options.gate_probability))) {
       points[i].status = Status::Inconsistent;
       ++out.inconsistent;
       continue;
     }
     points[i].c_cov *= out.sigma_scale * out.sigma_scale;
-    // The tracker's errors as measured (white and persistent parts where the residuals show them
-    // whole; else the AR(1) correlation at the pixel variance the whitened residuals say): the depth
-    // cannot be better known than the pixels allow with them, at this track's own noise (a corner's
-    // texture sets it: tracks differ by ten times).
-    const TrackerErrorModel ar1{0.0, out.correlation, std::max(factor, out.correlated_variance_factor) * var_model};
-    const TrackerErrorModel &floor = out.error_model.variance > 0 ? out.error_model : ar1;
     if (floor.variance > 0 && floor.phi > 0) {
       const double var_z = depthVarianceModel(fits[i], floor, &out.tracks[i].sigma_z_bound);
       if (std::isfinite(var_z) && var_z > points[i].c_cov(2, 2)) {

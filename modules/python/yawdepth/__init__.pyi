@@ -102,6 +102,7 @@ class NoiseModel:
     rot_per_radian: float
     rot_per_metre: float
     motion_noise: str
+    pixel_correlation: float
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
@@ -167,7 +168,8 @@ def estimatePoints(camera: CameraModel, rig: YawRig, motion: Motion, tracks: Arr
                    options: Optional[PipelineOptions] = None, *, method: str = ..., sigma_px: float = ...,
                    sigma_odom: float = ..., sigma_heading: float = ..., sigma_yaw: float = ...,
                    sigma_rot: float = ..., odom_per_metre: float = ..., rot_per_radian: float = ...,
-                   rot_per_metre: float = ..., motion_noise: str = ..., min_baseline: float = ...,
+                   rot_per_metre: float = ..., motion_noise: str = ..., pixel_correlation: float = ...,
+                   min_baseline: float = ...,
                    min_parallax_px: float = ..., robust_threshold_px: float = ...,
                    outlier_threshold_px: float = ..., window: int = ..., threads: int = ...,
                    drop_unusable: bool = ..., residual_check: bool = ..., max_depth_sigma: float = ...,

@@ -115,7 +115,7 @@ int addTruePoint(Model &m, const CameraModel &camera, const YawRig &rig, const s
   const std::size_t first = m.observations.size();
   m.observations.insert(m.observations.end(), obs.begin(), obs.end());
   for (std::size_t k = 1; phi > 0 && k < obs.size(); ++k)
-    m.setChainLink(first + k, first + k - 1, std::pow(phi, obs[k].row - obs[k - 1].row));
+    m.setChainLink(first + k, first + k - 1, pixelCorrelationOver(phi, obs[k].row - obs[k - 1].row));
   return point;
 }
 

@@ -550,11 +550,7 @@ void Refiner::addMotionPriors(ceres::Problem &problem)
 
 /* phi^gap for an observation gap motion-log rows after the previous one of its track's chain
    (NoiseModel::pixel_correlation, chain_costs.h); 0: independent errors. */
-double Refiner::chainCoefficient(int gap) const
-{
-  const double phi = o_.noise.pixel_correlation;
-  return phi > 0 && gap > 0 ? std::pow(phi, gap) : 0.0;
-}
+double Refiner::chainCoefficient(int gap) const { return pixelCorrelationOver(o_.noise.pixel_correlation, gap); }
 
 /* Observation j of a track: its residual, or with correlated tracker errors (pixel_correlation > 0)
    the innovation on the chain's previous inlier prev (chain_costs.h; prev = j: j starts the chain).

@@ -290,16 +290,19 @@ std::vector<vpHomogeneousMatrix> armTrajectory(const YawRig &rig, ArmPath path, 
   return poses;
 }
 
-
 void addTrackerErrors(std::vector<Track> &tracks, double sigma, double phi, std::uint64_t seed)
 {
+  if (!(std::isfinite(sigma) && sigma >= 0 && phi >= 0 && phi <= kMaxPixelCorrelation))
+    throw Error("tracker errors: sigma must be finite and >= 0 and phi in [0, 0.99]");
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   for (Track &t : tracks) {
     double eu = sigma * n(rng), ev = sigma * n(rng);
-    long last = t.observations.empty() ? 0 : t.observations.front().frame;
+    bool first = true;
+    long last = 0;
     for (Observation &ob : t.observations) {
-      const double a = std::pow(phi, static_cast<double>(ob.frame - last));
+      const double a = first ? 1.0 : pixelCorrelationOver(phi, ob.frame - last); // the first keeps its draw
+      first = false;
       const double s = sigma * std::sqrt(1.0 - a * a);
       eu = a * eu + s * n(rng);
       ev = a * ev + s * n(rng);

@@ -235,12 +235,8 @@ static inline void addFactor(SchurSystem &s, int i, const Impl::Frame &f, std::s
       s.E.block<3, 1>(3 * i, off + f.local[j]) += Ex.col(j);
 }
 
-/* phi^gap (window_impl.h's ChainLink). */
-double Impl::chainCoefficient(int gap) const
-{
-  const double phi = o.noise.pixel_correlation;
-  return phi > 0 && gap > 0 ? std::pow(phi, gap) : 0.0;
-}
+/* phi^gap (window_impl.h's ChainLink), gap in window frames. */
+double Impl::chainCoefficient(int gap) const { return pixelCorrelationOver(o.noise.pixel_correlation, gap); }
 
 /* The observation before ft.obs[k] in its track's chain (outliers skipped in the inlier phase), or
    none: the chain starts at k. */

@@ -159,6 +159,12 @@ struct NoiseModel {
 };
 
 /*!
+  \brief The correlation of a tracker's errors between two observations of a track `gap` frames apart,
+  under NoiseModel::pixel_correlation `phi`: \f$ \phi^{gap} \f$; 0 (no link) when phi or gap is not positive.
+*/
+double pixelCorrelationOver(double phi, long gap);
+
+/*!
   \brief 1-sigma of one increment's translation noise per axis (m): the per-increment term and the
   per-metre term of an increment of length `distance` (m), added in variance; for
   MotionNoise::Absolute, sqrt(2) sigma_odom (two independent pose errors; consecutive increments

@@ -67,7 +67,8 @@ Scene simulateScene(const CameraModel &camera, const YawRig &rig, const SceneOpt
   \brief Add a tracker's errors to every track's pixels: per axis an AR(1) process along the track
   (NoiseModel::pixel_correlation's model), stationary 1-sigma `sigma` (px), correlation `phi` from one
   frame to the next (phi^gap across a gap), seeded. A scene simulated with sigma_px 0 then has the
-  errors of a tracker that follows its corners from image to image.
+  errors of a tracker that follows its corners from image to image. Throws yawdepth::Error for a
+  sigma that is not finite and non-negative or a phi outside [0, 0.99].
 */
 void addTrackerErrors(std::vector<Track> &tracks, double sigma, double phi, std::uint64_t seed);
 
