@@ -88,8 +88,8 @@ struct Args {
   std::string data = "/usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu";
   int frames = 40, max_features = 300;
   double sigma_px = 0.3;
-  std::string method = "window";  // measure --features klt's defaults: window, the residual check, 5 %
-  double max_depth_sigma = 0.05;
+  std::string method = toString(naturalFeatureOptions().method); // measure --features klt's defaults
+  double max_depth_sigma = naturalFeatureOptions().max_depth_sigma;
   std::string points; // --points FILE: every compared point as CSV
   std::string guided = toString(KltOptions().guided); // --guided off|auto|on: KltOptions::guided
   bool no_residual_check = false;
@@ -243,10 +243,10 @@ int main(int argc, char **argv)
     return 2;
   }
   try {
-    PipelineOptions po;
+    PipelineOptions po = naturalFeatureOptions();
     po.method = methodFromString(a.method);
     po.noise = castleNoise(a.sigma_px);
-    po.residual_check.enabled = !a.no_residual_check;
+    po.residual_check.enabled = po.residual_check.enabled && !a.no_residual_check;
     po.max_depth_sigma = a.max_depth_sigma;
     po.validate();
     const CameraModel camera = CameraModel::brown(kFocal, kFocal, kU0, kV0, {0, 0, 0, 0}, 640, 480);
@@ -280,7 +280,7 @@ int main(int argc, char **argv)
                   seq.totals.guided, seq.totals.lost_ambiguous, seq.totals.lost_flow);
     std::printf("tracking %.1f ms/frame, estimation %.1f ms/frame (this machine, one core)\n", track_ms / a.frames,
                 est_ms / a.frames);
-    const double px = std::max(0.01, a.sigma_px * est.residuals.noise_scale); // the model's pixel noise at the end
+    const double px = est.noise.sigma_px; // the model's pixel noise at the end
     if (po.residual_check.enabled)
       std::printf("residual check: noise model scaled by %.2f from the residuals; then pixel noise %.2f px (model "
                   "%.2f px), sigmas scaled by %.2f; "

@@ -61,7 +61,7 @@ struct Pass {
   double track_ms = 0, estimate_ms = 0, features = 0;
 };
 
-Pass runPass(const Sequence &s, const CameraModel &camera, const KltOptions &ko, const Method *method)
+Pass runPass(const Sequence &s, const CameraModel &camera, const KltOptions &ko, const StreamMethod *method)
 {
   const YawRig rig;
   NoiseModel noise;
@@ -71,8 +71,7 @@ Pass runPass(const Sequence &s, const CameraModel &camera, const KltOptions &ko,
   if (method) {
     StreamOptions so;
     so.method = *method;
-    so.window.noise = noise;
-    so.fused.sigma_px = noise.sigma_px;
+    so.noise = noise;
     estimator = std::make_unique<StreamEstimator>(camera, rig, so);
   }
   Pass p;
@@ -118,14 +117,12 @@ double wallDepth(const CameraModel &camera, const MotionSample &first, const Mot
 /* The accuracy table: every ok point with its wall truth, then those whose own sigma is under 1 %. */
 void accuracyTable(const Sequence &s, const CameraModel &camera, const KltOptions &ko, Method method)
 {
-  PipelineOptions po;
+  PipelineOptions po = naturalFeatureOptions(); // measure --features klt's defaults, but the method
   po.method = method;
   po.noise.motion_noise = MotionNoise::Absolute;
   po.noise.sigma_odom = 0; // the render's poses are exact: the model says so
   po.noise.sigma_heading = 0;
   po.noise.sigma_yaw = 0;
-  po.residual_check.enabled = true;
-  po.max_depth_sigma = 0.05;
   const SequenceTracks seq =
       trackSequence(camera, YawRig(), s.motion, [&](std::size_t i) { return s.images[i]; }, po.noise, ko);
   const PipelineResult r = estimatePoints(camera, YawRig(), s.motion, seq.tracks, po);
@@ -177,10 +174,10 @@ void accuracyTable(const Sequence &s, const CameraModel &camera, const KltOption
 bool costTable(const Sequence &s, const CameraModel &camera, const KltOptions &ko, int repeat)
 {
   constexpr double kMinFps = 30.0, kMaxFusedRatio = 1.2, kMaxWindowRatio = 1.3;
-  const Method fused = Method::Fused, window = Method::Window;
+  const StreamMethod fused = StreamMethod::Fused, window = StreamMethod::Window;
   const struct {
     const char *name;
-    const Method *method;
+    const StreamMethod *method;
   } stages[] = {{"tracking alone", nullptr}, {"tracking + fused", &fused}, {"tracking + window", &window}};
   std::printf("| stage | features per frame | tracking ms | estimation ms | frames per second | (tracking + "
               "estimation) / tracking |\n|---|---|---|---|---|---|\n");

@@ -71,7 +71,7 @@ int main(int argc, char **argv)
     PatternDetector detector(board.pattern);
     detector.setCamera(camera);
     StreamOptions so; // the streaming entry point, as the servo's DepthProvider runs it
-    so.method = Method::Fused;
+    so.method = StreamMethod::Fused;
     StreamEstimator fused(camera, rig, so);
     double detect_s = 0, estimate_s = 0;
     found = features = 0;

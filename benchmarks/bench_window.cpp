@@ -112,7 +112,6 @@ bool costTable(bool quick, std::uint64_t seed, double phi)
       WindowEstimator w(camera, rig, wo);
       FusedOptions fo;
       fo.filter.noise = so.noise;
-      fo.sigma_px = so.noise.sigma_px;
       FusedEstimator f(camera, rig, fo);
       std::vector<double> tw, te, tf;
       int state = 0;

@@ -10,12 +10,13 @@
 */
 #include <cstdio>
 #include <exception>
+#include <string>
 #include <vector>
 
 #include <yawdepth/camera/camera_file.h>
 #include <yawdepth/error.h>
-#include <yawdepth/estimation/track_estimator.h>
 #include <yawdepth/io/files.h>
+#include <yawdepth/pipeline/pipeline.h>
 
 int main(int argc, char **argv)
 {
@@ -35,25 +36,30 @@ int main(int argc, char **argv)
     const std::vector<yawdepth::Track> tracks = yawdepth::readTracksCsv(argv[4]);
     yawdepth::checkTracksAgainstMotion(tracks, motion, argv[4]); // every frame must be in the log
 
-    // Method::Exact (the default) uses each track's last two observations; Method::Paper is the
-    // published eq. (5), kept for comparison.
-    yawdepth::TrackEstimatorOptions options;
-    options.method = yawdepth::Method::Exact;
-    // sigma_zc is propagated from options.two_view.noise (default 0.3 px, 1 mm odometry per
-    // increment, 0.05 deg heading and yaw): set it to your sensors' noise.
+    // The entry point for every method: estimatePoints(). Method::Window (every point with the last
+    // frames' motion) runs in every build; bestMethod() is refine where Ceres was found. The noise
+    // model (default 0.3 px, 1 mm odometry per increment, 0.05 deg heading and yaw) weighs every
+    // observation and gives the sigmas: set it to your sensors' noise. The residual check measures
+    // the pixel noise from the tracks and flags tracks that are not one point.
+    yawdepth::PipelineOptions options;
+    options.method = yawdepth::Method::Window;
+    options.residual_check.enabled = true;
+    const yawdepth::PipelineResult result = yawdepth::estimatePoints(camera, rig, motion.samples, tracks, options);
+    for (const std::string &warning : result.warnings) // what the data say is wrong (units, signs, offsets)
+      std::fprintf(stderr, "warning: %s\n", warning.c_str());
 
-    std::printf("%zu features, %zu motion rows, camera kx = %.1f px\n", tracks.size(), motion.samples.size(),
-                camera.kx());
+    std::printf("%zu features, %zu motion rows, camera kx = %.1f px, pixel noise %.2f px\n", tracks.size(),
+                motion.samples.size(), camera.kx(), result.noise.sigma_px);
     std::printf("%4s %6s %10s %10s  %s\n", "id", "frame", "Zc (m)", "sigma (mm)", "status");
     std::size_t ok = 0;
-    for (const yawdepth::Track &track : tracks) {
-      const yawdepth::PointEstimate e = yawdepth::estimateTrack(camera, rig, motion.samples, track, options);
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      const yawdepth::PointEstimate &e = result.points[i]; // one per track, at its last observation
       if (e.ok()) {
         ++ok;
-        std::printf("%4ld %6ld %10.4f %10.2f  %s\n", track.id, e.frame, e.c_P.z(), 1e3 * e.sigmaZ(),
+        std::printf("%4ld %6ld %10.4f %10.2f  %s\n", tracks[i].id, e.frame, e.c_P.z(), 1e3 * e.sigmaZ(),
                     yawdepth::toString(e.status));
       } else { // no numbers for an invalid estimate, only the reason
-        std::printf("%4ld %6ld %10s %10s  %s\n", track.id, e.frame, "-", "-", yawdepth::toString(e.status));
+        std::printf("%4ld %6ld %10s %10s  %s\n", tracks[i].id, e.frame, "-", "-", yawdepth::toString(e.status));
       }
     }
     std::printf("%zu of %zu features have a valid depth\n", ok, tracks.size());

@@ -51,7 +51,7 @@ std::size_t rowOf(const Scene &scene, long frame)
 TrackEstimatorOptions fusedOptions()
 {
   TrackEstimatorOptions opt;
-  opt.method = Method::Fused;
+  opt.method = TrackMethod::Fused;
   return opt;
 }
 
@@ -184,7 +184,7 @@ TEST_CASE("fused converges to the truth on noise-free sequences, with rotation",
       const Scene scene = simulateScene(camera, kRig, so);
       TrackEstimatorOptions opt = fusedOptions();
       // Noise-free data: tell the filter the noise is tiny, so that the diffuse prior weighs nothing.
-      opt.two_view.noise = NoiseModel{1e-4, 1e-8, 1e-9, 1e-9};
+      opt.noise = NoiseModel{1e-4, 1e-8, 1e-9, 1e-9};
       const std::vector<PointEstimate> est = estimateTracks(camera, kRig, scene.truth, scene.tracks, opt);
       int ok = 0;
       for (std::size_t i = 0; i < est.size(); ++i) {
@@ -214,12 +214,12 @@ TEST_CASE("fused, exact and paper on noise-free 6-DoF arm paths with a hand-eye 
     so.vision_poses = armTrajectory(rig, path, so.frames, 0.6, 9);
     so.seed = 9;
     const Scene scene = simulateScene(camera, rig, so);
-    for (Method method : {Method::Fused, Method::Exact}) {
+    for (TrackMethod method : {TrackMethod::Fused, TrackMethod::Exact}) {
       TrackEstimatorOptions opt;
       opt.method = method;
       // Noise-free data, a small noise model (not tinier: with 1e-4 px against the diffuse depth
       // prior the Kalman gain's conditioning, ~1e14, shows up as 1e-4 round-off in the depth).
-      opt.two_view.noise = NoiseModel{1e-3, 1e-7, 1e-8, 1e-8, 1e-8};
+      opt.noise = NoiseModel{1e-3, 1e-7, 1e-8, 1e-8, 1e-8};
       const std::vector<PointEstimate> est = estimateTracks(camera, rig, scene.measured, scene.tracks, opt);
       int ok = 0;
       for (std::size_t i = 0; i < est.size(); ++i) {
@@ -256,7 +256,7 @@ TEST_CASE("fused: honest sigma and better than the last increment alone (Monte C
       const Scene scene = simulateScene(camera, kRig, so);
       TrackEstimatorOptions opt = fusedOptions();
       const auto fused = estimateTracks(camera, kRig, scene.measured, scene.tracks, opt);
-      opt.method = Method::Exact;
+      opt.method = TrackMethod::Exact;
       const auto exact = estimateTracks(camera, kRig, scene.measured, scene.tracks, opt);
       for (std::size_t i = 0; i < fused.size(); ++i) {
         if (!fused[i].ok() || !exact[i].ok() || scene.tracks[i].observations.size() < 10)
@@ -333,8 +333,7 @@ TEST_CASE("fused rejects a gross outlier and restarts after a track jump", "[fus
   CHECK(std::abs(after.c_P.z() - other_truth.z()) < 4 * after.sigmaZ());
   // The filter restarted on the other point: at most its 5 observations and a rejected one behind.
   FusedOptions fo;
-  fo.filter.noise = opt.two_view.noise;
-  fo.sigma_px = opt.two_view.noise.sigma_px;
+  fo.filter.noise = opt.noise;
   FusedEstimator fused(camera, kRig, fo);
   for (const Observation &o : jumped.observations)
     fused.addFrame(scene.measured[static_cast<std::size_t>(o.frame)], {{jumped.id, o.u, o.v}});
@@ -473,7 +472,7 @@ TEST_CASE("fused: honest sigma on a finely sampled log (key frames)", "[fused][m
     so.noise.sigma_yaw = 0.0;
     const Scene scene = simulateScene(camera, kRig, so);
     TrackEstimatorOptions opt = fusedOptions();
-    opt.two_view.noise = so.noise;
+    opt.noise = so.noise;
     const auto fused = estimateTracks(camera, kRig, scene.measured, scene.tracks, opt);
     for (std::size_t i = 0; i < fused.size(); ++i) {
       ++tracks;
@@ -519,7 +518,7 @@ TEST_CASE("fused key frames: one per feature at most, released with the feature"
     CHECK(id % 2 == 0); // the vanished ones were dropped after max_missing_frames
   }
   for (long id : fused.ids())
-    fused.remove(id);
+    fused.forget(id);
   CHECK(fused.ids().empty());
   CHECK(fused.keyFrames() == 0);
 }

@@ -59,12 +59,12 @@ TEST_CASE("every method through estimatePoints gives what its own function gives
   PipelineOptions po;
   po.noise = NoiseModel{0.3, 1e-3, 0.05 * kDeg, 0.05 * kDeg};
 
-  for (Method m : {Method::Paper, Method::Exact, Method::Fused}) {
-    po.method = m;
+  for (TrackMethod m : {TrackMethod::Paper, TrackMethod::Exact, TrackMethod::Fused}) {
+    po.method = toMethod(m);
     const PipelineResult r = estimatePoints(camera, rig, s.measured, s.tracks, po);
     TrackEstimatorOptions to;
     to.method = m;
-    to.two_view.noise = po.noise;
+    to.noise = po.noise;
     std::vector<std::vector<bool>> flags;
     requireSame(r.points, estimateTracks(camera, rig, s.measured, s.tracks, to, &flags));
     CHECK(r.outliers == flags);
@@ -178,19 +178,25 @@ TEST_CASE("estimatePoints refuses options that cannot give an answer", "[pipelin
   }
 }
 
-TEST_CASE("method words round-trip, and estimateTracks sends window and refine to the pipeline", "[pipeline]")
+TEST_CASE("method words round-trip, and each API takes its typed subset", "[pipeline]")
 {
   for (Method m : {Method::Paper, Method::Exact, Method::Fused, Method::Window, Method::Refine})
     CHECK(methodFromString(toString(m)) == m);
   CHECK(std::string(toString(Method::Window)) == "window");
   CHECK_THROWS_AS(methodFromString("kalman"), Error);
-  const Scene s = noisyScene(10);
-  TrackEstimatorOptions to;
-  for (Method m : {Method::Window, Method::Refine}) {
-    to.method = m;
-    CHECK_THROWS_AS(estimateTracks(paperCamera(), paperRig(), s.measured, s.tracks, to), Error);
-    CHECK_THROWS_AS(estimateTrack(paperCamera(), paperRig(), s.measured, s.tracks[0], to), Error);
+  // The typed subsets: each API takes only the methods it runs, and their words parse to them alone.
+  for (TrackMethod m : {TrackMethod::Paper, TrackMethod::Exact, TrackMethod::Fused}) {
+    CHECK(trackMethodFromString(toString(m)) == m);
+    CHECK(std::string(toString(m)) == toString(toMethod(m)));
   }
+  for (StreamMethod m : {StreamMethod::Fused, StreamMethod::Window}) {
+    CHECK(streamMethodFromString(toString(m)) == m);
+    CHECK(std::string(toString(m)) == toString(toMethod(m)));
+  }
+  CHECK_THROWS_WITH(trackMethodFromString("window"), Catch::Contains("does not estimate each track on its own"));
+  CHECK_THROWS_WITH(trackMethodFromString("refine"), Catch::Contains("does not estimate each track on its own"));
+  CHECK_THROWS_WITH(streamMethodFromString("paper"), Catch::Contains("does not run frame by frame"));
+  CHECK_THROWS_WITH(streamMethodFromString("kalman"), Catch::Contains("unknown method"));
 }
 
 namespace {
@@ -227,25 +233,23 @@ TEST_CASE("StreamEstimator: fused and window frame by frame, estimates carried t
   REQUIRE(s.tracks[0].observations.size() == s.measured.size());
   const auto frames = framesOf(s, 0, stop_row);
 
-  for (Method m : {Method::Fused, Method::Window}) {
+  for (StreamMethod m : {StreamMethod::Fused, StreamMethod::Window}) {
     StreamOptions o;
     o.method = m;
     StreamEstimator stream(camera, rig, o);
-    FusedEstimator fused(camera, rig, o.fused);
-    WindowEstimator window(camera, rig, o.window);
+    FusedEstimator fused(camera, rig, fusedOptions(o));
+    WindowEstimator window(camera, rig, windowOptions(o));
     for (std::size_t r = 0; r < frames.size(); ++r) {
       stream.addFrame(s.measured[r], frames[r]);
-      if (m == Method::Fused)
+      if (m == StreamMethod::Fused)
         fused.addFrame(s.measured[r], frames[r]);
       else
         window.addFrame(s.measured[r], frames[r]);
     }
     CHECK(stream.method() == m);
-    CHECK((stream.fusedEstimator() != nullptr) == (m == Method::Fused));
-    CHECK((stream.windowEstimator() != nullptr) == (m == Method::Window));
     for (const Track &t : s.tracks) { // the same estimator, nothing added
       const PointEstimate a = stream.estimate(t.id);
-      const PointEstimate b = m == Method::Fused ? fused.estimate(t.id) : window.estimate(t.id);
+      const PointEstimate b = m == StreamMethod::Fused ? fused.estimate(t.id) : window.estimate(t.id);
       CHECK(a.status == b.status);
       if (a.ok() && b.ok())
         CHECK(a.c_P == b.c_P);
@@ -273,8 +277,8 @@ TEST_CASE("StreamEstimator: fused and window frame by frame, estimates carried t
 
   // A frame older than the rows kept can no longer be carried: fused keeps max_missing_frames + 1.
   StreamOptions o;
-  o.method = Method::Fused;
-  o.fused.max_missing_frames = 1;
+  o.method = StreamMethod::Fused;
+  o.max_missing_frames = 1;
   StreamEstimator stream(camera, rig, o);
   for (std::size_t r = 0; r < frames.size(); ++r)
     stream.addFrame(s.measured[r], frames[r]);
@@ -282,11 +286,24 @@ TEST_CASE("StreamEstimator: fused and window frame by frame, estimates carried t
   const PointEstimate kept = stream.estimateAt(1, s.measured[last]);
   CHECK(kept.ok());
 
-  for (Method m : {Method::Paper, Method::Exact, Method::Refine}) {
-    StreamOptions bad;
-    bad.method = m;
-    CHECK_THROWS_AS(StreamEstimator(camera, rig, bad), Error);
-  }
+  // What each method's options are made of: the one noise model, and the settings it takes.
+  StreamOptions set;
+  set.noise.sigma_px = 0.7;
+  set.noise.sigma_odom = 2e-3;
+  set.window = 6;
+  set.prior_depth = 4;
+  set.max_missing_frames = 7;
+  const WindowOptions wo = windowOptions(set);
+  const FusedOptions fo = fusedOptions(set);
+  CHECK((wo.noise.sigma_px == 0.7 && wo.noise.sigma_odom == 2e-3 && wo.window == 6 && wo.prior_inverse_depth == 0.25));
+  CHECK((fo.filter.noise.sigma_px == 0.7 && fo.filter.noise.sigma_odom == 2e-3 && fo.filter.prior_depth == 4 &&
+         fo.max_missing_frames == 7));
+  StreamOptions bad;
+  bad.prior_depth = 0;
+  CHECK_THROWS_AS(StreamEstimator(camera, rig, bad), Error);
+  bad = StreamOptions();
+  bad.window = 1;
+  CHECK_THROWS_AS(StreamEstimator(camera, rig, bad), Error);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -551,9 +568,6 @@ TEST_CASE("residual check: bad options and input", "[pipeline][residuals]")
   CHECK_THROWS_AS(o.validate(), Error);
   o = ResidualCheckOptions();
   o.min_tracks = 0;
-  CHECK_THROWS_AS(o.validate(), Error);
-  o = ResidualCheckOptions();
-  o.gate_scale = 0.5; // a gate tighter than the model given
   CHECK_THROWS_AS(o.validate(), Error);
   PipelineOptions po;
   po.residual_check.gate_probability = std::nan("");

@@ -93,8 +93,13 @@ def test_the_leftovers(tmp_path):
     e = provider.estimate(7)
     assert not e.ok and e.frame >= 0 and e.v_P.shape == (3,) and e.c_cov.shape == (3, 3) and e.parallax_px == e.parallax_px
     s = yawdepth.StreamOptions()
-    s.method, s.window_noise, s.window_gates, s.window = "fused", n, g, 5
-    s.robust_threshold_px, s.outlier_threshold_px, s.fused_sigma_px, s.max_missing_frames = 1.0, 2.0, 0.3, 30
+    s.method, s.noise, s.gates, s.window = "fused", n, g, 5
+    s.robust_threshold_px, s.outlier_threshold_px, s.prior_depth, s.max_missing_frames = 1.0, 2.0, 3.0, 30
+    s.window_noise, s.window_gates = n, g  # the older names: the same fields
+    s.fused_sigma_px = 0.4
+    assert s.noise.sigma_px == 0.4 and s.window_noise.sigma_px == 0.4 and s.prior_depth == 3.0
+    with pytest.raises(Exception, match="does not run frame by frame"):
+        s.method = "paper"
     stream = yawdepth.StreamEstimator(camera, rig, s)
     stream.addFrame([0, 0, 0, 0, 0, 0], np.array([[1, 300.0, 200.0]]))
     stream.forget(1)

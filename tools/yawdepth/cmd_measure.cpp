@@ -250,12 +250,13 @@ int runMeasure(const MeasureArgs &a, const CLI::App &sub)
     writeTracksCsv(a.tracks_out, tracks);
 
   MethodArgs method = a.method;
+  const PipelineOptions natural = naturalFeatureOptions(); // what the user did not choose, for natural features
   if (klt && method.method_option != nullptr && method.method_option->count() == 0)
-    method.method = "window"; // natural features: linear in the tracks, honest with the check, the most accurate (accuracy.md)
+    method.method = toString(natural.method);
   if (klt && method.residual_option != nullptr && method.residual_option->count() == 0)
-    method.residual_check = "on"; // natural features: T-junctions and silhouettes are not points
+    method.residual_check = natural.residual_check.enabled ? "on" : "off";
   if (klt && method.max_depth_sigma_option != nullptr && method.max_depth_sigma_option->count() == 0)
-    method.max_depth_sigma = 0.05; // a point cloud: each point's depth within 10 % at 2 sigma
+    method.max_depth_sigma = natural.max_depth_sigma;
   const MethodRun run = runMethodOnLog(camera, rig, motion, tracks, method);
   if (sub.count("--outliers") > 0)
     writeTracksCsv(a.outliers, rejectedObservations(tracks, run.outliers));

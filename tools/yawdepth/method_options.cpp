@@ -150,14 +150,12 @@ MethodRun runMethodOnLog(const CameraModel &camera, const YawRig &rig, const Mot
   const bool checked = po.residual_check.enabled && po.method != Method::Paper && po.method != Method::Exact;
   if (checked && !verbosity().quiet && r.residuals.noise_scale != 1.0)
     std::fprintf(stderr, "residual check: the noise model scaled by %.3g from the residuals (pixel noise %.3g px), "
-                 "estimated again\n", r.residuals.noise_scale,
-                 std::max(0.01, po.noise.sigma_px * r.residuals.noise_scale));
+                 "estimated again\n", r.residuals.noise_scale, r.noise.sigma_px);
   if (checked && !verbosity().quiet)
     std::fprintf(stderr,
                  "residual check: pixel noise from the residuals %.3g px (model %.3g px)%s; tracker errors' "
                  "correlation %.2f (%d depths' sigma raised for it); %d of %d tracks not one point (inconsistent)\n",
-                 std::max(0.01, po.noise.sigma_px * r.residuals.noise_scale) * std::sqrt(r.residuals.variance_factor),
-                 std::max(0.01, po.noise.sigma_px * r.residuals.noise_scale),
+                 r.noise.sigma_px * std::sqrt(r.residuals.variance_factor), r.noise.sigma_px,
                  r.residuals.sigma_scale > 1 ? (", sigmas scaled by " + std::to_string(r.residuals.sigma_scale).substr(0, 5)).c_str() : "",
                  r.residuals.correlation, r.residuals.correlation_scaled, r.residuals.inconsistent,
                  r.residuals.tracks_used);

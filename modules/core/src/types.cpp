@@ -52,6 +52,32 @@ Method methodFromString(const std::string &word)
   throw Error("unknown method '" + word + "' (expected paper, exact, fused, window or refine)");
 }
 
+Method toMethod(TrackMethod m) { return static_cast<Method>(static_cast<int>(m)); }
+
+Method toMethod(StreamMethod m) { return static_cast<Method>(static_cast<int>(m)); }
+
+const char *toString(TrackMethod m) { return toString(toMethod(m)); }
+
+const char *toString(StreamMethod m) { return toString(toMethod(m)); }
+
+TrackMethod trackMethodFromString(const std::string &word)
+{
+  for (TrackMethod m : {TrackMethod::Paper, TrackMethod::Exact, TrackMethod::Fused})
+    if (word == toString(m))
+      return m;
+  (void)methodFromString(word); // an unknown word: that error
+  throw Error("method " + word + " does not estimate each track on its own (paper, exact or fused do)");
+}
+
+StreamMethod streamMethodFromString(const std::string &word)
+{
+  for (StreamMethod m : {StreamMethod::Fused, StreamMethod::Window})
+    if (word == toString(m))
+      return m;
+  (void)methodFromString(word); // an unknown word: that error
+  throw Error("method " + word + " does not run frame by frame (window or fused do)");
+}
+
 Status statusFromString(const std::string &word)
 {
   for (Status s : {Status::Ok, Status::Degenerate, Status::Behind, Status::NoMotion, Status::TooFewFrames,

@@ -81,8 +81,7 @@ KeyChange keyChangeAfter(DepthFilter::Update u, int &consecutive_outliers, const
 FusedEstimator::FusedEstimator(const CameraModel &camera, const YawRig &rig, const FusedOptions &options)
     : camera_(camera), rig_(rig), o_(options)
 {
-  if (!std::isfinite(o_.sigma_px) || o_.sigma_px < 0)
-    throw Error("fused: sigma_px must be finite and non-negative");
+  o_.filter.noise.validate();
   if (o_.max_missing_frames < 0)
     throw Error("fused: max_missing_frames must be non-negative");
   if (!(o_.key_log_depth_sigma > 0))
@@ -118,7 +117,7 @@ PointEstimate FusedEstimator::estimate(long id) const
   return it->second.current.estimate(rig_);
 }
 
-void FusedEstimator::remove(long id)
+void FusedEstimator::forget(long id)
 {
   const auto it = features_.find(id);
   if (it == features_.end())
@@ -178,7 +177,7 @@ std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const Mo
 {
   if (started_ && row.frame <= last_.frame)
     throw Error("fused: frame " + std::to_string(row.frame) + " does not follow frame " + std::to_string(last_.frame));
-  const std::vector<UndistortedObservation> obs = undistortObservations(camera_, o_.sigma_px, observations);
+  const std::vector<UndistortedObservation> obs = undistortObservations(camera_, o_.filter.noise.sigma_px, observations);
   std::vector<ObservationResult> results = initialResults(obs);
 
   if (started_)

@@ -10,16 +10,16 @@ namespace yawdepth {
 
 namespace {
 
-void checkMethod(Method m)
+/* paper and exact's options: the call's noise model and gates, over `increments` motion-log rows. */
+TwoViewOptions twoViewOptions(const TrackEstimatorOptions &options, long increments)
 {
-  if (m == Method::Window || m == Method::Refine)
-    throw Error(std::string("estimateTracks: method ") + toString(m) +
-                " is above the estimation module: run it through yawdepth::estimatePoints (yawdepth/pipeline/pipeline.h)");
+  TwoViewOptions tv;
+  tv.noise = options.noise;
+  tv.gates = options.gates;
+  tv.compute_covariance = options.compute_covariance;
+  tv.increments = static_cast<int>(increments);
+  return tv;
 }
-
-} // namespace
-
-namespace {
 
 void checkObservedFrames(const std::vector<MotionSample> &motion, const Track &track)
 {
@@ -46,10 +46,9 @@ PointEstimate checkBehind(const CameraModel &camera, const YawRig &rig, const st
       !(filter.logDepthSigma() > 0.3))
     return e;
   const auto &obs = track.observations;
-  TwoViewOptions tv = options.two_view;
-  tv.compute_covariance = false;
   const long first_row = rowOfFrame(motion, obs.front().frame), last_row = rowOfFrame(motion, obs.back().frame);
-  tv.increments = static_cast<int>(last_row - first_row);
+  TwoViewOptions tv = twoViewOptions(options, last_row - first_row);
+  tv.compute_covariance = false;
   const PointEstimate wide =
       estimateExact(camera, rig, motion[first_row], motion[last_row], Eigen::Vector2d(obs.front().u, obs.front().v),
                     Eigen::Vector2d(obs.back().u, obs.back().v), tv);
@@ -69,12 +68,11 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
                                           const TrackEstimatorOptions &options,
                                           std::vector<std::vector<bool>> *outliers)
 {
-  checkMethod(options.method);
   std::vector<PointEstimate> out;
   out.reserve(tracks.size());
   if (outliers)
     outliers->assign(tracks.size(), {});
-  if (options.method == Method::Fused) {
+  if (options.method == TrackMethod::Fused) {
     // Frame by frame, all features together (FusedEstimator), each track's estimate taken at its
     // last observation.
     out.assign(tracks.size(), PointEstimate());
@@ -100,10 +98,9 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
     if (by_frame.empty())
       return out;
     FusedOptions fo;
-    fo.filter = options.filter;
-    fo.filter.noise = options.two_view.noise;
-    fo.filter.gates = options.two_view.gates;
-    fo.sigma_px = options.two_view.noise.sigma_px;
+    static_cast<DepthFilterSettings &>(fo.filter) = options.filter;
+    fo.filter.noise = options.noise;
+    fo.filter.gates = options.gates;
     fo.max_missing_frames = std::numeric_limits<int>::max() / 2; // tracks are dropped at their last frame
     FusedEstimator fused(camera, rig, fo);
     for (long r = rowOfFrame(motion, first); r <= rowOfFrame(motion, last); ++r) {
@@ -129,7 +126,7 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
           out[ti].status = Status::UndistortFailed;
         }
         out[ti].frame = row.frame;
-        fused.remove(tracks[ti].id);
+        fused.forget(tracks[ti].id);
       }
     }
   } else {
@@ -145,8 +142,7 @@ std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRi
 PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                             const Track &track, const TrackEstimatorOptions &options)
 {
-  checkMethod(options.method);
-  if (options.method == Method::Fused) // one implementation: the frame-by-frame FusedEstimator
+  if (options.method == TrackMethod::Fused) // one implementation: the frame-by-frame FusedEstimator
     return estimateTracks(camera, rig, motion, std::vector<Track>{track}, options).front();
   const auto &obs = track.observations;
   PointEstimate none;
@@ -163,17 +159,14 @@ PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const 
   if (i_cur <= i_prev)
     throw Error("feature " + std::to_string(track.id) + ": observations are not in increasing frame order");
 
-  TwoViewOptions tv = options.two_view;
-  tv.increments = static_cast<int>(i_cur - i_prev);
+  const TwoViewOptions tv = twoViewOptions(options, i_cur - i_prev);
   const Eigen::Vector2d uv_prev(o_prev.u, o_prev.v), uv_cur(o_cur.u, o_cur.v);
   switch (options.method) {
-  case Method::Paper:
+  case TrackMethod::Paper:
     return estimatePaper(camera, rig, motion[i_prev], motion[i_cur], uv_prev, uv_cur, tv);
-  case Method::Exact:
+  case TrackMethod::Exact:
     return estimateExact(camera, rig, motion[i_prev], motion[i_cur], uv_prev, uv_cur, tv);
-  case Method::Fused:
-  case Method::Window:
-  case Method::Refine:
+  case TrackMethod::Fused:
     break;
   }
   throw Error("unknown method");

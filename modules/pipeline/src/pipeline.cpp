@@ -71,9 +71,9 @@ PipelineResult run(const CameraModel &camera, const YawRig &rig, const std::vect
   }
   const bool refine = options.method == Method::Refine;
   TrackEstimatorOptions to;
-  to.method = refine ? Method::Fused : options.method; // refine starts from fused
-  to.two_view.noise = options.noise;
-  to.two_view.gates = options.gates;
+  to.method = refine ? TrackMethod::Fused : trackMethodFromString(toString(options.method)); // refine starts from fused
+  to.noise = options.noise;
+  to.gates = options.gates;
   r.points = estimateTracks(camera, rig, motion, tracks, to, &r.outliers);
   if (!refine) {
     r.motion = motion;
@@ -162,6 +162,15 @@ void PipelineOptions::validate() const
   residual_check.validate();
   if (!(std::isfinite(max_depth_sigma) && max_depth_sigma >= 0))
     throw Error("the largest relative depth sigma must be finite and non-negative (0: no gate)");
+}
+
+PipelineOptions naturalFeatureOptions()
+{
+  PipelineOptions o;
+  o.method = Method::Window;
+  o.residual_check.enabled = true;
+  o.max_depth_sigma = 0.05;
+  return o;
 }
 
 bool methodAvailable(Method m) { return m != Method::Refine || refineAvailable(); }
@@ -326,6 +335,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
 {
   options.validate();
   PipelineResult r = runUsable(camera, rig, motion, tracks, options);
+  r.noise = options.noise;
   const bool whole_track = options.method == Method::Fused || options.method == Method::Window ||
                            options.method == Method::Refine;
   if (whole_track) {
@@ -358,10 +368,10 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
       markUnconfirmed(r);
       r.consistency = log;
     }
-    ResidualCheckOptions check = options.residual_check;
-    check.gate_scale = model.gate_scale;
-    r.residuals = checkResiduals(camera, rig, motion, tracks, r.outliers, model.noise, check, r.points);
+    r.residuals = pipeline_detail::checkResidualsGated(camera, rig, motion, tracks, r.outliers, model.noise,
+                                                       options.residual_check, model.gate_scale, r.points);
     r.residuals.noise_scale = model.pixel_scale;
+    r.noise = model.noise;
   } else if (whole_track && log.s0 > pipeline_detail::kModelFitsS0) {
     r.warnings.push_back("the residuals are " + figure(log.s0) +
                          " times what the noise model allows: the sigmas are too small by about that (raise the "

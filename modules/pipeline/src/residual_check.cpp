@@ -15,8 +15,6 @@ void ResidualCheckOptions::validate() const
     throw Error("residual check: the gate probability must be in (0.5, 1)");
   if (min_tracks < 1)
     throw Error("residual check: min_tracks must be at least 1");
-  if (!(std::isfinite(gate_scale) && gate_scale >= 1))
-    throw Error("residual check: gate_scale must be finite and at least 1");
 }
 
 namespace {
@@ -665,14 +663,15 @@ int varianceFactor(const std::vector<TrackResidual> &tracks, const std::vector<b
   return used;
 }
 
-} // namespace pipeline_detail
-
-ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
-                                   const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
-                                   const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
-                                   const ResidualCheckOptions &options, std::vector<PointEstimate> &points)
+ResidualCheckResult checkResidualsGated(const CameraModel &camera, const YawRig &rig,
+                                        const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                        const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
+                                        const ResidualCheckOptions &options, double gate_scale,
+                                        std::vector<PointEstimate> &points)
 {
   options.validate();
+  if (!(std::isfinite(gate_scale) && gate_scale >= 1))
+    throw Error("residual check: the gate's scale must be finite and at least 1");
   if (points.size() != tracks.size())
     throw Error("residual check: " + std::to_string(points.size()) + " estimates for " +
                 std::to_string(tracks.size()) + " tracks");
@@ -722,7 +721,7 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     if (!points[i].ok())
       continue;
     const double gate_factor = options.gate_at_model ? 1.0 : factor;
-    if (t.dof >= 1 && !(t.chi2 <= options.gate_scale * gate_factor * chiSquareQuantile(t.dof, options.gate_probability))) {
+    if (t.dof >= 1 && !(t.chi2 <= gate_scale * gate_factor * chiSquareQuantile(t.dof, options.gate_probability))) {
       points[i].status = Status::Inconsistent;
       ++out.inconsistent;
       continue;
@@ -737,6 +736,16 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
     }
   }
   return out;
+}
+
+} // namespace pipeline_detail
+
+ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
+                                   const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                   const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
+                                   const ResidualCheckOptions &options, std::vector<PointEstimate> &points)
+{
+  return pipeline_detail::checkResidualsGated(camera, rig, motion, tracks, outliers, noise, options, 1.0, points);
 }
 
 } // namespace yawdepth

@@ -29,9 +29,9 @@ Fit fit(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSa
         const std::vector<Track> &tracks, const PipelineOptions &options)
 {
   TrackEstimatorOptions to;
-  to.method = Method::Fused;
-  to.two_view.noise = options.noise;
-  to.two_view.gates = options.gates;
+  to.method = TrackMethod::Fused;
+  to.noise = options.noise;
+  to.gates = options.gates;
   std::vector<std::vector<bool>> outliers;
   std::vector<PointEstimate> points = estimateTracks(camera, rig, motion, tracks, to, &outliers);
   ResidualCheckOptions probe = options.residual_check;

@@ -1,6 +1,7 @@
 #pragma once
 // Private to the pipeline: the whole log's s0^2 from the tracks' residuals, the one formula
-// checkResiduals() reports and rigDoubts() compares two models with.
+// checkResiduals() reports and rigDoubts() compares two models with; and the check with a gate
+// wider than the model's, which only estimatePoints() asks for.
 #include <vector>
 #include <yawdepth/pipeline/residual_check.h>
 
@@ -18,6 +19,15 @@ constexpr double kModelFitsS0 = 1.5;
    than `min_tracks` the factor is 1 and the sigma 0. */
 int varianceFactor(const std::vector<TrackResidual> &tracks, const std::vector<bool> &use, int min_tracks,
                    double &factor, double &sigma);
+
+/* checkResiduals() with the gate's threshold multiplied by gate_scale (>= 1): estimatePoints() uses
+   1 / s0^2 when it made the model tighter, so that the gate is never tighter than the model given,
+   which says what counts as a track that is not one point. */
+ResidualCheckResult checkResidualsGated(const CameraModel &camera, const YawRig &rig,
+                                        const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                        const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
+                                        const ResidualCheckOptions &options, double gate_scale,
+                                        std::vector<PointEstimate> &points);
 
 } // namespace pipeline_detail
 } // namespace yawdepth

@@ -99,7 +99,7 @@ initial_depth (m), max_missing_frames, method ('window' or 'fused'), window (fra
       .def_readwrite("initial_depth", &DepthProviderOptions::initial_depth)
       .def_readwrite("max_missing_frames", &DepthProviderOptions::max_missing_frames)
       .def_property("method", [](const DepthProviderOptions &o) { return std::string(toString(o.method)); },
-                    [](DepthProviderOptions &o, const std::string &w) { o.method = methodFromString(w); })
+                    [](DepthProviderOptions &o, const std::string &w) { o.method = streamMethodFromString(w); })
       .def_readwrite("window", &DepthProviderOptions::window)
       .def("validate", &DepthProviderOptions::validate);
 
@@ -142,26 +142,24 @@ Raises yawdepth.Error for a non-finite pose or a repeated id.)doc")
       .def_property_readonly("estimatorFrames", &DepthProvider::estimatorFrames, "Frames fed to the estimator.");
 
   py::class_<StreamOptions>(m, "StreamOptions", R"doc(
-Options of StreamEstimator: method ('window' or 'fused'); window_noise, window_gates, window
-(frames), robust_threshold_px, outlier_threshold_px for window; fused_sigma_px (px) and
-max_missing_frames for fused. Defaults from C++ (StreamOptions).)doc")
+Options of StreamEstimator: method ('window' or 'fused'); noise and gates (the call's one noise
+model); window (frames), robust_threshold_px, outlier_threshold_px for window; prior_depth (m) for
+both; max_missing_frames for fused. Defaults from C++ (StreamOptions). window_noise, window_gates and
+fused_sigma_px are older names of noise, gates and noise.sigma_px.)doc")
       .def(py::init<>())
       .def_property("method", [](const StreamOptions &o) { return std::string(toString(o.method)); },
-                    [](StreamOptions &o, const std::string &w) { o.method = methodFromString(w); })
-      .def_property("window_noise", [](const StreamOptions &o) { return o.window.noise; },
-                    [](StreamOptions &o, const NoiseModel &n) { o.window.noise = n; })
-      .def_property("window_gates", [](const StreamOptions &o) { return o.window.gates; },
-                    [](StreamOptions &o, const GateOptions &g) { o.window.gates = g; })
-      .def_property("window", [](const StreamOptions &o) { return o.window.window; },
-                    [](StreamOptions &o, int w) { o.window.window = w; })
-      .def_property("robust_threshold_px", [](const StreamOptions &o) { return o.window.robust_threshold_px; },
-                    [](StreamOptions &o, double v) { o.window.robust_threshold_px = v; })
-      .def_property("outlier_threshold_px", [](const StreamOptions &o) { return o.window.outlier_threshold_px; },
-                    [](StreamOptions &o, double v) { o.window.outlier_threshold_px = v; })
-      .def_property("fused_sigma_px", [](const StreamOptions &o) { return o.fused.sigma_px; },
-                    [](StreamOptions &o, double v) { o.fused.sigma_px = v; })
-      .def_property("max_missing_frames", [](const StreamOptions &o) { return o.fused.max_missing_frames; },
-                    [](StreamOptions &o, int v) { o.fused.max_missing_frames = v; });
+                    [](StreamOptions &o, const std::string &w) { o.method = streamMethodFromString(w); })
+      .def_readwrite("noise", &StreamOptions::noise)
+      .def_readwrite("gates", &StreamOptions::gates)
+      .def_readwrite("window", &StreamOptions::window)
+      .def_readwrite("robust_threshold_px", &StreamOptions::robust_threshold_px)
+      .def_readwrite("outlier_threshold_px", &StreamOptions::outlier_threshold_px)
+      .def_readwrite("prior_depth", &StreamOptions::prior_depth)
+      .def_readwrite("max_missing_frames", &StreamOptions::max_missing_frames)
+      .def_readwrite("window_noise", &StreamOptions::noise)
+      .def_readwrite("window_gates", &StreamOptions::gates)
+      .def_property("fused_sigma_px", [](const StreamOptions &o) { return o.noise.sigma_px; },
+                    [](StreamOptions &o, double v) { o.noise.sigma_px = v; });
 
   py::class_<StreamEstimator>(m, "StreamEstimator", R"doc(
 Frames in one at a time, estimates out (window or fused; C++ yawdepth::StreamEstimator).

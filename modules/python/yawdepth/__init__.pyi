@@ -243,13 +243,16 @@ class DepthProvider:
 
 class StreamOptions:
     method: str
-    window_noise: NoiseModel
-    window_gates: GateOptions
+    noise: NoiseModel
+    gates: GateOptions
     window: int
     robust_threshold_px: float
     outlier_threshold_px: float
-    fused_sigma_px: float
+    prior_depth: float
     max_missing_frames: int
+    window_noise: NoiseModel  # older name of noise
+    window_gates: GateOptions  # older name of gates
+    fused_sigma_px: float  # older name of noise.sigma_px
     def __init__(self) -> None: ...
 
 class StreamEstimator:

@@ -17,14 +17,10 @@ StreamOptions streamOptions(const DepthProviderOptions &o)
   o.validate();
   StreamOptions s;
   s.method = o.method;
-  const double initial = o.initial_depth > 0 ? o.initial_depth : o.prior_depth;
-  s.fused.sigma_px = o.noise.sigma_px;
-  s.fused.max_missing_frames = o.max_missing_frames;
-  s.fused.filter.noise = o.noise;
-  s.fused.filter.prior_depth = initial;
-  s.window.noise = o.noise;
-  s.window.window = o.window;
-  s.window.prior_inverse_depth = 1.0 / initial;
+  s.noise = o.noise;
+  s.window = o.window;
+  s.prior_depth = o.initial_depth > 0 ? o.initial_depth : o.prior_depth;
+  s.max_missing_frames = o.max_missing_frames;
   return s;
 }
 
@@ -56,8 +52,6 @@ void DepthProviderOptions::validate() const
     throw Error("depth provider: max_missing_frames must be non-negative");
   if (window < 2)
     throw Error("depth provider: window must be at least 2 frames");
-  if (method != DepthMethod::Window && method != DepthMethod::Fused)
-    throw Error(std::string("depth provider: method ") + toString(method) + " does not run frame by frame (window or fused do)");
   noise.validate();
 }
 

@@ -1,20 +1,42 @@
 #include <yawdepth/window/stream_estimator.h>
 
+#include <cmath>
 #include <string>
 #include <yawdepth/error.h>
 
 namespace yawdepth {
 
+WindowOptions windowOptions(const StreamOptions &options)
+{
+  WindowOptions w;
+  w.noise = options.noise;
+  w.gates = options.gates;
+  w.window = options.window;
+  w.robust_threshold_px = options.robust_threshold_px;
+  w.outlier_threshold_px = options.outlier_threshold_px;
+  w.prior_inverse_depth = 1.0 / options.prior_depth;
+  return w;
+}
+
+FusedOptions fusedOptions(const StreamOptions &options)
+{
+  FusedOptions f;
+  f.filter.noise = options.noise;
+  f.filter.gates = options.gates;
+  f.filter.prior_depth = options.prior_depth;
+  f.max_missing_frames = options.max_missing_frames;
+  return f;
+}
+
 StreamEstimator::StreamEstimator(const CameraModel &camera, const YawRig &rig, const StreamOptions &options)
     : rig_(rig), options_(options)
 {
-  if (options.method == Method::Window)
-    window_ = std::make_unique<WindowEstimator>(camera, rig, options.window);
-  else if (options.method == Method::Fused)
-    fused_ = std::make_unique<FusedEstimator>(camera, rig, options.fused);
+  if (!(std::isfinite(options.prior_depth) && options.prior_depth > 0))
+    throw Error("stream estimator: prior_depth must be finite and positive");
+  if (options.method == StreamMethod::Window)
+    window_ = std::make_unique<WindowEstimator>(camera, rig, windowOptions(options));
   else
-    throw Error(std::string("stream estimator: method ") + toString(options.method) +
-                " does not run frame by frame (fused or window do)");
+    fused_ = std::make_unique<FusedEstimator>(camera, rig, fusedOptions(options));
 }
 
 void StreamEstimator::addFrame(const MotionSample &row, const std::vector<FeatureObservation> &observations)
@@ -26,7 +48,7 @@ void StreamEstimator::addFrame(const MotionSample &row, const std::vector<Featur
   rows_[row.frame] = row;
   // A feature's estimate is kept at its last observed frame while the estimator keeps it: in the
   // window, or up to max_missing_frames for fused.
-  const long keep = window_ ? options_.window.window : static_cast<long>(options_.fused.max_missing_frames) + 1;
+  const long keep = window_ ? options_.window : static_cast<long>(options_.max_missing_frames) + 1;
   while (!rows_.empty() && rows_.begin()->first <= row.frame - keep)
     rows_.erase(rows_.begin());
 }
@@ -59,7 +81,7 @@ void StreamEstimator::forget(long id)
   if (window_)
     window_->forget(id);
   else
-    fused_->remove(id);
+    fused_->forget(id);
 }
 
 } // namespace yawdepth

@@ -77,6 +77,30 @@ const char *toString(Method m);
 /*! \brief Parse a method word; throws yawdepth::Error for an unknown one. */
 Method methodFromString(const std::string &word);
 
+/*! \brief The methods that estimate each track on its own from the whole log (estimateTracks()). */
+enum class TrackMethod {
+  Paper = static_cast<int>(Method::Paper), //!< Method::Paper
+  Exact = static_cast<int>(Method::Exact), //!< Method::Exact
+  Fused = static_cast<int>(Method::Fused)  //!< Method::Fused
+};
+/*! \brief The methods that run frame by frame (StreamEstimator, DepthProvider). */
+enum class StreamMethod {
+  Fused = static_cast<int>(Method::Fused),  //!< Method::Fused
+  Window = static_cast<int>(Method::Window) //!< Method::Window
+};
+/*! \brief The same method in the whole set. */
+Method toMethod(TrackMethod m);
+/*! \brief The same method in the whole set. */
+Method toMethod(StreamMethod m);
+/*! \brief The method's word ("paper", "exact", "fused"). */
+const char *toString(TrackMethod m);
+/*! \brief The method's word ("fused", "window"). */
+const char *toString(StreamMethod m);
+/*! \brief Parse "paper", "exact" or "fused"; throws yawdepth::Error for any other word, naming it. */
+TrackMethod trackMethodFromString(const std::string &word);
+/*! \brief Parse "fused" or "window"; throws yawdepth::Error for any other word, naming it. */
+StreamMethod streamMethodFromString(const std::string &word);
+
 /*!
   \brief A point estimate with its uncertainty.
 

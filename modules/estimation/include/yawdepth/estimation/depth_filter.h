@@ -97,10 +97,9 @@ double inverseDepthInterval(double r);
     about 0.59), without computing the interval; false for a negative or non-finite r. */
 bool inverseDepthBounded(double r);
 
-/*! \brief Options of DepthFilter. */
-struct DepthFilterOptions {
-  NoiseModel noise;                     //!< Odometry and yaw noise (pixel noise comes with each observation).
-  GateOptions gates;                    //!< no_motion and degenerate gates (on the whole track).
+/*! \brief The filter's own settings: its prior, outlier gate and convergence (no noise model: that is
+    the caller's, DepthFilterOptions::noise or the options of whatever runs the filters). */
+struct DepthFilterSettings {
   double prior_depth = 2.0;             //!< Prior median depth at the first observation (m).
   double prior_log_depth_sigma = 3.0;   //!< Prior sigma of log Z: diffuse (a factor e^3 = 20 per sigma).
   double outlier_chi2 = 13.8155;        //!< Innovation gate (chi-square, 2 dof; 99.9 %).
@@ -111,6 +110,12 @@ struct DepthFilterOptions {
       Whatever this value, an estimate whose depth has no bounded 2-sigma interval (see
       inverseDepthInterval(): above about 0.59) is `degenerate`. */
   double max_log_depth_sigma = 1.0;
+};
+
+/*! \brief Options of DepthFilter: the noise model, the gates and the filter's settings. */
+struct DepthFilterOptions : DepthFilterSettings {
+  NoiseModel noise;  //!< Odometry and yaw noise (pixel noise comes with each observation).
+  GateOptions gates; //!< no_motion and degenerate gates (on the whole track).
 };
 
 /*! \brief Recursive log-inverse-depth filter for one feature (the `fused` method). */

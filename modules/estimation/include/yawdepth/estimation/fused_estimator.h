@@ -41,8 +41,9 @@ namespace yawdepth {
 
 /*! \brief Options of FusedEstimator. */
 struct FusedOptions {
-  DepthFilterOptions filter;    //!< per-feature filter (its noise model is the pixel/odometry/yaw model)
-  double sigma_px = 0.3;        //!< pixel noise of the observations (px)
+  /*! The per-feature filter: its settings, and the noise model of every feature (filter.noise: the
+      pixel noise weighs each observation, the odometry and yaw noise each increment). */
+  DepthFilterOptions filter;
   int max_missing_frames = 30;  //!< drop a feature not observed for this many frames
   /*! A step whose 1-sigma of log-depth is at most this becomes the feature's new key (see the
       file's description); infinity, with key_information_gain 0: a key at every step that does not
@@ -82,8 +83,8 @@ public:
   PointEstimate estimate(long id) const;
   /*! \brief The feature's filter at its last observation, or nullptr. */
   const DepthFilter *filter(long id) const;
-  /*! \brief Forget a feature. */
-  void remove(long id);
+  /*! \brief Forget a feature (its filter and its estimate). */
+  void forget(long id);
   /*! \brief Ids currently tracked. */
   std::vector<long> ids() const;
   /*! \brief Distinct key frames held (each carries its composed motion noise; at most one per feature). */

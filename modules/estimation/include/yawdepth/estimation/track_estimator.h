@@ -18,11 +18,14 @@
 
 namespace yawdepth {
 
-/*! \brief Options of estimateTrack(). */
+/*! \brief Options of estimateTrack(): the method, the call's one noise model and gates, and each
+    method's settings. */
 struct TrackEstimatorOptions {
-  Method method = Method::Exact; //!< paper, exact or fused (window and refine throw: see yawdepth::estimatePoints)
-  TwoViewOptions two_view;      //!< paper / exact (its noise and gates are also used by fused)
-  DepthFilter::Options filter;  //!< fused: prior, outlier gate, convergence (noise and gates come from two_view)
+  TrackMethod method = TrackMethod::Exact; //!< paper, exact or fused (window and refine: yawdepth::estimatePoints).
+  NoiseModel noise;                        //!< Noise of pixels, motion and yaw readings (every method).
+  GateOptions gates;                       //!< no_motion / degenerate gates (every method).
+  bool compute_covariance = true;          //!< paper, exact: false skips the covariance (c_cov NaN); fused always has it.
+  DepthFilterSettings filter;              //!< fused: the filter's prior, outlier gate and convergence.
 };
 
 /*!

@@ -66,6 +66,9 @@ struct PipelineResult {
   std::vector<std::vector<bool>> outliers; //!< Per track and observation: rejected (or unusable).
   std::vector<MotionSample> motion;        //!< The motion as estimated (refine) or as given (the others).
   ResidualCheckResult residuals;           //!< The residual check's findings (defaults when it did not run).
+  /*! The noise model of the final run and of the points' covariances: the one given, or the one the
+      residual check said (see estimatePoints(); its pixel noise never under 0.01 px). */
+  NoiseModel noise;
   /*! \brief fused, window, refine: the whole log against the noise model given (see estimatePoints()). */
   struct Consistency {
     double s0 = 1;            //!< sqrt of the median chi-square ratio of the tracks at the model given (1: not measured)
@@ -77,6 +80,15 @@ struct PipelineResult {
   /*! One line each, for the user: what the data say is wrong (empty: nothing). */
   std::vector<std::string> warnings;
 };
+
+/*!
+  \brief The options for natural features (a tracker's corners: `measure --features klt`'s defaults,
+  which the benchmarks on such tracks use too): `window` (linear in the tracks, honest with the check,
+  the most accurate on them: docs/accuracy.md), the residual check on (T-junctions and silhouettes are
+  not points), and an ok point's depth resolved to 5 % at 1 sigma (a point cloud: within 10 % at 2
+  sigma). The noise model is the default one: set it for the data.
+*/
+PipelineOptions naturalFeatureOptions();
 
 /*! \brief Whether this build has the method (every one but refine always; refine with Ceres). */
 bool methodAvailable(Method m);

@@ -30,8 +30,8 @@
     only in part, may be what the sigma is made of); estimatePoints() may make the model tighter
     first (below).
   - **The gate**: a track with \f$ \chi^2 > g \max(1, s_0^2)\, q_p(\nu) \f$ (\f$ q_p \f$ the
-    `gate_probability` quantile, g the `gate_scale`, 1 unless estimatePoints() made the model
-    tighter) is not one rigid point (a T-junction where a near edge crosses a
+    `gate_probability` quantile, g = 1; when estimatePoints() made the model tighter, g = 1 / s0^2
+    there, so that the gate is never tighter than the model given) is not one rigid point (a T-junction where a near edge crosses a
     far one, a corner on a silhouette, a track that slid along its epipolar line, which the
     tracker's epipolar gate cannot see): its status becomes `inconsistent`.
 
@@ -100,15 +100,10 @@ struct ResidualCheckOptions {
       smaller with strong evidence and the pixels dominating), run the method again with the model
       they say (the pixel noise at least 0.01 px), then check. */
   bool reestimate_noise = true;
-  /*! Multiplies the gate's threshold (estimatePoints() sets it to 1 / s0^2 when it made the model
-      tighter: the gate is never tighter than the model given, which says what counts as a track that
-      is not one point). */
-  double gate_scale = 1;
   /*! The gate at the noise model given whatever s0 says (estimatePoints() when the tracks do not fit
       the motion: s0 then measures the mistake, not the noise). */
   bool gate_at_model = false;
-  /*! \brief Throws yawdepth::Error for a probability outside (0.5, 1), min_tracks < 1 or a gate_scale that
-      is not finite and at least 1. */
+  /*! \brief Throws yawdepth::Error for a probability outside (0.5, 1) or min_tracks < 1. */
   void validate() const;
 };
 

@@ -9,7 +9,7 @@
   set the depth of your vpFeaturePoint's with apply(). By default it runs the `window` estimator
   (yawdepth::WindowEstimator: a sliding-window smoother of every tracked point with the recent
   motion, at the joint Cramér–Rao bound; pixel, odometry and yaw noise modelled); with
-  `method = DepthMethod::Fused` the cheaper per-feature filter (yawdepth::FusedEstimator), which
+  `method = StreamMethod::Fused` the cheaper per-feature filter (yawdepth::FusedEstimator), which
   cannot tell the odometry's error from a feature's depth. It gives:
 
   - depth(id): the estimated depth Zc of the feature in the CURRENT camera frame once the estimate
@@ -75,13 +75,6 @@
 namespace yawdepth {
 
 /*!
-  \brief The estimator behind a DepthProvider: DepthMethod::Window (WindowEstimator: every feature
-  and the recent motion together, the default) or DepthMethod::Fused (FusedEstimator: one filter per
-  feature, cheaper, several times less accurate). The provider runs it through a StreamEstimator.
-*/
-using DepthMethod = Method;
-
-/*!
   \brief The provider's default noise model: 0.3 px; odometry that drifts by 2 % of the distance
   travelled (per axis) and 2 % of the angle turned, plus 0.01 rad per metre (wheel slip), as wheel
   odometry and arm kinematics do over a control period, with a floor of 10 micrometres and 1e-5 rad per
@@ -126,7 +119,10 @@ struct DepthProviderOptions {
       in its state while it is seen within its window, restarts it when it comes back later, and
       drops what it kept of it after this many frames). */
   int max_missing_frames = 30;
-  DepthMethod method = DepthMethod::Window; //!< The estimator: Window or Fused (the others throw).
+  /*! The estimator, run through a StreamEstimator: `window` (WindowEstimator: every feature and the
+      recent motion together, the default) or `fused` (FusedEstimator: one filter per feature,
+      cheaper, several times less accurate). */
+  StreamMethod method = StreamMethod::Window;
   int window = 10;                       //!< Frames in the window estimator's window (>= 2).
   /*! \brief Throws yawdepth::Error for an invalid option. */
   void validate() const;

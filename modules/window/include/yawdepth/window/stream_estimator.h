@@ -23,12 +23,25 @@
 
 namespace yawdepth {
 
-/*! \brief Options of StreamEstimator: the method and that method's options. */
+/*! \brief Options of StreamEstimator: the method, the call's one noise model and gates, and the
+    settings each method takes from them (windowOptions(), fusedOptions()). */
 struct StreamOptions {
-  Method method = Method::Window; //!< Method::Window (the default) or Method::Fused; the others throw.
-  WindowOptions window;           //!< `window`'s options.
-  FusedOptions fused;             //!< `fused`'s options.
+  StreamMethod method = StreamMethod::Window; //!< `window` (the default) or `fused`.
+  NoiseModel noise;                           //!< Noise of pixels, motion and yaw readings.
+  GateOptions gates;                          //!< no_motion / degenerate gates.
+  int window = WindowOptions().window;        //!< window: frames kept in the window (>= 2).
+  double robust_threshold_px = WindowOptions().robust_threshold_px;   //!< window: scale of the robust loss (px).
+  double outlier_threshold_px = WindowOptions().outlier_threshold_px; //!< window: larger reprojection errors are outliers (px).
+  /*! The prior depth of a new feature (m): `window`'s weak inverse-depth prior has mean 1 / prior_depth,
+      `fused`'s filter starts at this median depth. */
+  double prior_depth = DepthFilterSettings().prior_depth;
+  int max_missing_frames = FusedOptions().max_missing_frames; //!< fused: drop a feature not observed for this many frames.
 };
+
+/*! \brief The WindowEstimator's options a StreamEstimator with these options runs (its other settings the defaults). */
+WindowOptions windowOptions(const StreamOptions &options);
+/*! \brief The FusedEstimator's options a StreamEstimator with these options runs (its other settings the defaults). */
+FusedOptions fusedOptions(const StreamOptions &options);
 
 /*! \brief Frames in, one at a time; feature estimates out (see the file). */
 class StreamEstimator {
@@ -36,8 +49,7 @@ public:
   /*!
     \param camera Camera model (observed pixels are undistorted with it).
     \param rig Camera mount and yaw joint.
-    \param options The method and its options; throws yawdepth::Error for a method that does not
-           stream (paper, exact, refine) or invalid options.
+    \param options The method and its options; throws yawdepth::Error for invalid options.
   */
   StreamEstimator(const CameraModel &camera, const YawRig &rig, const StreamOptions &options = StreamOptions());
 
@@ -58,11 +70,7 @@ public:
   /*! \brief Forget a feature (a long-running caller forgets the ids it no longer tracks: bounded memory). */
   void forget(long id);
   /*! \brief The method behind it. */
-  Method method() const { return options_.method; }
-  /*! \brief The `fused` estimator, or nullptr for `window`. */
-  const FusedEstimator *fusedEstimator() const { return fused_.get(); }
-  /*! \brief The `window` estimator, or nullptr for `fused`. */
-  const WindowEstimator *windowEstimator() const { return window_.get(); }
+  StreamMethod method() const { return options_.method; }
 
 private:
   YawRig rig_;
