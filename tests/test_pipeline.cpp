@@ -9,6 +9,7 @@
 #include "scene_support.h"
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
+#include <yawdepth/geometry/track_inputs.h>
 #include <yawdepth/pipeline/pipeline.h>
 #include <yawdepth/simulation/scene.h>
 #include <yawdepth/window/stream_estimator.h>
@@ -217,6 +218,96 @@ std::vector<std::vector<FeatureObservation>> framesOf(const Scene &s, long stop_
 }
 
 } // namespace
+
+TEST_CASE("inputs: one check for every method, one message per rule, and the tracks by row", "[pipeline][inputs]")
+{
+  const CameraModel camera = paperCamera();
+  const YawRig rig = paperRig();
+  const Scene s = noisyScene(11);
+  // The view: every observation's row, and each row's observations in track order.
+  const TracksByFrame view = validateInputs(s.measured, s.tracks);
+  std::size_t indexed = 0, observations = 0;
+  for (std::size_t r = 0; r < s.measured.size(); ++r)
+    for (const TracksByFrame::Entry &e : view.observedAt(r)) {
+      CHECK(view.row(e.first, e.second) == r);
+      CHECK(s.tracks[e.first].observations[e.second].frame == s.measured[r].frame);
+      ++indexed;
+    }
+  for (const Track &t : s.tracks)
+    observations += t.observations.size();
+  CHECK(indexed == observations);
+
+  // Each broken rule: the same one-line message whatever the method, naming the feature and frame.
+  struct Broken {
+    const char *what;
+    std::vector<MotionSample> motion;
+    std::vector<Track> tracks;
+    std::string message;
+  };
+  std::vector<Broken> cases;
+  {
+    Broken b{"frames not increasing", s.measured, s.tracks, ""};
+    std::swap(b.motion[3], b.motion[4]);
+    b.message = "motion log: frame " + std::to_string(b.motion[4].frame) + " after frame " +
+                std::to_string(b.motion[3].frame) + ": frames must be strictly increasing";
+    cases.push_back(b);
+  }
+  {
+    Broken b{"planar and 6-DoF rows", s.measured, s.tracks, ""};
+    b.motion[5].six_dof = !b.motion[5].six_dof;
+    b.message = "is 6-DoF after planar rows";
+    if (b.motion[0].six_dof)
+      b.message = "is planar after 6-DoF rows";
+    cases.push_back(b);
+  }
+  {
+    Broken b{"a frame not in the log", s.measured, s.tracks, ""};
+    b.tracks[2].observations.back().frame = 100000;
+    b.message = "feature " + std::to_string(b.tracks[2].id) + " is observed in frame 100000, which the motion log does not have";
+    cases.push_back(b);
+  }
+  {
+    Broken b{"observations out of order", s.measured, s.tracks, ""};
+    auto &obs = b.tracks[1].observations;
+    REQUIRE(obs.size() >= 3);
+    std::swap(obs[1], obs[2]);
+    b.message = "feature " + std::to_string(b.tracks[1].id) + ": frame " + std::to_string(obs[2].frame) + " after frame " +
+                std::to_string(obs[1].frame) + ": observations must be in strictly increasing frame order";
+    cases.push_back(b);
+  }
+  {
+    Broken b{"an id in two tracks", s.measured, s.tracks, ""};
+    b.tracks[3].id = b.tracks[0].id;
+    b.message = "feature " + std::to_string(b.tracks[0].id) + " is in two tracks";
+    cases.push_back(b);
+  }
+  for (const Broken &b : cases) {
+    INFO(b.what);
+    CHECK_THROWS_WITH(validateInputs(b.motion, b.tracks), Catch::Contains(b.message));
+    for (Method m : {Method::Paper, Method::Exact, Method::Fused, Method::Window}) {
+      PipelineOptions po;
+      po.method = m;
+      CHECK_THROWS_WITH(estimatePoints(camera, rig, b.motion, b.tracks, po), Catch::Contains(b.message));
+    }
+    CHECK_THROWS_WITH(windowTracks(camera, rig, b.motion, b.tracks), Catch::Contains(b.message));
+    CHECK_THROWS_WITH(estimateTracks(camera, rig, b.motion, b.tracks), Catch::Contains(b.message));
+  }
+
+  // Derived views: fewer observations of the same tracks, or another reading of the same frames.
+  std::vector<Track> fewer = s.tracks;
+  fewer[0].observations.erase(fewer[0].observations.begin());
+  const TracksByFrame less = view.withFewer(fewer);
+  CHECK(less.row(0, 0) == view.row(0, 1));
+  std::vector<Track> foreign = s.tracks;
+  foreign[0].observations.front().frame += 1000;
+  CHECK_THROWS_AS(view.withFewer(foreign), Error);
+  std::vector<MotionSample> negated = s.measured;
+  for (MotionSample &m : negated)
+    m.yaw = -m.yaw;
+  CHECK(&view.withMotion(negated).motion() == &negated);
+  negated.pop_back();
+  CHECK_THROWS_AS(view.withMotion(negated), Error);
+}
 
 TEST_CASE("StreamEstimator: fused and window frame by frame, estimates carried to the current pose", "[pipeline]")
 {

@@ -7,6 +7,7 @@
 #include <vector>
 #include <tuple>
 #include <yawdepth/error.h>
+#include <yawdepth/geometry/track_inputs.h>
 #include <yawdepth/io/files.h>
 
 namespace yawdepth {
@@ -65,11 +66,11 @@ std::vector<Track> readTracksCsv(const std::string &path, const InputLimits &lim
 void checkTracksAgainstMotion(const std::vector<Track> &tracks, const MotionLog &motion,
                               const std::string &tracks_path)
 {
-  for (const Track &t : tracks)
-    for (const Observation &o : t.observations)
-      if (!motion.find(o.frame))
-        throwError(tracks_path + ": feature " + std::to_string(t.id) + " is observed in frame " +
-                   std::to_string(o.frame) + ", which the motion log does not have");
+  try {
+    validateInputs(motion.samples, tracks); // the estimators' rules, in one place
+  } catch (const Error &e) {
+    throwError(tracks_path + ": " + e.what());
+  }
 }
 
 void writeTracksCsv(const std::string &path, const std::vector<Track> &tracks)

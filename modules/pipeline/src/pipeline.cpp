@@ -10,6 +10,7 @@
 #include <utility>
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>
+#include <yawdepth/geometry/track_inputs.h>
 #include <yawdepth/window/window_estimator.h>
 
 namespace yawdepth {
@@ -58,14 +59,15 @@ template <class Options> Options jointOptions(const PipelineOptions &p)
 }
 
 /* The chosen method on the tracks as given. */
-PipelineResult run(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                   const std::vector<Track> &tracks, const PipelineOptions &options)
+PipelineResult run(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                   const PipelineOptions &options)
 {
+  const std::vector<MotionSample> &motion = input.motion();
   PipelineResult r;
   if (options.method == Method::Window) {
     WindowOptions wo = jointOptions<WindowOptions>(options);
     wo.window = options.window;
-    r.points = windowTracks(camera, rig, motion, tracks, wo, &r.outliers);
+    r.points = windowTracks(camera, rig, input, wo, &r.outliers);
     r.motion = motion;
     return r;
   }
@@ -74,7 +76,7 @@ PipelineResult run(const CameraModel &camera, const YawRig &rig, const std::vect
   to.method = refine ? TrackMethod::Fused : trackMethodFromString(toString(options.method)); // refine starts from fused
   to.noise = options.noise;
   to.gates = options.gates;
-  r.points = estimateTracks(camera, rig, motion, tracks, to, &r.outliers);
+  r.points = estimateTracks(camera, rig, input, to, &r.outliers);
   if (!refine) {
     r.motion = motion;
     return r;
@@ -82,7 +84,7 @@ PipelineResult run(const CameraModel &camera, const YawRig &rig, const std::vect
   RefineOptions ro = jointOptions<RefineOptions>(options);
   ro.threads = options.threads;
   ro.progress = options.progress;
-  RefineResult refined = refineWindow(camera, rig, motion, tracks, r.points, ro);
+  RefineResult refined = refineWindow(camera, rig, input, r.points, ro);
   r.points = std::move(refined.points);
   r.outliers = std::move(refined.outliers);
   r.motion = std::move(refined.motion);
@@ -281,11 +283,12 @@ Reestimated pixelNoiseFromResiduals(const ResidualCheckResult &c, const Pipeline
 }
 
 /* The method with the observations no method can use taken out first (see the file). */
-PipelineResult runUsable(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                         const std::vector<Track> &tracks, const PipelineOptions &options)
+PipelineResult runUsable(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                         const PipelineOptions &options)
 {
   if (!options.drop_unusable)
-    return run(camera, rig, motion, tracks, options);
+    return run(camera, rig, input, options);
+  const std::vector<Track> &tracks = input.tracks();
   // Observations that no method can use are taken out before estimation and reported as outliers:
   // the feature is estimated from the rest (a track left with none keeps them all, and its method
   // says why it failed).
@@ -311,8 +314,8 @@ PipelineResult runUsable(const CameraModel &camera, const YawRig &rig, const std
     usable_tracks[i] = std::move(kept);
   }
   if (!any_unusable)
-    return run(camera, rig, motion, tracks, options);
-  PipelineResult r = run(camera, rig, motion, usable_tracks, options);
+    return run(camera, rig, input, options);
+  PipelineResult r = run(camera, rig, input.withFewer(usable_tracks), options);
   // The flags back onto the original observations.
   std::vector<std::vector<bool>> full(tracks.size());
   for (std::size_t i = 0; i < tracks.size(); ++i) {
@@ -334,7 +337,8 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
                               const std::vector<Track> &tracks, const PipelineOptions &options)
 {
   options.validate();
-  PipelineResult r = runUsable(camera, rig, motion, tracks, options);
+  const TracksByFrame input = validateInputs(motion, tracks); // the one check of the inputs: every method assumes it
+  PipelineResult r = runUsable(camera, rig, input, options);
   r.noise = options.noise;
   const bool whole_track = options.method == Method::Fused || options.method == Method::Window ||
                            options.method == Method::Refine;
@@ -364,7 +368,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
     if (model.changed(options.noise)) {
       PipelineOptions again = options;
       again.noise = model.noise;
-      r = runUsable(camera, rig, motion, tracks, again);
+      r = runUsable(camera, rig, input, again);
       markUnconfirmed(r);
       r.consistency = log;
     }
@@ -377,9 +381,9 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
                          " times what the noise model allows: the sigmas are too small by about that (raise the "
                          "pixel noise, or let the residual check scale them)");
   }
+  const std::vector<Track> usable = whole_track ? usableTracks(camera, tracks) : std::vector<Track>();
   if (whole_track)
-    for (const pipeline_detail::RigDoubt &d :
-         pipeline_detail::rigDoubts(camera, rig, motion, usableTracks(camera, tracks), options))
+    for (const pipeline_detail::RigDoubt &d : pipeline_detail::rigDoubts(camera, rig, input.withFewer(usable), options))
       r.warnings.push_back("with " + d.what + " flipped the tracks fit better (residuals " + figure(d.s0_alternative) +
                            (std::isfinite(d.s0_given) ? " instead of " + figure(d.s0_given) + " times the noise model"
                                                       : " times the noise model, where as given most tracks do not fit") +

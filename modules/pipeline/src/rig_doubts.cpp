@@ -25,15 +25,16 @@ struct Fit {
   std::vector<TrackResidual> tracks; // per track; dof 0 where the check did not use it
 };
 
-Fit fit(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-        const std::vector<Track> &tracks, const PipelineOptions &options)
+Fit fit(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input, const PipelineOptions &options)
 {
+  const std::vector<MotionSample> &motion = input.motion();
+  const std::vector<Track> &tracks = input.tracks();
   TrackEstimatorOptions to;
   to.method = TrackMethod::Fused;
   to.noise = options.noise;
   to.gates = options.gates;
   std::vector<std::vector<bool>> outliers;
-  std::vector<PointEstimate> points = estimateTracks(camera, rig, motion, tracks, to, &outliers);
+  std::vector<PointEstimate> points = estimateTracks(camera, rig, input, to, &outliers);
   ResidualCheckOptions probe = options.residual_check;
   probe.scale_sigma = false;
   probe.correlated = false;
@@ -64,9 +65,11 @@ YawRig leverNegated(const YawRig &rig)
 
 } // namespace
 
-std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                                const std::vector<Track> &tracks, const PipelineOptions &options)
+std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                                const PipelineOptions &options)
 {
+  const std::vector<MotionSample> &motion = input.motion();
+  const std::vector<Track> &tracks = input.tracks();
   std::vector<RigDoubt> out;
   if (motion.size() < 3)
     return out;
@@ -82,7 +85,7 @@ std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, co
   if (!yaw_matters && !lever_matters)
     return out;
   // As given, too few tracks may fit to be measured (a gross mistake): any alternative that fits wins.
-  const Fit given = fit(camera, rig, motion, tracks, options);
+  const Fit given = fit(camera, rig, input, options);
   const bool given_fits = given.measured && std::isfinite(given.f2);
   auto compare = [&](const std::string &what, const Fit &alt) {
     if (!alt.measured || !std::isfinite(alt.f2))
@@ -114,12 +117,12 @@ std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, co
   };
   if (lever_matters)
     compare("the lever arm's sign (the rig file's camera_offset, or camera_pose's translation)",
-            fit(camera, leverNegated(rig), motion, tracks, options));
+            fit(camera, leverNegated(rig), input, options));
   if (yaw_matters) {
     std::vector<MotionSample> negated = motion;
     for (MotionSample &s : negated)
       s.yaw = -s.yaw;
-    compare("the yaw's sign (the motion log's yaw readings)", fit(camera, rig, negated, tracks, options));
+    compare("the yaw's sign (the motion log's yaw readings)", fit(camera, rig, input.withMotion(negated), options));
   }
   return out;
 }

@@ -3,6 +3,7 @@
 // can tell apart from what was given (estimatePoints() warns about them).
 #include <string>
 #include <vector>
+#include <yawdepth/geometry/track_inputs.h>
 #include <yawdepth/pipeline/pipeline.h>
 
 namespace yawdepth {
@@ -29,8 +30,8 @@ struct RigDoubt {
   the body turning by at least kMinYawSpan, the yaw's sign when it turns, or
   stays away from 0, by at least kMinYawSpan.
 */
-std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                                const std::vector<Track> &tracks, const PipelineOptions &options);
+std::vector<RigDoubt> rigDoubts(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                                const PipelineOptions &options);
 
 } // namespace pipeline_detail
 } // namespace yawdepth

@@ -7,6 +7,7 @@
 #include <limits>
 #include <string>
 #include <yawdepth/error.h>
+#include <yawdepth/geometry/track_inputs.h>
 #include <yawdepth/refine/refine.h>
 
 namespace yawdepth {
@@ -15,25 +16,16 @@ using namespace refine_detail;
 
 namespace {
 
-void checkInputs(const std::vector<MotionSample> &truth, const std::vector<Track> &tracks,
-                 const std::vector<Eigen::Vector3d> &w_points, const NoiseModel &noise)
+/* The inputs, validated (validateInputs()'s rules, and a true point per track). */
+TracksByFrame checkInputs(const std::vector<MotionSample> &truth, const std::vector<Track> &tracks,
+                          const std::vector<Eigen::Vector3d> &w_points, const NoiseModel &noise)
 {
   noise.validate();
   if (w_points.size() != tracks.size())
     throw Error("depthCramerRao: one true point per track is needed");
   if (truth.empty())
     throw Error("depthCramerRao: the motion log is empty");
-  for (std::size_t i = 1; i < truth.size(); ++i)
-    if (!(truth[i].frame > truth[i - 1].frame))
-      throw Error("depthCramerRao: motion-log frames must be strictly increasing");
-}
-
-int rowOf(const std::vector<MotionSample> &truth, long frame)
-{
-  const long row = rowOfFrame(truth, frame);
-  if (row < 0)
-    throw Error("depthCramerRao: frame " + std::to_string(frame) + " is not in the motion log");
-  return static_cast<int>(row);
+  return validateInputs(truth, tracks);
 }
 
 /* The model's motion at the truth, without points. */
@@ -79,13 +71,14 @@ WhitenedObservation whitenedAtTruth(const CameraModel &camera, const Eigen::Vect
    the previous one by phi^gap (rows) when the tracker's errors are correlated (phi > 0, as refine's
    innovations); returns the point's index, or -1 when the track has fewer than two observations or
    the point is behind a camera. */
-int addTruePoint(Model &m, const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &truth,
-                 const Track &track, const Eigen::Vector3d &w_point, double sigma_px, double phi)
+int addTruePoint(Model &m, const CameraModel &camera, const YawRig &rig, const TracksByFrame &input, std::size_t t,
+                 const Eigen::Vector3d &w_point, double sigma_px, double phi)
 {
+  const Track &track = input.tracks()[t];
   if (track.observations.size() < 2)
     return -1;
-  const int ra = rowOf(truth, track.observations.front().frame);
-  const int rk = rowOf(truth, track.observations.back().frame);
+  const int ra = static_cast<int>(input.row(t, 0));
+  const int rk = static_cast<int>(input.row(t, track.observations.size() - 1));
   // The true point anchored in its first camera frame.
   Eigen::Matrix3d Ra;
   Eigen::Vector3d ca;
@@ -94,8 +87,8 @@ int addTruePoint(Model &m, const CameraModel &camera, const YawRig &rig, const s
   if (!(Pa.z() > 0))
     return -1;
   std::vector<ModelObservation> obs;
-  for (const Observation &ob : track.observations) {
-    const int row = rowOf(truth, ob.frame);
+  for (std::size_t k = 0; k < track.observations.size(); ++k) {
+    const int row = static_cast<int>(input.row(t, k));
     Eigen::Matrix3d R;
     Eigen::Vector3d c;
     cameraAt(m, rig, row, R, c);
@@ -125,13 +118,12 @@ std::vector<double> depthCramerRao(const CameraModel &camera, const YawRig &rig,
                                    const std::vector<Track> &tracks, const std::vector<Eigen::Vector3d> &w_points,
                                    const NoiseModel &noise, bool joint)
 {
-  checkInputs(truth, tracks, w_points, noise);
+  const TracksByFrame input = checkInputs(truth, tracks, w_points, noise);
   Model m = truthMotionModel(rig, truth, noise);
   std::vector<double> out(tracks.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<int> point_of_track(tracks.size(), -1);
   for (std::size_t t = 0; t < tracks.size(); ++t)
-    point_of_track[t] = addTruePoint(m, camera, rig, truth, tracks[t], w_points[t], noise.sigma_px,
-                                     noise.pixel_correlation);
+    point_of_track[t] = addTruePoint(m, camera, rig, input, t, w_points[t], noise.sigma_px, noise.pixel_correlation);
 
   std::vector<Eigen::Matrix3d> cov;
   std::vector<char> ok;

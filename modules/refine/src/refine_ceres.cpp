@@ -202,10 +202,10 @@ private:
 
 class Refiner {
 public:
-  Refiner(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-          const std::vector<Track> &tracks, const std::vector<PointEstimate> &initial, const RefineOptions &options)
-      : camera_(camera), motion_(motion), tracks_(tracks), initial_(initial), o_(options), t0v_(rig.cameraOffset()),
-        rig_(rig)
+  Refiner(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+          const std::vector<PointEstimate> &initial, const RefineOptions &options)
+      : camera_(camera), input_(input), motion_(input.motion()), tracks_(input.tracks()), initial_(initial),
+        o_(options), t0v_(rig.cameraOffset()), rig_(rig)
   {
     std::copy(t0v_.data(), t0v_.data() + 3, t0_);
   }
@@ -217,7 +217,6 @@ public:
   RefineResult run();
 
 private:
-  int rowOf(long frame) const;
   void prepare();
   void initialise();
   void gate(TrackData &t, bool inliers_only) const;
@@ -246,6 +245,7 @@ private:
   double pixelError(const TrackData &t, std::size_t j) const;
 
   const CameraModel &camera_;
+  const TracksByFrame &input_;
   const std::vector<MotionSample> &motion_;
   const std::vector<Track> &tracks_;
   const std::vector<PointEstimate> &initial_;
@@ -259,14 +259,6 @@ private:
   State state_;
   std::vector<TrackData> data_;
 };
-
-int Refiner::rowOf(long frame) const
-{
-  const long row = rowOfFrame(motion_, frame);
-  if (row < 0)
-    throw Error("refine: frame " + std::to_string(frame) + " is not in the motion log");
-  return static_cast<int>(row);
-}
 
 /* The camera's world rotation and centre at a row, with the current state. */
 void Refiner::cameraAt(int row, Eigen::Matrix3d &R, Eigen::Vector3d &c) const
@@ -311,9 +303,6 @@ void Refiner::prepare()
 {
   if (motion_.empty())
     throw Error("refine: the motion log is empty");
-  for (std::size_t i = 1; i < motion_.size(); ++i)
-    if (!(motion_[i].frame > motion_[i - 1].frame))
-      throw Error("refine: motion-log frames must be strictly increasing");
   if (!initial_.empty() && initial_.size() != tracks_.size())
     throw Error("refine: one initial estimate per track is needed (or none)");
 
@@ -336,9 +325,7 @@ void Refiner::prepare()
     bool undistorted = true;
     for (std::size_t j = 0; j < tr.observations.size(); ++j) {
       const Observation &ob = tr.observations[j];
-      const int row = rowOf(ob.frame);
-      if (j > 0 && !(row > t.rows.back()))
-        throw Error("refine: track " + std::to_string(tr.id) + " has observations out of frame order");
+      const int row = static_cast<int>(input_.row(i, j));
       t.rows.push_back(row);
       t.uv.emplace_back(ob.u, ob.v);
       Eigen::Vector2d m;
@@ -859,11 +846,10 @@ RefineResult Refiner::run()
 
 bool refineAvailable() { return true; }
 
-RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                          const std::vector<Track> &tracks, const std::vector<PointEstimate> &initial,
-                          const RefineOptions &options)
+RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                          const std::vector<PointEstimate> &initial, const RefineOptions &options)
 {
-  Refiner refiner(camera, rig, motion, tracks, initial, options);
+  Refiner refiner(camera, rig, input, initial, options);
   return refiner.run();
 }
 

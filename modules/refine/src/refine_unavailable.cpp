@@ -6,10 +6,11 @@ namespace yawdepth {
 
 bool refineAvailable() { return false; }
 
-RefineResult refineWindow(const CameraModel &, const YawRig &, const std::vector<MotionSample> &motion,
-                          const std::vector<Track> &tracks, const std::vector<PointEstimate> &initial,
-                          const RefineOptions &options)
+RefineResult refineWindow(const CameraModel &, const YawRig &, const TracksByFrame &input,
+                          const std::vector<PointEstimate> &initial, const RefineOptions &options)
 {
+  const std::vector<MotionSample> &motion = input.motion();
+  const std::vector<Track> &tracks = input.tracks();
   options.noise.validate();
   options.gates.validate();
   if (!initial.empty() && initial.size() != tracks.size())

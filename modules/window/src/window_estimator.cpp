@@ -303,28 +303,14 @@ std::vector<PointEstimate> windowTracks(const CameraModel &camera, const YawRig 
                                         const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
                                         const WindowOptions &options, std::vector<std::vector<bool>> *outliers)
 {
-  for (std::size_t i = 1; i < motion.size(); ++i)
-    if (!(motion[i].frame > motion[i - 1].frame))
-      throw Error("window estimator: motion-log frames must be strictly increasing");
-  std::map<long, std::size_t> track_of;
-  std::map<long, std::vector<FeatureObservation>> by_frame;
-  std::set<long> logged;
-  for (const MotionSample &s : motion)
-    logged.insert(s.frame);
-  for (std::size_t t = 0; t < tracks.size(); ++t) {
-    if (!track_of.emplace(tracks[t].id, t).second)
-      throw Error("window estimator: feature id " + std::to_string(tracks[t].id) + " appears in two tracks");
-    for (const Observation &ob : tracks[t].observations) {
-      if (!logged.count(ob.frame))
-        throw Error("window estimator: frame " + std::to_string(ob.frame) + " of feature " +
-                    std::to_string(tracks[t].id) + " is not in the motion log");
-      FeatureObservation fo;
-      fo.id = tracks[t].id;
-      fo.u = ob.u;
-      fo.v = ob.v;
-      by_frame[ob.frame].push_back(fo);
-    }
-  }
+  return windowTracks(camera, rig, validateInputs(motion, tracks), options, outliers);
+}
+
+std::vector<PointEstimate> windowTracks(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                                        const WindowOptions &options, std::vector<std::vector<bool>> *outliers)
+{
+  const std::vector<MotionSample> &motion = input.motion();
+  const std::vector<Track> &tracks = input.tracks();
   std::vector<PointEstimate> out(tracks.size());
   if (outliers) {
     outliers->assign(tracks.size(), {});
@@ -344,9 +330,14 @@ std::vector<PointEstimate> windowTracks(const CameraModel &camera, const YawRig 
       for (std::size_t k = 0; k < tracks[t].observations.size(); ++k)
         (*outliers)[t][k] = est.isOutlier(tracks[t].id, tracks[t].observations[k].frame);
   };
-  for (const MotionSample &row : motion) {
-    const auto it = by_frame.find(row.frame);
-    est.addFrame(row, it == by_frame.end() ? std::vector<FeatureObservation>() : it->second);
+  for (std::size_t r = 0; r < motion.size(); ++r) {
+    std::vector<FeatureObservation> frame;
+    frame.reserve(input.observedAt(r).size());
+    for (const TracksByFrame::Entry &e : input.observedAt(r)) {
+      const Observation &ob = tracks[e.first].observations[e.second];
+      frame.push_back({tracks[e.first].id, ob.u, ob.v});
+    }
+    est.addFrame(motion[r], frame);
   }
   // Estimates of features that left the state were kept when they left; the others are read now.
   for (std::size_t t = 0; t < tracks.size(); ++t)

@@ -15,6 +15,7 @@
 #include <yawdepth/estimation/two_view.h>
 #include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/geometry/track_inputs.h>
 
 namespace yawdepth {
 
@@ -37,8 +38,8 @@ struct TrackEstimatorOptions {
   motion-log row to the last observation (predicting through rows where the feature is missing).
   \param camera Camera model (observed pixels are undistorted with it).
   \param rig Yaw rig.
-  \param motion Motion-log rows sorted by strictly increasing frame; every observed frame must be in
-         it (throws yawdepth::Error otherwise).
+  \param motion Motion-log rows; the track and the log must obey yawdepth::validateInputs()'s rules
+         (throws yawdepth::Error otherwise).
   \param track The feature's observations.
   \param options Method and its options.
   \return An estimate whose status says whether it is valid; `too_few_frames` for fewer than two
@@ -58,6 +59,14 @@ PointEstimate estimateTrack(const CameraModel &camera, const YawRig &rig, const 
 */
 std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRig &rig,
                                           const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                          const TrackEstimatorOptions &options = TrackEstimatorOptions(),
+                                          std::vector<std::vector<bool>> *outliers = nullptr);
+
+/*!
+  \brief estimateTracks() on input already validated (yawdepth::validateInputs(): what
+  yawdepth::estimatePoints() passes); the same results.
+*/
+std::vector<PointEstimate> estimateTracks(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
                                           const TrackEstimatorOptions &options = TrackEstimatorOptions(),
                                           std::vector<std::vector<bool>> *outliers = nullptr);
 

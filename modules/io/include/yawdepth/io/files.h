@@ -109,8 +109,9 @@ NoiseModel noiseForMotionLog(const NoiseModel &noise, bool six_dof, bool yaw_col
 std::vector<Track> readTracksCsv(const std::string &path, const InputLimits &limits = InputLimits());
 
 /*!
-  \brief Check that every observation names a frame of the motion log; throws yawdepth::Error
-  naming the first track and frame that does not.
+  \brief Check the tracks against the motion log by the estimators' rules (yawdepth::validateInputs():
+  every observed frame in the log, ...); throws yawdepth::Error naming the tracks file, the feature
+  and the frame.
 */
 void checkTracksAgainstMotion(const std::vector<Track> &tracks, const MotionLog &motion,
                               const std::string &tracks_path);

@@ -50,6 +50,7 @@
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/geometry/track_inputs.h>
 
 namespace yawdepth {
 
@@ -102,8 +103,8 @@ bool refineAvailable();
   \brief Refine every track's point jointly with the motion.
   \param camera Camera model (observed pixels are undistorted with it).
   \param rig Yaw rig.
-  \param motion Motion-log rows, strictly increasing frames; every observed frame must be among them.
-  \param tracks The features; tracks with fewer than two observations get `too_few_frames`.
+  \param motion Motion-log rows. \param tracks The features; tracks with fewer than two observations
+         get `too_few_frames`. The two must obey yawdepth::validateInputs()'s rules.
   \param initial An initial estimate per track (e.g. from `fused`), same order as `tracks`, used
          when its status is ok; other tracks start from `exact` on their first and last frames or,
          failing that, from the median depth of the others. May be empty (no initial estimates).
@@ -111,11 +112,18 @@ bool refineAvailable();
          second-to-last/last observations) are scored robustly against all its observations and
          the best one is used, so one gross error at either end does not spoil the start.
   \param options Noise model, robust loss and solver options.
-  \throws yawdepth::Error for inconsistent input (sizes, unknown frames).
+  \throws yawdepth::Error for inconsistent input (sizes, validateInputs()'s rules).
 */
 RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
                           const std::vector<Track> &tracks, const std::vector<PointEstimate> &initial,
                           const RefineOptions &options = RefineOptions());
+
+/*!
+  \brief refineWindow() on input already validated (yawdepth::validateInputs(): what
+  yawdepth::estimatePoints() passes); the same results.
+*/
+RefineResult refineWindow(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                          const std::vector<PointEstimate> &initial, const RefineOptions &options = RefineOptions());
 
 /*!
   \brief Cramér–Rao lower bound of each point's depth zc at its track's last frame.

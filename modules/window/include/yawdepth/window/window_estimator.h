@@ -73,6 +73,7 @@
 #include <yawdepth/estimation/fused_estimator.h>
 #include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/geometry/track_inputs.h>
 
 namespace yawdepth {
 
@@ -163,8 +164,8 @@ private:
   \brief Run WindowEstimator over a motion log and tracks, the batch interface of the CLI and the
   benchmarks: every row is fed in order with the observations of that frame.
   \param camera, rig As for WindowEstimator.
-  \param motion Motion-log rows, strictly increasing frames; every observed frame must be among them.
-  \param tracks The features (unique ids); an observation at a frame missing from the log throws.
+  \param motion Motion-log rows. \param tracks The features. The two must obey
+         yawdepth::validateInputs()'s rules (throws yawdepth::Error otherwise).
   \param options Estimator options.
   \param outliers If not null, receives per track and per observation whether it was flagged (the
          final flags).
@@ -172,6 +173,14 @@ private:
 */
 std::vector<PointEstimate> windowTracks(const CameraModel &camera, const YawRig &rig,
                                         const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                        const WindowOptions &options = WindowOptions(),
+                                        std::vector<std::vector<bool>> *outliers = nullptr);
+
+/*!
+  \brief windowTracks() on input already validated (yawdepth::validateInputs(): what
+  yawdepth::estimatePoints() passes); the same results.
+*/
+std::vector<PointEstimate> windowTracks(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
                                         const WindowOptions &options = WindowOptions(),
                                         std::vector<std::vector<bool>> *outliers = nullptr);
 
