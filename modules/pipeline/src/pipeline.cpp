@@ -17,10 +17,6 @@ namespace yawdepth {
 
 namespace {
 
-/* The smallest pixel noise and robust scale the weighted methods accept: zero (or a denormal)
-   would give infinite weights and NaN uncertainties, not an answer. */
-constexpr double kMinWeightPx = 1e-6;
-
 /* An observation no estimator can use: not finite, more than an image size outside the image, or
    outside what the lens model can undistort. */
 bool unusableObservation(const CameraModel &camera, const Observation &ob)
@@ -58,6 +54,23 @@ template <class Options> Options jointOptions(const PipelineOptions &p)
   return o;
 }
 
+/* The options `window` runs with. */
+WindowOptions windowOptionsOf(const PipelineOptions &p)
+{
+  WindowOptions wo = jointOptions<WindowOptions>(p);
+  wo.window = p.window;
+  return wo;
+}
+
+/* The options `refine` runs with (after fused). */
+RefineOptions refineOptionsOf(const PipelineOptions &p)
+{
+  RefineOptions ro = jointOptions<RefineOptions>(p);
+  ro.threads = p.threads;
+  ro.progress = p.progress;
+  return ro;
+}
+
 /* The chosen method on the tracks as given. */
 PipelineResult run(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
                    const PipelineOptions &options)
@@ -65,9 +78,7 @@ PipelineResult run(const CameraModel &camera, const YawRig &rig, const TracksByF
   const std::vector<MotionSample> &motion = input.motion();
   PipelineResult r;
   if (options.method == Method::Window) {
-    WindowOptions wo = jointOptions<WindowOptions>(options);
-    wo.window = options.window;
-    r.points = windowTracks(camera, rig, input, wo, &r.outliers);
+    r.points = windowTracks(camera, rig, input, windowOptionsOf(options), &r.outliers);
     r.motion = motion;
     return r;
   }
@@ -81,10 +92,7 @@ PipelineResult run(const CameraModel &camera, const YawRig &rig, const TracksByF
     r.motion = motion;
     return r;
   }
-  RefineOptions ro = jointOptions<RefineOptions>(options);
-  ro.threads = options.threads;
-  ro.progress = options.progress;
-  RefineResult refined = refineWindow(camera, rig, input, r.points, ro);
+  RefineResult refined = refineWindow(camera, rig, input, r.points, refineOptionsOf(options));
   r.points = std::move(refined.points);
   r.outliers = std::move(refined.outliers);
   r.motion = std::move(refined.motion);
@@ -141,21 +149,21 @@ std::string figure(double v)
 
 void PipelineOptions::validate() const
 {
-  noise.validate();
-  gates.validate();
-  const bool weighted = method == Method::Fused || method == Method::Window || method == Method::Refine;
   const std::string name = toString(method);
   if (!methodAvailable(method))
     throw Error("method " + name + " is unavailable: this yawdepth was built without Ceres");
-  if (weighted && !(noise.sigma_px >= kMinWeightPx))
-    throw Error("pixel noise " + std::to_string(noise.sigma_px) + " px: method " + name +
-                " needs at least 1e-6 px (it weighs every observation by it)");
-  if ((method == Method::Window || method == Method::Refine) && !(robust_threshold_px >= kMinWeightPx))
-    throw Error("method " + name + " needs a robust threshold of at least 1e-6 px (the scale of its robust loss)");
-  if (method == Method::Window && !(outlier_threshold_px >= kMinWeightPx))
-    throw Error("method window needs an outlier threshold of at least 1e-6 px");
-  if (method == Method::Window && window < 2)
-    throw Error("method window needs a window of at least 2 frames");
+  // Each method's own rules, on the options it will run with.
+  if (method == Method::Window) {
+    windowOptionsOf(*this).validate();
+  } else if (method == Method::Refine) {
+    refineOptionsOf(*this).validate();
+  } else {
+    noise.validate();
+    gates.validate();
+    if (method == Method::Fused && !(noise.sigma_px >= kMinWeightPx))
+      throw Error("pixel noise " + std::to_string(noise.sigma_px) +
+                  " px: method fused needs at least 1e-6 px (it weighs every observation by it)");
+  }
   if (threads < 1)
     throw Error("refine needs at least one thread");
   if (noise.pixel_correlation > 0 && !modelsTrackerCorrelation(method))

@@ -702,13 +702,7 @@ void Refiner::flagOutliers()
   }
 }
 
-void Refiner::checkOptions() const
-{
-  o_.noise.validate();
-  o_.gates.validate();
-  if (!(o_.robust_threshold_px > 0) || !(o_.outlier_threshold_px > 0) || o_.max_iterations < 0)
-    throw Error("refine: the robust and outlier thresholds must be positive, max_iterations non-negative");
-}
+void Refiner::checkOptions() const { o_.validate(); }
 
 /* The robust solve, the outliers it shows, then the final solve on the inliers: the iterations,
    costs and convergence into result. */

@@ -11,8 +11,7 @@ RefineResult refineWindow(const CameraModel &, const YawRig &, const TracksByFra
 {
   const std::vector<MotionSample> &motion = input.motion();
   const std::vector<Track> &tracks = input.tracks();
-  options.noise.validate();
-  options.gates.validate();
+  options.validate();
   if (!initial.empty() && initial.size() != tracks.size())
     throw Error("refine: one initial estimate per track is needed (or none)");
   RefineResult result;

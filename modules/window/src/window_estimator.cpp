@@ -20,14 +20,16 @@ void WindowOptions::validate() const
   gates.validate();
   if (window < 2)
     throw Error("window estimator: the window must hold at least 2 frames (got " + std::to_string(window) + ")");
-  if (!(noise.sigma_px >= kMinSigmaPx))
+  if (!(noise.sigma_px >= kMinWeightPx))
     throw Error("window estimator: the pixel noise must be at least 1e-6 px (it weighs every observation)");
   auto positive = [](double v, const char *what) {
     if (!(std::isfinite(v) && v > 0))
       throw Error(std::string("window estimator: ") + what + " must be finite and positive");
   };
-  positive(robust_threshold_px, "robust_threshold_px");
-  positive(outlier_threshold_px, "outlier_threshold_px");
+  if (!(robust_threshold_px >= kMinWeightPx))
+    throw Error("window estimator: the robust threshold must be at least 1e-6 px (the scale of its robust loss)");
+  if (!(outlier_threshold_px >= kMinWeightPx))
+    throw Error("window estimator: the outlier threshold must be at least 1e-6 px");
   positive(prior_sigma_inverse_depth, "prior_sigma_inverse_depth");
   positive(convergence, "convergence");
   if (!std::isfinite(prior_inverse_depth))

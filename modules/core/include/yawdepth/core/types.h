@@ -151,6 +151,10 @@ MotionNoise motionNoiseFromString(const std::string &word);
     innovations would weigh over seven times its first observation). */
 constexpr double kMaxPixelCorrelation = 0.99;
 
+/*! \brief The smallest pixel noise and robust scale (px) the methods that weigh every observation by
+    them accept (fused, window, refine): zero or a denormal gives infinite weights and NaN sigmas. */
+constexpr double kMinWeightPx = 1e-6;
+
 /*!
   \brief Noise model of the inputs (1-sigma), used for uncertainty and for weighting.
 */

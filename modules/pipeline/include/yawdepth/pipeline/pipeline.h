@@ -51,11 +51,11 @@ struct PipelineOptions {
       cloud whose points should be within 10 % at 2 sigma). 0: no such gate. */
   double max_depth_sigma = 0;
   /*!
-    \brief Throws yawdepth::Error, one line, when the options cannot give an answer: a negative or
-    non-finite max_depth_sigma, a bad noise
-    model or gate, a pixel noise under 1e-6 px for fused, window or refine (they weigh every
-    observation by it), a robust or outlier threshold under 1e-6 px for window and refine, fewer
-    than one thread, or refine in a build without Ceres.
+    \brief Throws yawdepth::Error, one line, when the options cannot give an answer: the method's own
+    rules on the options it runs with (WindowOptions::validate(), RefineOptions::validate(); for
+    fused a pixel noise under kMinWeightPx: it weighs every observation by it), a bad noise model or
+    gate, a negative or non-finite max_depth_sigma, fewer than one thread, a pixel correlation for a
+    method that does not model it, or refine in a build without Ceres.
   */
   void validate() const;
 };
