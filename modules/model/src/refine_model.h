@@ -1,9 +1,12 @@
 #pragma once
 /*
-  Private to yawdepth::refine: the measurement model of `refine`, templated on the scalar type so
-  that the same code runs with double, ceres::Jet (the solver's automatic derivatives) and
-  Eigen::AutoDiffScalar (the information matrix and the Cramér–Rao bound, which must not need
-  Ceres). Nothing here depends on Ceres.
+  The measurement model of yawdepth's estimators (internal: modules/model, never installed),
+  templated on the scalar type so that the same code runs with double, ceres::Jet (refine's cost
+  functors, modules/refine/src/refine_ceres.cpp: the solver's automatic derivatives) and
+  Eigen::AutoDiffScalar (information.cpp: the information matrix, refine's sigma_zc and the
+  Cramér–Rao bound, which must not need Ceres). yawdepth::window uses it too: window_model.h's
+  analytic Jacobians are of these residuals (the general chain's), on the same whitened
+  observations and odometry increments. Nothing here depends on Ceres.
 
   Parameter blocks and units:
   - pose[4]  = (x, y, z, heading): the vision frame in the world, wMv = [Ry(heading) | (x, y, z)]

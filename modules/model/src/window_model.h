@@ -1,8 +1,9 @@
 #pragma once
 /*
-  Private to yawdepth::refine: the measurement model of the sliding-window estimator
-  (WindowEstimator), with analytic Jacobians (the estimator runs every frame, so no automatic
-  differentiation here; the tests check every Jacobian against finite differences).
+  The measurement model of the sliding-window estimator (yawdepth::window's WindowEstimator; internal:
+  modules/model, never installed): refine_model.h's general-chain residuals with analytic Jacobians
+  (the estimator runs every frame, so no automatic differentiation here; tests/test_window.cpp checks
+  every Jacobian against finite differences and the residuals against refine_model.h's).
 
   Parameter blocks and units:
   - frame x[7] = (x, y, z, dx, dy, dz, yaw): the vision frame at p = (x, y, z) (m) with orientation

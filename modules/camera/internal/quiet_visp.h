@@ -1,7 +1,10 @@
 #pragma once
 /*
-  quiet_visp.h: run ViSP calls that print without printing (the library never prints). Private to
-  yawdepth::camera and yawdepth::calibration (not installed).
+  quiet_visp.h: run ViSP calls that print without printing (the library never prints). Internal,
+  not installed: QuietVisp is compiled into yawdepth::camera (src/quiet_visp.cpp), which uses it
+  around vpXmlParserCamera; yawdepth::calibration uses it around vpCalibration, vpHandEyeCalibration
+  and vpXmlParserCamera's save. Both reach this header through the yawdepth_quiet_visp_internal
+  target (modules/camera/CMakeLists.txt).
 */
 #include <iosfwd>
 #include <mutex>

@@ -1,8 +1,11 @@
 #pragma once
 /*
-  Private to yawdepth::refine: the Gauss–Newton information of the refine model and each point's
-  marginal covariance (Schur complement over the motion), without Ceres. Used by refineWindow()
-  for sigma_zc at its solution and by depthCramerRao() at the truth.
+  The Gauss–Newton information of the measurement model (refine_model.h) and each point's marginal
+  covariance (Schur complement over the motion), without Ceres (internal: modules/model, never
+  installed; information.cpp is compiled into yawdepth_window's library). Used by yawdepth::refine:
+  refineWindow() for sigma_zc at its solution and depthCramerRao() at the truth; and by
+  yawdepth::window for the observations' whitening and the measured increments (whitenObservation,
+  measuredIncrementGeneral, kMinSigmaPx), so that both estimators weigh the same measurements alike.
 */
 #include "refine_model.h"
 
