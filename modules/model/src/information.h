@@ -52,7 +52,7 @@ struct Model {
   double inv_sigma_yaw = 0;
   bool poses_free = false, yaws_free = false;
   bool rotation_free[3] = {false, true, false}; //!< general chain: which components of d are estimated
-  // The tracker's correlated errors (NoiseModel::pixel_correlation; refine's chain_costs.h): per
+  // The tracker's correlated errors (NoiseModel::pixel_correlation; refine's costs/innovation_costs.h): per
   // observation, the index of its track's previous observation in the chain (same point, earlier
   // row) or -1, and the AR(1) coefficient a on it; the observation then enters as the innovation
   // (r - a r_prev) / sqrt(1 - a^2). Shorter than observations (empty: independent errors): -1 beyond.

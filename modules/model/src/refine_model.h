@@ -2,7 +2,7 @@
 /*
   The measurement model of yawdepth's estimators (internal: modules/model, never installed),
   templated on the scalar type so that the same code runs with double, ceres::Jet (refine's cost
-  functors, modules/refine/src/refine_ceres.cpp: the solver's automatic derivatives) and
+  functors, modules/refine/src/costs/: the solver's automatic derivatives) and
   Eigen::AutoDiffScalar (information.cpp: the information matrix, refine's sigma_zc and the
   Cramér–Rao bound, which must not need Ceres). yawdepth::window uses it too: window_model.h's
   analytic Jacobians are of these residuals (the general chain's), on the same whitened
