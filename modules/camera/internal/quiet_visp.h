@@ -12,8 +12,8 @@
 namespace yawdepth {
 namespace detail {
 
-/*!
-  \brief While alive: holds a process-wide lock and sends std::cout, std::cerr and std::clog to
+/*
+  While alive: holds a process-wide lock and sends std::cout, std::cerr and std::clog to
   nowhere. vpXmlParserCamera::parse/save print "Found camera with name ..." and vpCalibration
   prints its iterations; yawdepth wraps those calls in one QuietVisp. The lock serialises
   yawdepth's own ViSP calls (and vpCalibration's static gain); other threads that print through
@@ -21,10 +21,10 @@ namespace detail {
 */
 class QuietVisp {
 public:
-  /*! \brief Take the lock, then silence the standard streams; with `c_stdout`, also C's standard
+  /* Take the lock, then silence the standard streams; with `c_stdout`, also C's standard
       output (file descriptor 1: vpHandEyeCalibration prints with printf). */
   explicit QuietVisp(bool c_stdout = false);
-  /*! \brief Restore the standard streams, then release the lock. */
+  /* Restore the standard streams, then release the lock. */
   ~QuietVisp();
   QuietVisp(const QuietVisp &) = delete;
   QuietVisp &operator=(const QuietVisp &) = delete;
