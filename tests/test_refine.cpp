@@ -4,7 +4,7 @@
 // refine's Ceres cost functors of the tracker's correlated errors (private; built with Ceres only),
 // before Catch: Ceres brings glog, whose CHECK macro would otherwise replace Catch's.
 #ifdef YAWDEPTH_TEST_CHAIN_COSTS
-#include "chain_costs.h"
+#include "costs/innovation_costs.h"
 #include <memory>
 #undef CHECK
 #endif

@@ -1,5 +1,9 @@
-// refineWindow() with Ceres: MAP refinement of the points with the odometry and yaw readings.
-#include "chain_costs.h"
+// refineWindow() with Ceres: MAP refinement of the points with the odometry and yaw readings. The
+// problem's assembly and solution; the cost functors are in costs/, the model in refine_model.h.
+#include "costs/innovation_costs.h"
+#include "costs/observation_costs.h"
+#include "costs/odometry_costs.h"
+#include "costs/prior_costs.h"
 #include "information.h"
 
 #include <Eigen/Geometry>
@@ -23,139 +27,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// ---------------------------------------------------------------------------------------------
-// Cost functors (automatic derivatives; the model itself is in refine_model.h).
-
-/* Reprojection of a point anchored in another frame.
-   Parameter blocks: frame_a[5] = (x, y, z [m], heading [rad], yaw [rad]) of the anchor frame (the
-   track's first observation): its vision-frame pose in the world and its camera yaw; frame_k[5]
-   the same for the observing frame; point[3] = (alpha, beta [-], rho [1/m]).
-   Residual[2]: whitened normalised reprojection error (units of sigma_px). */
-struct ReprojectionCost {
-  ReprojectionCost(const WhitenedObservation &w, const double *t0) : w_(w), t0_{t0[0], t0[1], t0[2]} {}
-  template <typename T> bool operator()(const T *frame_a, const T *frame_k, const T *point, T *r) const
-  {
-    return reprojectionResidual(frame_a, frame_a + 4, frame_k, frame_k + 4, point, t0_, w_, r);
-  }
-  static ceres::CostFunction *Create(const WhitenedObservation &w, const double *t0)
-  {
-    return new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 5, 5, 3>(new ReprojectionCost(w, t0));
-  }
-  WhitenedObservation w_;
-  double t0_[3];
-};
-
-/* The observation in the anchor frame itself. Parameter block: point[3] = (alpha, beta, rho).
-   Residual[2]: whitened (alpha, beta) - m (units of sigma_px). */
-struct AnchorCost {
-  explicit AnchorCost(const WhitenedObservation &w) : w_(w) {}
-  template <typename T> bool operator()(const T *point, T *r) const
-  {
-    anchorResidual(point, w_, r);
-    return true;
-  }
-  static ceres::CostFunction *Create(const WhitenedObservation &w)
-  {
-    return new ceres::AutoDiffCostFunction<AnchorCost, 2, 3>(new AnchorCost(w));
-  }
-  WhitenedObservation w_;
-};
-
-/* Odometry increment prior. Parameter blocks: frame_prev[5], frame_cur[5] = (x, y, z [m],
-   heading [rad], yaw [rad], the yaw unused here). Residual[4]: (estimated - measured) increment,
-   translation in the earlier vision frame over sigma_odom, heading change over sigma_heading. */
-struct OdometryCost {
-  explicit OdometryCost(const OdometryMeasurement &o) : o_(o) {}
-  template <typename T> bool operator()(const T *frame_prev, const T *frame_cur, T *r) const
-  {
-    odometryResidual(frame_prev, frame_cur, o_, r);
-    return true;
-  }
-  static ceres::CostFunction *Create(const OdometryMeasurement &o)
-  {
-    return new ceres::AutoDiffCostFunction<OdometryCost, 4, 5, 5>(new OdometryCost(o));
-  }
-  OdometryMeasurement o_;
-};
-
-/* Yaw reading prior. Parameter block: frame[N] = (pose..., yaw) (N = 5 planar, 7 general), only
-   the yaw [rad], the last value, used. Residual[1]: (yaw - reading) / sigma_yaw. */
-template <int N> struct YawCost {
-  YawCost(double measured, double inv_sigma) : measured_(measured), inv_sigma_(inv_sigma) {}
-  template <typename T> bool operator()(const T *frame, T *r) const
-  {
-    yawResidual(frame + N - 1, measured_, inv_sigma_, r);
-    return true;
-  }
-  static ceres::CostFunction *Create(double measured, double inv_sigma)
-  {
-    return new ceres::AutoDiffCostFunction<YawCost, 1, N>(new YawCost(measured, inv_sigma));
-  }
-  double measured_, inv_sigma_;
-};
-
-/* Reprojection of an anchored point, general chain (refine_model.h).
-   Parameter blocks: frame_a[7] = (x, y, z [m], dx, dy, dz [rad], yaw [rad]) of the anchor frame,
-   the vision frame's orientation being Rref_a Exp(d); frame_k[7] the same for the observing frame;
-   point[3] = (alpha, beta [-], rho [1/m]). Stored by value: the two rows' reference orientations
-   and the camera mount. Residual[2]: whitened normalised reprojection error (units of sigma_px). */
-struct ReprojectionCostGeneral {
-  ReprojectionCostGeneral(const WhitenedObservation &w, const Eigen::Matrix3d &Rref_a, const Eigen::Matrix3d &Rref_k,
-                          const Mount &mount)
-      : w_(w), Rref_a_(Rref_a), Rref_k_(Rref_k), mount_(mount)
-  {
-  }
-  template <typename T> bool operator()(const T *frame_a, const T *frame_k, const T *point, T *r) const
-  {
-    return reprojectionResidualGeneral(frame_a, Rref_a_, frame_k, Rref_k_, point, mount_, w_, r);
-  }
-  static ceres::CostFunction *Create(const WhitenedObservation &w, const Eigen::Matrix3d &Rref_a,
-                                     const Eigen::Matrix3d &Rref_k, const Mount &mount)
-  {
-    return new ceres::AutoDiffCostFunction<ReprojectionCostGeneral, 2, 7, 7, 3>(
-        new ReprojectionCostGeneral(w, Rref_a, Rref_k, mount));
-  }
-  WhitenedObservation w_;
-  Eigen::Matrix3d Rref_a_, Rref_k_;
-  Mount mount_;
-};
-
-/* Odometry increment prior, general chain. Parameter blocks: frame_prev[7], frame_cur[7] as in
-   ReprojectionCostGeneral (the yaw unused). Residual[6]: (estimated - measured) increment,
-   translation in the earlier vision frame over sigma_odom, rotation error over its sigma per axis. */
-struct OdometryCostGeneral {
-  explicit OdometryCostGeneral(const OdometryMeasurementGeneral &o) : o_(o) {}
-  template <typename T> bool operator()(const T *frame_prev, const T *frame_cur, T *r) const
-  {
-    odometryResidualGeneral(frame_prev, frame_cur, o_, r);
-    return true;
-  }
-  static ceres::CostFunction *Create(const OdometryMeasurementGeneral &o)
-  {
-    return new ceres::AutoDiffCostFunction<OdometryCostGeneral, 6, 7, 7>(new OdometryCostGeneral(o));
-  }
-  OdometryMeasurementGeneral o_;
-};
-
-/* Per-pose prior (MotionNoise::Absolute). Parameter block: frame[B] (B = 5 planar, 7 general, as
-   above; the yaw, last, unused). Residual[PD]: (estimated - measured) pose over its sigma, PD = 4
-   planar (x, y, z [m], heading [rad]), 6 general (x, y, z [m], rotation offset d [rad]). */
-template <int PD, int B> struct PosePriorCost {
-  explicit PosePriorCost(const PosePrior &o) : o_(o) {}
-  template <typename T> bool operator()(const T *frame, T *r) const
-  {
-    posePriorResidual<PD>(frame, o_, r);
-    return true;
-  }
-  static ceres::CostFunction *Create(const PosePrior &o)
-  {
-    return new ceres::AutoDiffCostFunction<PosePriorCost, PD, B>(new PosePriorCost(o));
-  }
-  PosePrior o_;
-};
-
-// ---------------------------------------------------------------------------------------------
 
 struct TrackData {
   std::vector<int> rows;
@@ -536,11 +407,11 @@ void Refiner::addMotionPriors(ceres::Problem &problem)
 }
 
 /* phi^gap for an observation gap motion-log rows after the previous one of its track's chain
-   (NoiseModel::pixel_correlation, chain_costs.h); 0: independent errors. */
+   (NoiseModel::pixel_correlation, costs/innovation_costs.h); 0: independent errors. */
 double Refiner::chainCoefficient(int gap) const { return pixelCorrelationOver(o_.noise.pixel_correlation, gap); }
 
 /* Observation j of a track: its residual, or with correlated tracker errors (pixel_correlation > 0)
-   the innovation on the chain's previous inlier prev (chain_costs.h; prev = j: j starts the chain).
+   the innovation on the chain's previous inlier prev (costs/innovation_costs.h; prev = j: j starts the chain).
    The anchor observation is the track's first (prepare()), so it is always its chain's first. */
 void Refiner::addObservation(ceres::Problem &problem, TrackData &t, std::size_t j, std::size_t prev,
                              ceres::LossFunction *loss)

@@ -1,8 +1,9 @@
 #pragma once
 /*
-  Private to yawdepth::refine: the measurement model of the sliding-window estimator
-  (WindowEstimator), with analytic Jacobians (the estimator runs every frame, so no automatic
-  differentiation here; the tests check every Jacobian against finite differences).
+  The measurement model of the sliding-window estimator (yawdepth::window's WindowEstimator; internal:
+  modules/model, never installed): refine_model.h's general-chain residuals with analytic Jacobians
+  (the estimator runs every frame, so no automatic differentiation here; tests/test_window.cpp checks
+  every Jacobian against finite differences and the residuals against refine_model.h's).
 
   Parameter blocks and units:
   - frame x[7] = (x, y, z, dx, dy, dz, yaw): the vision frame at p = (x, y, z) (m) with orientation
@@ -27,7 +28,7 @@ using refine_detail::WhitenedObservation;
 constexpr int kFrameDim = 7;
 
 
-/*! Right Jacobian of SO(3): Exp(w + e) = Exp(w) Exp(Jr(w) e) to first order in e. */
+/* Right Jacobian of SO(3): Exp(w + e) = Exp(w) Exp(Jr(w) e) to first order in e. */
 inline Eigen::Matrix3d rightJacobianSO3(const Eigen::Vector3d &w)
 {
   const double t2 = w.squaredNorm();
@@ -38,21 +39,21 @@ inline Eigen::Matrix3d rightJacobianSO3(const Eigen::Vector3d &w)
   return Eigen::Matrix3d::Identity() - (1.0 - std::cos(t)) / t2 * W + (t - std::sin(t)) / (t2 * t) * W * W;
 }
 
-/*! A frame's camera and vision-frame rotation with their derivatives by the 7 frame parameters. */
+/* A frame's camera and vision-frame rotation with their derivatives by the 7 frame parameters. */
 struct CameraPose {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity(); //!< camera rotation in the world
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();     //!< camera centre in the world
-  Eigen::Matrix3d dR[kFrameDim];                   //!< dR / dx_j
-  Eigen::Vector3d dc[kFrameDim];                   //!< dc / dx_j
-  Eigen::Matrix3d Rv = Eigen::Matrix3d::Identity(); //!< vision frame rotation Rref Exp(d)
-  Eigen::Matrix3d dRv[3];                          //!< dRv / dd_j
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity(); // camera rotation in the world
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();     // camera centre in the world
+  Eigen::Matrix3d dR[kFrameDim];                   // dR / dx_j
+  Eigen::Vector3d dc[kFrameDim];                   // dc / dx_j
+  Eigen::Matrix3d Rv = Eigen::Matrix3d::Identity(); // vision frame rotation Rref Exp(d)
+  Eigen::Matrix3d dRv[3];                          // dRv / dd_j
   // For the observations' Jacobians: dR_j = R [w_j]x (a rotation's derivative, in the camera frame),
   // so d(R' u)/dx_j = (R' u) x w_j - rho R' dc_j.
-  Eigen::Vector3d w[kFrameDim];                    //!< vee(R' dR_j)
-  Eigen::Vector3d Rt_dc[kFrameDim];                //!< R' dc_j
+  Eigen::Vector3d w[kFrameDim];                    // vee(R' dR_j)
+  Eigen::Vector3d Rt_dc[kFrameDim];                // R' dc_j
 };
 
-/*! The camera of frame x (see the file comment) and its derivatives. */
+/* The camera of frame x (see the file comment) and its derivatives. */
 inline void cameraPose(const double *x, const Eigen::Matrix3d &Rref, const Mount &mount, CameraPose &out)
 {
   const Eigen::Vector3d d(x[3], x[4], x[5]);
@@ -83,7 +84,7 @@ inline void cameraPose(const double *x, const Eigen::Matrix3d &Rref, const Mount
   }
 }
 
-/*!
+/*
   Whitened reprojection residual of an observation in the camera `f` of a point p anchored in
   (Ra, ca), and if J is given its Jacobian (2 x 10: the frame's 7 parameters, then alpha, beta,
   rho). Returns false (r = 0) when the point is not in front of the camera.
@@ -123,7 +124,7 @@ inline bool observationResidual(const Eigen::Matrix3d &Ra, const Eigen::Vector3d
   return true;
 }
 
-/*!
+/*
   The increment residual of refine_detail::odometryResidualGeneral between frames xp and xn (whose
   vision rotations and derivatives are in cp, cn), and its Jacobian (6 x 14: xp's 7, then xn's 7).
 */

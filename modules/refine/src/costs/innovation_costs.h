@@ -1,22 +1,25 @@
 #pragma once
 /*
-  Private to yawdepth::refine: Ceres cost functors of the tracker's correlated errors
-  (NoiseModel::pixel_correlation phi). Along a track the errors are an AR(1) process per pixel axis,
+  refine's Ceres cost functors of the tracker's correlated errors (NoiseModel::pixel_correlation
+  phi). Private to yawdepth::refine (refine_ceres.cpp adds them; tests/test_refine_costs.cpp and
+  tests/test_refine.cpp check them). Along a track the errors are an AR(1) process per pixel axis,
   so an observation after the first of its track's chain (inliers in frame order) enters as the
   innovation
       r~ = (r_k - a r_prev) / sqrt(1 - a^2),  a = phi^gap,
   r_k and r_prev the whitened residuals of this observation and of the chain's previous one
   (refine_model.h's reprojectionResidual / anchorResidual, or their general-chain forms), gap the
-  motion-log rows between them; the chain's first observation enters as r_k (ReprojectionCost,
-  AnchorCost). Ceres takes a parameter block once per residual block, so the functors differ by
-  the blocks the pair touches:
+  motion-log rows between them; the chain's first observation enters as r_k (observation_costs.h:
+  ReprojectionCost, AnchorCost). Ceres takes a parameter block once per residual block, so the
+  functors differ by the blocks the pair touches:
   - the previous observation is the anchor's (its residual depends on the point only):
     frame_a, frame_k, point;
   - neither is: frame_a, frame_p (the previous observation's frame), frame_k, point.
   The current observation is never the anchor's: refine anchors a track at its first observation
   (TrackData::anchor_row = rows.front()), which comes first in any chain it is part of.
-  Residual[2]: the whitened innovation (units of sigma_px). Frame blocks as in refine_ceres.cpp:
-  planar (x, y, z, heading, yaw), general (x, y, z, dx, dy, dz, yaw).
+  Residual[2]: the whitened innovation (units of sigma_px); false (no residual) when the point is
+  not in front of a camera. Frame blocks as in observation_costs.h: planar (x, y, z [m], heading
+  [rad], yaw [rad]), general (x, y, z [m], dx, dy, dz [rad], yaw [rad]); point (alpha, beta [-],
+  rho [1/m]).
 */
 #include "refine_model.h"
 
@@ -47,13 +50,14 @@ struct InnovationAfterAnchorCost {
       : prev_(prev), cur_(cur), t0_{t0[0], t0[1], t0[2]}, c_(c)
   {
   }
-  template <typename T> bool operator()(const T *frame_a, const T *frame_k, const T *point, T *r) const
+  template <typename T>
+  bool operator()(const T *const frame_a, const T *const frame_k, const T *const point, T *residual) const
   {
     T rp[2], rk[2];
     anchorResidual(point, prev_, rp);
     if (!reprojectionResidual(frame_a, frame_a + 4, frame_k, frame_k + 4, point, t0_, cur_, rk))
       return false;
-    innovation(c_, rk, rp, r);
+    innovation(c_, rk, rp, residual);
     return true;
   }
   static ceres::CostFunction *Create(const WhitenedObservation &prev, const WhitenedObservation &cur, const double *t0,
@@ -74,13 +78,15 @@ struct InnovationCost {
       : prev_(prev), cur_(cur), t0_{t0[0], t0[1], t0[2]}, c_(c)
   {
   }
-  template <typename T> bool operator()(const T *frame_a, const T *frame_p, const T *frame_k, const T *point, T *r) const
+  template <typename T>
+  bool operator()(const T *const frame_a, const T *const frame_p, const T *const frame_k, const T *const point,
+                  T *residual) const
   {
     T rp[2], rk[2];
     if (!reprojectionResidual(frame_a, frame_a + 4, frame_p, frame_p + 4, point, t0_, prev_, rp) ||
         !reprojectionResidual(frame_a, frame_a + 4, frame_k, frame_k + 4, point, t0_, cur_, rk))
       return false;
-    innovation(c_, rk, rp, r);
+    innovation(c_, rk, rp, residual);
     return true;
   }
   static ceres::CostFunction *Create(const WhitenedObservation &prev, const WhitenedObservation &cur, const double *t0,
@@ -101,13 +107,14 @@ struct InnovationAfterAnchorCostGeneral {
       : prev_(prev), cur_(cur), Rref_a_(Rref_a), Rref_k_(Rref_k), mount_(mount), c_(c)
   {
   }
-  template <typename T> bool operator()(const T *frame_a, const T *frame_k, const T *point, T *r) const
+  template <typename T>
+  bool operator()(const T *const frame_a, const T *const frame_k, const T *const point, T *residual) const
   {
     T rp[2], rk[2];
     anchorResidual(point, prev_, rp);
     if (!reprojectionResidualGeneral(frame_a, Rref_a_, frame_k, Rref_k_, point, mount_, cur_, rk))
       return false;
-    innovation(c_, rk, rp, r);
+    innovation(c_, rk, rp, residual);
     return true;
   }
   static ceres::CostFunction *Create(const WhitenedObservation &prev, const WhitenedObservation &cur,
@@ -131,13 +138,15 @@ struct InnovationCostGeneral {
       : prev_(prev), cur_(cur), Rref_a_(Rref_a), Rref_p_(Rref_p), Rref_k_(Rref_k), mount_(mount), c_(c)
   {
   }
-  template <typename T> bool operator()(const T *frame_a, const T *frame_p, const T *frame_k, const T *point, T *r) const
+  template <typename T>
+  bool operator()(const T *const frame_a, const T *const frame_p, const T *const frame_k, const T *const point,
+                  T *residual) const
   {
     T rp[2], rk[2];
     if (!reprojectionResidualGeneral(frame_a, Rref_a_, frame_p, Rref_p_, point, mount_, prev_, rp) ||
         !reprojectionResidualGeneral(frame_a, Rref_a_, frame_k, Rref_k_, point, mount_, cur_, rk))
       return false;
-    innovation(c_, rk, rp, r);
+    innovation(c_, rk, rp, residual);
     return true;
   }
   static ceres::CostFunction *Create(const WhitenedObservation &prev, const WhitenedObservation &cur,

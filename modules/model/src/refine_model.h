@@ -1,9 +1,12 @@
 #pragma once
 /*
-  Private to yawdepth::refine: the measurement model of `refine`, templated on the scalar type so
-  that the same code runs with double, ceres::Jet (the solver's automatic derivatives) and
-  Eigen::AutoDiffScalar (the information matrix and the Cramér–Rao bound, which must not need
-  Ceres). Nothing here depends on Ceres.
+  The measurement model of yawdepth's estimators (internal: modules/model, never installed),
+  templated on the scalar type so that the same code runs with double, ceres::Jet (refine's cost
+  functors, modules/refine/src/costs/: the solver's automatic derivatives) and
+  Eigen::AutoDiffScalar (information.cpp: the information matrix, refine's sigma_zc and the
+  Cramér–Rao bound, which must not need Ceres). yawdepth::window uses it too: window_model.h's
+  analytic Jacobians are of these residuals (the general chain's), on the same whitened
+  observations and odometry increments. Nothing here depends on Ceres.
 
   Parameter blocks and units:
   - pose[4]  = (x, y, z, heading): the vision frame in the world, wMv = [Ry(heading) | (x, y, z)]
@@ -29,7 +32,7 @@
 namespace yawdepth {
 namespace refine_detail {
 
-/*! out = Ry(a) v, with c = cos a, s = sin a. */
+/* out = Ry(a) v, with c = cos a, s = sin a. */
 template <typename T> inline void rotateY(const T &c, const T &s, const T *v, T *out)
 {
   out[0] = c * v[0] + s * v[2];
@@ -37,7 +40,7 @@ template <typename T> inline void rotateY(const T &c, const T &s, const T *v, T 
   out[2] = c * v[2] - s * v[0];
 }
 
-/*! out = Ry(a)^T v, with c = cos a, s = sin a. */
+/* out = Ry(a)^T v, with c = cos a, s = sin a. */
 template <typename T> inline void rotateYT(const T &c, const T &s, const T *v, T *out)
 {
   out[0] = c * v[0] - s * v[2];
@@ -45,7 +48,7 @@ template <typename T> inline void rotateYT(const T &c, const T &s, const T *v, T
   out[2] = c * v[2] + s * v[0];
 }
 
-/*!
+/*
   rho times the point in the camera frame of frame k, for a point anchored in frame a:
   \f[ q = R_k^T \left[ R_a \big((\alpha, \beta, 1) + \rho t_0\big) + \rho (p_a - p_k) \right] - \rho t_0,
       \quad R = R_y(\text{heading} + \text{yaw}) \f]
@@ -72,7 +75,7 @@ void anchoredPoint(const T *pose_a, const T *yaw_a, const T *pose_k, const T *ya
     q[i] -= rho * t0[i];
 }
 
-/*!
+/*
   An observation prepared for the model: the undistorted normalised point m and the upper
   triangular square root S of its information, S^T S = (J diag(sigma_px^2) J^T)^-1 with
   J = d(x, y)/d(u, v) the undistortion Jacobian, so S (m_proj - m) is in units of sigma_px.
@@ -88,7 +91,7 @@ template <typename T> inline void whiten(const WhitenedObservation &o, const T &
   r[1] = o.s11 * ey;
 }
 
-/*!
+/*
   Reprojection residual of an observation in frame k of a point anchored in frame a != k.
   Returns false when the point is not in front of the camera (q_z <= 0).
 */
@@ -109,13 +112,13 @@ bool reprojectionResidual(const T *pose_a, const T *yaw_a, const T *pose_k, cons
   return true;
 }
 
-/*! Residual of the observation in the anchor frame itself: (alpha, beta) against m. */
+/* Residual of the observation in the anchor frame itself: (alpha, beta) against m. */
 template <typename T> void anchorResidual(const T *point, const WhitenedObservation &o, T *r)
 {
   whiten(o, T(point[0] - o.m[0]), T(point[1] - o.m[1]), r);
 }
 
-/*!
+/*
   A measured odometry increment between consecutive motion-log rows: d = Ry(h_prev)^T (p_cur -
   p_prev) (m, in the earlier vision frame) and dh = h_cur - h_prev (rad), with the inverse sigmas.
 */
@@ -125,7 +128,7 @@ struct OdometryMeasurement {
   double inv_sigma_t = 1, inv_sigma_h = 1;
 };
 
-/*! Residual[4]: (estimated - measured) increment, whitened. */
+/* Residual[4]: (estimated - measured) increment, whitened. */
 template <typename T>
 void odometryResidual(const T *pose_prev, const T *pose_cur, const OdometryMeasurement &o, T *r)
 {
@@ -140,7 +143,7 @@ void odometryResidual(const T *pose_prev, const T *pose_cur, const OdometryMeasu
   r[3] = (pose_cur[3] - pose_prev[3] - o.dh) * o.inv_sigma_h;
 }
 
-/*! Residual[1]: (estimated - measured) yaw, whitened. */
+/* Residual[1]: (estimated - measured) yaw, whitened. */
 template <typename T> void yawResidual(const T *yaw, double measured, double inv_sigma, T *r)
 {
   r[0] = (yaw[0] - measured) * inv_sigma;
@@ -149,19 +152,19 @@ template <typename T> void yawResidual(const T *yaw, double measured, double inv
 // ---------------------------------------------------------------------------------------------
 // The general chain.
 
-/*! The camera mount (R0, t0) and a row's reference orientation, as the general model needs them. */
+/* The camera mount (R0, t0) and a row's reference orientation, as the general model needs them. */
 struct Mount {
   Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t0 = Eigen::Vector3d::Zero();
 };
 
-/*! The yawed vision frame's orientation Rref Exp(d) Ry(yaw) of a general frame block. */
+/* The yawed vision frame's orientation Rref Exp(d) Ry(yaw) of a general frame block. */
 template <typename T> Eigen::Matrix<T, 3, 3> yawedRotation(const Eigen::Matrix3d &Rref, const T *frame)
 {
   return Rref.cast<T>() * expSO3<T>(Eigen::Matrix<T, 3, 1>(frame[3], frame[4], frame[5])) * rotY<T>(frame[6]);
 }
 
-/*!
+/*
   rho times the point in the camera frame of frame k, for a point anchored in frame a (general chain):
   \f[ q = R_0^T \left( V_k^T \left[ V_a (R_0 (\alpha, \beta, 1) + \rho t_0) + \rho (p_a - p_k) \right] - \rho t_0 \right),
       \quad V = R_{ref} \exp(d) R_y(\text{yaw}) \f]
@@ -182,7 +185,7 @@ void anchoredPointGeneral(const T *frame_a, const Eigen::Matrix3d &Rref_a, const
   q[2] = out(2);
 }
 
-/*! Reprojection residual (general chain); false when the point is not in front of the camera. */
+/* Reprojection residual (general chain); false when the point is not in front of the camera. */
 template <typename T>
 bool reprojectionResidualGeneral(const T *frame_a, const Eigen::Matrix3d &Rref_a, const T *frame_k,
                                  const Eigen::Matrix3d &Rref_k, const T *point, const Mount &mount,
@@ -199,7 +202,7 @@ bool reprojectionResidualGeneral(const T *frame_a, const Eigen::Matrix3d &Rref_a
   return true;
 }
 
-/*!
+/*
   A measured increment of the general chain: d = Rp^T (p_cur - p_prev) (m, in the earlier vision
   frame) and dR = Rp^T Rc, with the rows' reference orientations and the inverse sigmas per axis.
 */
@@ -211,7 +214,7 @@ struct OdometryMeasurementGeneral {
   double inv_sigma_r[3] = {1, 1, 1};
 };
 
-/*!
+/*
   Residual[6]: (estimated - measured) increment, whitened: the translation in the earlier vision
   frame, and the rotation error E = dR^T Rp^T Rc as vee((E - E^T) / 2) (its rotation vector to
   third order: the error is at noise level).
@@ -231,7 +234,7 @@ void odometryResidualGeneral(const T *frame_prev, const T *frame_cur, const Odom
   r[5] = T(0.5) * (E(1, 0) - E(0, 1)) * o.inv_sigma_r[2];
 }
 
-/*!
+/*
   A measured pose, for per-pose motion noise (MotionNoise::Absolute): the prior on one row's pose
   block. Planar chain: value = (x, y, z, heading) of the row; general chain: value = (x, y, z, 0,
   0, 0), the rotation being the block's offset d from the row's reference (measured) orientation.
@@ -241,7 +244,7 @@ struct PosePrior {
   double inv_sigma[6] = {1, 1, 1, 1, 1, 1};
 };
 
-/*! Residual[PD]: (estimated - measured) pose, whitened (PD = 4 planar, 6 general). */
+/* Residual[PD]: (estimated - measured) pose, whitened (PD = 4 planar, 6 general). */
 template <int PD, typename T> void posePriorResidual(const T *pose, const PosePrior &o, T *r)
 {
   for (int i = 0; i < PD; ++i)
