@@ -59,10 +59,6 @@ public:
   void forget(long id);
   /*! \brief The method behind it. */
   Method method() const { return options_.method; }
-  /*! \brief The `fused` estimator, or nullptr for `window`. */
-  const FusedEstimator *fusedEstimator() const { return fused_.get(); }
-  /*! \brief The `window` estimator, or nullptr for `fused`. */
-  const WindowEstimator *windowEstimator() const { return window_.get(); }
 
 private:
   YawRig rig_;
