@@ -1,12 +1,25 @@
 #!/usr/bin/env bash
 # Command-line contract test for yawdepth (see docs/formats.md).
 #
-#   YAWDEPTH=/path/to/yawdepth CALIB=/path/to/calib bash tests/cli_contract.sh
+#   YAWDEPTH=/path/to/yawdepth CALIB=/path/to/calib bash tests/cli_contract.sh [SECTION...]
 #
+# Runs the named sections (SECTIONS below; ctest runs each as cli_contract_SECTION), or all of them
+# in order without one. A section makes the files it reads itself when another section makes them
+# (the need_* helpers, unchecked: the section that owns them checks them).
 # Prints one line per failed check ("FAIL: ...") and ends with "N passed, M failed".
 # Exits 0 only when every check passed. Needs bash, coreutils and awk only.
 
 set -u
+
+# The sections, in the order a run without arguments takes them (tests/CMakeLists.txt reads this line).
+SECTIONS="exact paper methods measure calibrate status output columns bad_input help error_analysis files six_dof readme usage"
+SELECTED="${*:-$SECTIONS}"
+for section in $SELECTED; do
+  case " $SECTIONS " in
+    *" $section "*) ;;
+    *) echo "FAIL: unknown section '$section' (one of: $SECTIONS)"; echo "0 passed, 1 failed"; exit 1 ;;
+  esac
+done
 
 YAWDEPTH=${YAWDEPTH:-}
 CALIB=${CALIB:-}
@@ -45,6 +58,84 @@ lines_of() { awk 'END { print NR }' "$1"; }
 first() { head -n 1 "$1" 2>/dev/null | cut -c 1-200; }
 
 HEADER='id,frame,x,y,z,xc,yc,zc,sigma_zc,status'
+
+# ---------------------------------------------------------------------------
+# Files more than one section reads, each made by one function: by the section that checks them,
+# and by need_* (unchecked) when a section that only reads them runs without it.
+
+# Section 1's noise-free scenes: sim_CAM_NAME (CAM xml or yaml) with the options of SCENES.
+SCENES=(
+  "front:--yaw 0"
+  "oblique:--yaw 0.7"
+  "side:--yaw 1.5708"
+  "turning:--yaw 0.3 --turn-rate 0.02"
+  "yawrate:--yaw 0.2 --yaw-rate 0.03"
+  "lateral:--yaw 0.5 --lateral-step 0.01"
+  "seed:--yaw 0.9 --seed 7 --frames 6"
+)
+# simulate_scene CAM NAME: runs simulate into $W/sim_CAM_NAME (run's files: $W/sim_CAM_NAME.{out,err,rc}).
+simulate_scene() {
+  local cam=$1 name=$2 sc opts="" camf
+  for sc in "${SCENES[@]}"; do [ "${sc%%:*}" = "$name" ] && opts=${sc#*:}; done
+  if [ "$cam" = xml ]; then camf=$XML; else camf=$YML; fi
+  # shellcheck disable=SC2086
+  run "$W/sim_${cam}_$name" simulate --camera "$camf" --rig "$RIG" --out-dir "$W/sim_${cam}_$name" --points 40 $opts
+}
+need_scene() { [ -s "$W/sim_$1_$2/tracks.csv" ] || simulate_scene "$1" "$2"; }
+
+# The paper's two images (section 2c), an AprilTag board (2c), the README's worked example.
+PE="$W/paper_two"
+AT="$W/apriltag"
+X="$W/worked"
+simulate_paper_two() {
+  run "$PE.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$PE" --frames 2 --step -0.0565685 --yaw 0.785398 \
+      --pattern chessboard:5x4:0.02 --board-distance 0.62 --blur 0.7 --image-noise 2
+}
+simulate_apriltag() {
+  run "$AT.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$AT" --frames 4 --step 0.01 --yaw 1.5708 \
+      --pattern apriltag:36h11:0.05 --tags 2x1 --board-distance 0.6 --board-offset-x -0.02 --blur 0.6 --image-noise 1
+}
+simulate_worked() {
+  run "$X.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$X" --frames 10 --step 0.02 --yaw 1.5708 --points 12 \
+    --sigma-px 0.3 --sigma-odom 0.001 --sigma-heading 0.00087266 --sigma-yaw 0.00087266
+}
+need_paper_two() { [ -s "$PE/motion.csv" ] || simulate_paper_two; }
+need_apriltag() { [ -s "$AT/motion.csv" ] || simulate_apriltag; }
+need_worked() { [ -s "$X/tracks.csv" ] || simulate_worked; }
+
+# The oblique scene's files as the bad-input and files sections read them: D, M, T.
+oblique_inputs() {
+  need_scene xml oblique
+  D="$W/sim_xml_oblique"
+  M="$D/motion.csv"; T="$D/tracks.csv"
+}
+
+# Section 9's folder of inputs (F, EF) that its refused() checks are never allowed to change; the
+# 6-DoF section's refusals use it too.
+files_setup() {
+  F="$W/files"
+  EF=(estimate --camera "$XML" --rig "$RIG" --motion "$F/m.csv" --tracks "$F/t.csv")
+  [ -d "$F" ] && return
+  oblique_inputs
+  mkdir -p "$F"
+  cp "$T" "$F/t.csv"; cp "$M" "$F/m.csv"; cp "$F/t.csv" "$F/t.orig"; cp "$F/m.csv" "$F/m.orig"
+  ln "$F/t.csv" "$F/t_hard.csv"; ln -s t.csv "$F/t_soft.csv"
+}
+# refused NAME WORDS ARGS...: non-zero exit, one line on stderr holding WORDS, inputs unchanged.
+refused() {
+  local name=$1 words=$2; shift 2
+  run "$F/$name" "$@"
+  local rc; rc=$(rc_of "$F/$name")
+  local msg=""
+  [ "$rc" -eq 0 ] && msg="$msg exit 0;"
+  [ "$rc" -ge 124 ] && msg="$msg exit $rc (crash or timeout);"
+  [ "$(lines_of "$F/$name.err")" -ne 1 ] && msg="$msg $(lines_of "$F/$name.err") lines on stderr;"
+  grep -q -F -e "$words" "$F/$name.err" || msg="$msg stderr lacks '$words';"
+  cmp -s "$F/t.csv" "$F/t.orig" || msg="$msg the tracks input changed;"
+  cmp -s "$F/m.csv" "$F/m.orig" || msg="$msg the motion input changed;"
+  if [ -z "$msg" ]; then pass; else fail "files $name:$msg stderr: $(first "$F/$name.err")"; fi
+  cp "$F/t.orig" "$F/t.csv"; cp "$F/m.orig" "$F/m.csv"
+}
 
 # ---------------------------------------------------------------------------
 # Points checker (awk). Joins the estimate and the truth on id.
@@ -101,24 +192,15 @@ compare_points() {
     }' "$2" "$1"
 }
 
+sec_exact() {
 # ---------------------------------------------------------------------------
-# 1. Noise-free exactness through the CLI.
-SCENES=(
-  "front:--yaw 0"
-  "oblique:--yaw 0.7"
-  "side:--yaw 1.5708"
-  "turning:--yaw 0.3 --turn-rate 0.02"
-  "yawrate:--yaw 0.2 --yaw-rate 0.03"
-  "lateral:--yaw 0.5 --lateral-step 0.01"
-  "seed:--yaw 0.9 --seed 7 --frames 6"
-)
+# 1. Noise-free exactness through the CLI (the scenes: SCENES above).
 for cam in xml yaml; do
   if [ "$cam" = xml ]; then CAMF=$XML; TOL=1e-9; else CAMF=$YML; TOL=1e-6; fi
   for sc in "${SCENES[@]}"; do
     name=${sc%%:*}; opts=${sc#*:}
     D="$W/sim_${cam}_$name"
-    # shellcheck disable=SC2086
-    run "$W/sim_${cam}_$name" simulate --camera "$CAMF" --rig "$RIG" --out-dir "$D" --points 40 $opts
+    simulate_scene "$cam" "$name"
     if [ "$(rc_of "$W/sim_${cam}_$name")" -ne 0 ]; then
       fail "simulate $cam $name: exit $(rc_of "$W/sim_${cam}_$name"): $(first "$W/sim_${cam}_$name.err")"
       continue
@@ -138,9 +220,12 @@ for cam in xml yaml; do
     esac
   done
 done
+}
 
+sec_paper() {
 # ---------------------------------------------------------------------------
 # 2. --method paper on a pure-translation scene.
+need_scene xml front
 D="$W/sim_xml_front"
 if [ -s "$D/tracks.csv" ]; then
   run "$W/paper" estimate --method paper --camera "$XML" --rig "$RIG" --motion "$D/motion_truth.csv" --tracks "$D/tracks.csv"
@@ -155,12 +240,16 @@ if [ -s "$D/tracks.csv" ]; then
 else
   fail "estimate --method paper: no simulated front scene"
 fi
+}
 
+sec_methods() {
 # ---------------------------------------------------------------------------
 # 2b. fused and refine: on noise-free data with a tiny noise model they agree with the truth
 # (not to round-off: they are statistical estimators with a diffuse prior), and on noisy data
 # they run, report ok rows and write the --outliers file.
 TINY=(--sigma-px 1e-4 --sigma-odom 1e-8 --sigma-heading 1e-9 --sigma-yaw 1e-9)
+need_scene yaml side
+need_scene yaml turning
 for m in fused window refine; do
   for name in side turning; do
     D="$W/sim_yaml_$name"
@@ -284,12 +373,12 @@ done
 run "$N.jump_track" track --camera "$YML" --rig "$RIG" --motion "$N/motion_jump_z.csv" --out "$N/jump_track.csv"
 [ "$(rc_of "$N.jump_track")" -ne 0 ] && [ ! -e "$N/jump_track.csv" ] && grep -q "the row of frame" "$N.jump_track.err" &&
   pass || fail "track with a motion jump: exit $(rc_of "$N.jump_track"): $(first "$N.jump_track.err")"
+}
 
+sec_measure() {
 # ---------------------------------------------------------------------------
 # 2c. measure on rendered images: the paper's two images (chessboard) and an AprilTag board.
-PE="$W/paper_two"
-run "$PE.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$PE" --frames 2 --step -0.0565685 --yaw 0.785398 \
-    --pattern chessboard:5x4:0.02 --board-distance 0.62 --blur 0.7 --image-noise 2
+simulate_paper_two
 run "$PE.m" measure --quiet --camera "$YML" --rig "$RIG" --motion "$PE/motion.csv" --pattern chessboard:5x4:0.02 \
     --sigma-px 0.05 --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-yaw 1e-6 --report "$PE/report" --out "$PE/points.csv" \
     --ply "$PE/points.ply"
@@ -443,9 +532,7 @@ run "$PH.bad" simulate --camera "$YML" --rig "$RIG" --out-dir "$W/photo_bad" --f
 if [ "$(rc_of "$PH.bad")" -ne 0 ] && [ "$(wc -l < "$PH.bad.err")" -eq 1 ] && grep -q "outer" "$PH.bad.err"; then pass; else
   fail "simulate --outer-square wider than a square: exit $(rc_of "$PH.bad"): $(first "$PH.bad.err")"; fi
 
-AT="$W/apriltag"
-run "$AT.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$AT" --frames 4 --step 0.01 --yaw 1.5708 \
-    --pattern apriltag:36h11:0.05 --tags 2x1 --board-distance 0.6 --board-offset-x -0.02 --blur 0.6 --image-noise 1
+simulate_apriltag
 run "$AT.m" measure --quiet --camera "$YML" --rig "$RIG" --motion "$AT/motion.csv" --pattern apriltag:36h11:0.05 \
     --sigma-px 0.2 --sigma-odom 1e-5 --sigma-heading 1e-6 --sigma-yaw 1e-6 --out "$AT/points.csv"
 res=$(awk -F, 'NR > 1 && $10 == "ok" { k++; if ($1 % 5 == 0) c++ } END { print k+0, c+0 }' "$AT/points.csv" 2>/dev/null)
@@ -453,7 +540,9 @@ if [ "$(rc_of "$AT.m")" -eq 0 ] && [ "$res" = "10 2" ]; then pass; else
   fail "measure apriltag 2 tags: exit $(rc_of "$AT.m"), ok rows and centres: $res; $(first "$AT.m.err")"; fi
 res=$(compare_points "$AT/points.csv" "$AT/truth.csv" 1e-2 0.99)
 case $res in OK*) pass ;; *) fail "measure apriltag against truth: $(echo "$res" | head -n 2 | tr '\n' ';')" ;; esac
+}
 
+sec_calibrate() {
 # ---------------------------------------------------------------------------
 # 2d. calibrate-camera on real photographs (tests/data/franka-eye-in-hand, 8 PNG, 9x6 board):
 # every image used, the distortion model chosen and said, a picture per image in --debug-dir, the
@@ -461,6 +550,7 @@ case $res in OK*) pass ;; *) fail "measure apriltag against truth: $(echo "$res"
 # that does not invert at the image's corners, which yawdepth does not write), and a camera file
 # that yawdepth itself reads back.
 FR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/data/franka-eye-in-hand"
+need_scene xml front # calibrate-rig --hand-eye with a planar log, below
 run "$W/franka" calibrate-camera --pattern chessboard:9x6:0.0236 --out "$W/franka_cam" --debug-dir "$W/franka_debug" \
     "$FR"/franka_image-[1-8].png
 res=$(awk '/^RMS reprojection error:/ { if ($4 + 0 > 0 && $4 + 0 <= 0.257 && $6 == "(8") print "OK"; else print $0 }' "$W/franka.out")
@@ -497,7 +587,9 @@ run "$W/handeye_planar" calibrate-rig --hand-eye eye-in-hand --camera "$W/franka
   fail "calibrate-rig --hand-eye with a planar log: exit $(rc_of "$W/handeye_planar"): $(first "$W/handeye_planar.err")"
 run "$W/franka_load" simulate --camera "$W/franka_cam.yaml" --rig "$RIG" --out-dir "$W/franka_sim" --frames 2
 [ "$(rc_of "$W/franka_load")" -eq 0 ] && pass || fail "the calibrated franka camera does not load: $(first "$W/franka_load.err")"
+}
 
+sec_status() {
 # ---------------------------------------------------------------------------
 # 3. Status words.
 S="$W/status"; mkdir -p "$S"
@@ -545,9 +637,12 @@ if [ -z "$nn" ]; then pass; else fail "status mixed: non-ok row holds numbers: $
 # the ok feature of the mixed file (u-u0 = 100 -> 102 px, moving outward) is in front: zc > 0
 zc=$(awk -F, 'NR > 1 && $1 == 1 { print $8 }' "$S/mixed.out")
 if awk -v z="$zc" 'BEGIN { exit !(z + 0 > 0) }'; then pass; else fail "status mixed: ok feature 1 has zc '$zc'"; fi
+}
 
+sec_output() {
 # ---------------------------------------------------------------------------
 # 4. Output columns, --out, digits, sigma.
+need_scene xml oblique
 D="$W/sim_xml_oblique"
 if [ -s "$D/tracks.csv" ]; then
   run "$W/o4" estimate --camera "$XML" --rig "$RIG" --motion "$D/motion.csv" --tracks "$D/tracks.csv"
@@ -577,9 +672,12 @@ if [ -s "$D/tracks.csv" ]; then
 else
   fail "output columns: no simulated oblique scene"
 fi
+}
 
+sec_columns() {
 # ---------------------------------------------------------------------------
 # 5. Column order free, unknown columns ignored (motion and tracks).
+need_scene xml turning
 D="$W/sim_xml_turning"
 if [ -s "$D/tracks.csv" ]; then
   awk -F, -v OFS=, '{ print $6, (NR == 1 ? "comment" : "x" NR), $4, $5, $1, $3, $2 }' "$D/motion.csv" >"$W/motion_perm.csv"
@@ -597,12 +695,15 @@ if [ -s "$D/tracks.csv" ]; then
 else
   fail "column order: no simulated turning scene"
 fi
+}
 
+sec_bad_input() {
 # ---------------------------------------------------------------------------
 # 6. Bad input.
 B="$W/bad"; mkdir -p "$B" "$B/outs"
-D="$W/sim_xml_oblique"
-M="$D/motion.csv"; T="$D/tracks.csv"
+oblique_inputs
+need_paper_two
+need_apriltag
 : >"$B/empty.csv"
 echo 'frame,id,u,v' >"$B/tracks_header_only.csv"
 awk -F, -v OFS=, '{ print $1, $2, $3, $5, $6 }' "$M" >"$B/motion_no_z.csv"
@@ -731,7 +832,9 @@ if [ "$rc" -ne 0 ] && [ "$rc" -lt 128 ] && [ "$nl" -eq 1 ] && [ ! -e "$B/no" ]; 
 else fail "bad input --out into missing folder: exit $rc, $nl lines on stderr: $(first "$B/out_nodir.err")"; fi
 left=$(ls -A "$B/outs" | head -n 3 | tr '\n' ' ')
 if [ -z "$left" ]; then pass; else fail "bad input: files left in the --out folder after failed runs: $left"; fi
+}
 
+sec_help() {
 # ---------------------------------------------------------------------------
 # 7. --help.
 run "$W/h_top" --help
@@ -748,7 +851,9 @@ for m in paper exact fused refine; do
   if grep -q -e "$m" "$W/h_estimate.out"; then pass; else fail "yawdepth estimate --help does not mention method $m"; fi
 done
 if grep -q -e '--paper' "$W/h_error-analysis.out"; then pass; else fail "yawdepth error-analysis --help does not mention --paper"; fi
+}
 
+sec_error_analysis() {
 # ---------------------------------------------------------------------------
 # 8. error-analysis --paper.
 run "$W/ea" error-analysis --paper
@@ -756,29 +861,15 @@ if [ "$(rc_of "$W/ea")" -eq 0 ]; then pass; else fail "error-analysis --paper: e
 for s in '45.84 %' '25.42 %' '13.17 %' '18.17 %' '5.15 %' '5.30 %' '0.15 %' 0.1484 0.0742 0.0297 5.1333e-6; do
   if grep -q -F -e "$s" "$W/ea.out"; then pass; else fail "error-analysis --paper output lacks '$s'"; fi
 done
+}
 
+sec_files() {
 # ---------------------------------------------------------------------------
 # 9. Files: no output replaces an input, another output, a device or a read-only file; no input is
 #    read without bound; a failed run writes nothing.
-F="$W/files"; mkdir -p "$F"
-cp "$T" "$F/t.csv"; cp "$M" "$F/m.csv"; cp "$F/t.csv" "$F/t.orig"; cp "$F/m.csv" "$F/m.orig"
-ln "$F/t.csv" "$F/t_hard.csv"; ln -s t.csv "$F/t_soft.csv"
-EF=(estimate --camera "$XML" --rig "$RIG" --motion "$F/m.csv" --tracks "$F/t.csv")
-# refused NAME WORDS ARGS...: non-zero exit, one line on stderr holding WORDS, inputs unchanged.
-refused() {
-  local name=$1 words=$2; shift 2
-  run "$F/$name" "$@"
-  local rc; rc=$(rc_of "$F/$name")
-  local msg=""
-  [ "$rc" -eq 0 ] && msg="$msg exit 0;"
-  [ "$rc" -ge 124 ] && msg="$msg exit $rc (crash or timeout);"
-  [ "$(lines_of "$F/$name.err")" -ne 1 ] && msg="$msg $(lines_of "$F/$name.err") lines on stderr;"
-  grep -q -F -e "$words" "$F/$name.err" || msg="$msg stderr lacks '$words';"
-  cmp -s "$F/t.csv" "$F/t.orig" || msg="$msg the tracks input changed;"
-  cmp -s "$F/m.csv" "$F/m.orig" || msg="$msg the motion input changed;"
-  if [ -z "$msg" ]; then pass; else fail "files $name:$msg stderr: $(first "$F/$name.err")"; fi
-  cp "$F/t.orig" "$F/t.csv"; cp "$F/m.orig" "$F/m.csv"
-}
+oblique_inputs
+files_setup
+need_paper_two
 refused out_is_tracks "is the input --tracks" "${EF[@]}" --out "$F/t.csv"
 refused out_is_tracks_dot "is the input --tracks" "${EF[@]}" --out "$F/./t.csv"
 refused out_is_tracks_hardlink "is the input --tracks" "${EF[@]}" --out "$F/t_hard.csv"
@@ -887,8 +978,12 @@ refused measure_image_huge "32000 x 32000" "${MEF[@]}" --motion "$F/huge_img_mot
 printf 'P5\n99999999999999 99999999999999\n255\n' >"$F/huge.pgm"
 sed "s|,frame_|,$PE/frame_|; s|[^,]*frame_0001.png|$F/huge.pgm|" "$PE/motion.csv" >"$F/huge_pgm_motion.csv"
 refused measure_image_huge_pgm "pixels are read" "${MEF[@]}" --motion "$F/huge_pgm_motion.csv"
+}
+
+sec_six_dof() {
 # ---------------------------------------------------------------------------
 # 6-DoF motion logs (an arm's poses, tx,ty,tz,tux,tuy,tuz) and a camera_pose mount (hand-eye eMc).
+files_setup # refused()'s folder
 A="$W/arm"; mkdir -p "$A"
 printf 'camera_pose: [0.0577148, -0.0339261, -0.0422745, 0.00178253, 0.00917657, 1.58178]\n' >"$A/eMc.yaml"
 for path in approach orbit random; do
@@ -949,13 +1044,13 @@ printf 'frame,tx,ty,tz,tux,tuy\n0,0,0,0,0,0\n' >"$A/five.csv"
 refused motion_missing_tuz "tuz" estimate --camera "$YML" --rig "$A/eMc.yaml" --motion "$A/five.csv" \
   --tracks "$A/sim_orbit/tracks.csv"
 refused simulate_arm_with_step "excludes" simulate --camera "$YML" --rig "$A/eMc.yaml" --out-dir "$A/x" --arm orbit --step 0.1
+}
 
+sec_readme() {
 # The README's worked example, verbatim: its two printed rows (zc 0.9749 and 0.4775 m, sigma_zc
 # 0.0889 and 0.0334 m, to 4 decimals: the rows hold 17 digits) and the truth it quotes (0.958 and
 # 0.531 m).
-X="$W/worked"
-run "$X.sim" simulate --camera "$YML" --rig "$RIG" --out-dir "$X" --frames 10 --step 0.02 --yaw 1.5708 --points 12 \
-  --sigma-px 0.3 --sigma-odom 0.001 --sigma-heading 0.00087266 --sigma-yaw 0.00087266
+simulate_worked
 run "$X.est" estimate --camera "$YML" --rig "$RIG" --motion "$X/motion.csv" --tracks "$X/tracks.csv" --out "$X/points.csv"
 res=$(awk -F, 'FNR == 1 { next }
   FILENAME == ARGV[1] && FNR <= 3 { t = t sprintf("%.3f ", $8) }
@@ -963,7 +1058,9 @@ res=$(awk -F, 'FNR == 1 { next }
   END { print t "| " e }' "$X/truth.csv" "$X/points.csv" 2>/dev/null)
 want='0.958 0.531 | 9 0.9749 0.0889 ok 8 0.4775 0.0334 ok '
 [ "$res" = "$want" ] && pass || fail "README worked example: got '$res', README has '$want'"
+}
 
+sec_usage() {
 # ---------------------------------------------------------------------------
 # 8. A command line without surprises (issue #34): usage errors name the command's help, an unknown
 # option comes before a missing one (with a suggestion when one is close), renamed options keep
@@ -971,6 +1068,7 @@ want='0.958 0.531 | 9 0.9749 0.0889 ok 8 0.4775 0.0334 ok '
 # progress never on a pipe.
 U="$W/usage"
 mkdir -p "$U"
+need_worked
 # usage NAME WANT ARGS...: status 2, exactly the one stderr line WANT, nothing on stdout.
 usage() {
   local name=$1 want=$2; shift 2
@@ -1146,8 +1244,13 @@ if command -v script >/dev/null 2>&1; then
     /dev/null </dev/null >"$P.ttyq.log" 2>&1
   ! grep -q 'images rendered' "$P.ttyq.log" && pass || fail "simulate --quiet on a terminal shows progress"
 fi
+}
 
-# No stray temporary files anywhere.
+for section in $SELECTED; do
+  "sec_$section"
+done
+
+# No stray temporary files anywhere (one check per run: whichever sections ran).
 left=$(find "$W" -name '.*.tmp*' | head -3)
 [ -z "$left" ] && pass || fail "files: temporary files left: $left"
 

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <random>
+#include "depth_filter_test_access.h" // the filter's raw state (modules/estimation/src)
 #include "scene_support.h"
 #include <yawdepth/estimation/depth_filter.h>
 #include <yawdepth/estimation/fused_estimator.h>
@@ -11,14 +12,6 @@
 
 using namespace yawdepth;
 using yawdepth::test::paperCamera;
-
-// The filter's raw state and covariance, private to the library, read here to check the prediction.
-namespace yawdepth {
-struct DepthFilterTestAccess {
-  static const Eigen::Vector4d &state(const DepthFilter &f) { return f.s_; }
-  static const Eigen::Matrix4d &covariance(const DepthFilter &f) { return f.P_; }
-};
-} // namespace yawdepth
 
 namespace {
 

@@ -20,6 +20,7 @@
 #include <unistd.h>
 #include <vector>
 #include <yawdepth/error.h>
+#include <yawdepth/core/files.h>
 #include <yawdepth/io/files.h>
 
 #include "file_support.h"

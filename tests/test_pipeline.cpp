@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include "residual_statistics.h" // chi-square helpers, relativePoseSigma (modules/pipeline/src)
 #include "scene_support.h"
 #include <yawdepth/error.h>
 #include <yawdepth/estimation/track_estimator.h>

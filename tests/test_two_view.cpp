@@ -147,8 +147,10 @@ TEST_CASE("the u-row and v-row depth formulas are the finite-increment forms of 
   const Eigen::Vector2d m_prev = P_prev.head<2>() / P_prev.z(), m_cur = P_cur.head<2>() / P_cur.z();
   const double Zk = (m_prev.x() * dZ - dX) / (m_cur.x() - m_prev.x());
   CHECK(Zk == Approx(P_cur.z()).epsilon(1e-12));
-  CHECK(exactDepthURow(m_prev, m_cur, Eigen::Matrix3d::Identity(), t) == Approx(P_cur.z()).epsilon(1e-12));
-  CHECK(exactDepthVRow(m_prev, m_cur, Eigen::Matrix3d::Identity(), t) == Approx(P_cur.z()).epsilon(1e-10));
+  // The rows estimateExact solves (depthRows, through rowCoefficients).
+  const DepthRows<double> rows = depthRows<double>(m_prev, m_cur, Eigen::Matrix3d::Identity(), t);
+  CHECK(rows.b_u / rows.a_u == Approx(P_cur.z()).epsilon(1e-12));
+  CHECK(rows.b_v / rows.a_v == Approx(P_cur.z()).epsilon(1e-10));
 }
 
 TEST_CASE("paperDepth is eq. (5) through vpFeaturePoint's interaction matrix", "[paper]")

@@ -9,6 +9,7 @@
 #include <yawdepth/core/types.h>
 #include <yawdepth/features/klt_tracker.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/core/files.h>
 #include <yawdepth/io/files.h>
 
 namespace yawdepth::cli {

@@ -75,20 +75,6 @@ Eigen::Matrix<double, kTwoViewInputs, 1> twoViewInputVariances(const NoiseModel 
   return var;
 }
 
-double exactDepthURow(const Eigen::Vector2d &m_prev, const Eigen::Vector2d &m_cur, const Eigen::Matrix3d &R,
-                      const Eigen::Vector3d &t)
-{
-  const Eigen::Vector3d r = R * homog(m_prev);
-  return (t.x() * r.z() - t.z() * r.x()) / (m_cur.x() * r.z() - r.x());
-}
-
-double exactDepthVRow(const Eigen::Vector2d &m_prev, const Eigen::Vector2d &m_cur, const Eigen::Matrix3d &R,
-                      const Eigen::Vector3d &t)
-{
-  const Eigen::Vector3d r = R * homog(m_prev);
-  return (t.y() * r.z() - t.z() * r.y()) / (m_cur.y() * r.z() - r.y());
-}
-
 double paperDepth(double x, double y, double du, double kx, const Eigen::Vector3d &c_d, const Eigen::Vector3d &c_omega)
 {
   // The interaction matrix of the point at Z = 1: its translational part scales with 1/Z,
@@ -138,16 +124,14 @@ RowCoefficients rowCoefficients(const YawRig &rig, const MotionSample &prev, con
   Eigen::Matrix<AD, 3, 3> R;
   Eigen::Matrix<AD, 3, 1> t;
   relativeMotion<AD>(rig, prev, cur, p, R, t);
-  const Eigen::Matrix<AD, 3, 1> r = R * Eigen::Matrix<AD, 3, 1>(m_prev(0), m_prev(1), AD(1.0));
-  const AD a_u = m_cur(0) * r(2) - r(0), b_u = t(0) * r(2) - t(2) * r(0);
-  const AD a_v = m_cur(1) * r(2) - r(1), b_v = t(1) * r(2) - t(2) * r(1);
+  const DepthRows<AD> rows = depthRows<AD>(m_prev, m_cur, R, t);
 
   Eigen::Vector3d t_val, r_val;
   for (int i = 0; i < 3; ++i) {
     t_val(i) = t(i).value();
-    r_val(i) = r(i).value();
+    r_val(i) = rows.r(i).value();
   }
-  return RowCoefficients{m_cur, a_u, b_u, a_v, b_v, t_val, r_val};
+  return RowCoefficients{m_cur, rows.a_u, rows.b_u, rows.a_v, rows.b_v, t_val, r_val};
 }
 
 /* The rows' values a, b and their Jacobians Da, Db with respect to the inputs. */

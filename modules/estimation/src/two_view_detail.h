@@ -9,17 +9,34 @@
 
 namespace yawdepth {
 
-/*!
-  \brief Exact depth at the current frame from the u-row, for known rotation and translation:
-  \f[ Z_{cur} = \frac{t_1 r_3 - t_3 r_1}{x_{cur} r_3 - r_1} \f]
-  For a pure translation (\f$ R = I,\ t = -(dX_c, dY_c, dZ_c) \f$) this is docs/method.md's
-  \f$ Z_k = (x_{k-1} dZ_c - dX_c)/(x_k - x_{k-1}) \f$, the finite-increment form of eq. (5).
+/*
+  The exact depth rows a Z_cur = b of one feature seen in two frames, for the relative motion
+  (R, t) from the earlier camera frame to the current one, r = R (x_prev, y_prev, 1):
+    u-row: a_u = x_cur r_3 - r_1,  b_u = t_1 r_3 - t_3 r_1
+    v-row: a_v = y_cur r_3 - r_2,  b_v = t_2 r_3 - t_3 r_2
+  For a pure translation (R = I, t = -(dX_c, dY_c, dZ_c)) b_u / a_u is docs/method.md's
+  Z_k = (x_{k-1} dZ_c - dX_c)/(x_k - x_{k-1}), the finite-increment form of eq. (5). The exact
+  estimator (rowCoefficients in two_view.cpp) evaluates them with forward-mode derivatives.
 */
-double exactDepthURow(const Eigen::Vector2d &m_prev, const Eigen::Vector2d &m_cur, const Eigen::Matrix3d &R,
-                      const Eigen::Vector3d &t);
-/*! \brief Same from the v-row: \f$ Z_{cur} = (t_2 r_3 - t_3 r_2)/(y_{cur} r_3 - r_2) \f$. */
-double exactDepthVRow(const Eigen::Vector2d &m_prev, const Eigen::Vector2d &m_cur, const Eigen::Matrix3d &R,
-                      const Eigen::Vector3d &t);
+template <typename T>
+struct DepthRows {
+  Eigen::Matrix<T, 3, 1> r; // the earlier bearing after the rotation
+  T a_u, b_u, a_v, b_v;
+};
+
+template <typename T>
+DepthRows<T> depthRows(const Eigen::Matrix<T, 2, 1> &m_prev, const Eigen::Matrix<T, 2, 1> &m_cur,
+                       const Eigen::Matrix<T, 3, 3> &R, const Eigen::Matrix<T, 3, 1> &t)
+{
+  DepthRows<T> rows;
+  rows.r = R * Eigen::Matrix<T, 3, 1>(m_prev(0), m_prev(1), T(1.0));
+  const Eigen::Matrix<T, 3, 1> &r = rows.r;
+  rows.a_u = m_cur(0) * r(2) - r(0);
+  rows.b_u = t(0) * r(2) - t(2) * r(0);
+  rows.a_v = m_cur(1) * r(2) - r(1);
+  rows.b_v = t(1) * r(2) - t(2) * r(1);
+  return rows;
+}
 
 /*! \brief Number of noisy inputs of the two-view estimators (see twoViewInputVariances()). */
 constexpr int kTwoViewInputs = 12;

@@ -196,7 +196,7 @@ OdometryMeasurementGeneral measuredIncrementGeneral(const MotionSample &prev, co
 
 WhitenedObservation whitenObservation(const Eigen::Vector2d &m, const Eigen::Matrix2d &J, double sigma_px)
 {
-  const double s = std::max(sigma_px, kMinSigmaPx);
+  const double s = std::max(sigma_px, kMinWeightPx);
   const Eigen::Matrix2d cov = s * s * J * J.transpose();
   const Eigen::Matrix2d info = cov.inverse();
   // info = L L^T (L lower triangular); S = L^T is upper triangular with S^T S = info.

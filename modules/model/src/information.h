@@ -5,7 +5,7 @@
   installed; information.cpp is compiled into yawdepth_window's library). Used by yawdepth::refine:
   refineWindow() for sigma_zc at its solution and depthCramerRao() at the truth; and by
   yawdepth::window for the observations' whitening and the measured increments (whitenObservation,
-  measuredIncrementGeneral, kMinSigmaPx), so that both estimators weigh the same measurements alike.
+  measuredIncrementGeneral, the pixel-noise floor kMinWeightPx), so that both estimators weigh the same measurements alike.
 */
 #include "refine_model.h"
 
@@ -114,7 +114,6 @@ void setModelMotion(Model &m, const YawRig &rig, const std::vector<MotionSample>
 /* Lower bounds used instead of a zero sigma for a parameter that is estimated. */
 constexpr double kMinSigmaLength = 1e-9; // m
 constexpr double kMinSigmaAngle = 1e-9;  // rad
-constexpr double kMinSigmaPx = 1e-6;     // px
 
 } // namespace refine_detail
 } // namespace yawdepth

@@ -1,5 +1,6 @@
 #include <yawdepth/pipeline/residual_check.h>
 
+#include "residual_statistics.h"
 #include "variance_factor.h"
 
 #include <Eigen/Geometry>
@@ -629,13 +630,6 @@ double chiSquareMedian(int dof)
     throw Error("chiSquareMedian: needs dof >= 1");
   const double k = dof, c = 1 - 2.0 / (9.0 * k);
   return k * c * c * c;
-}
-
-TrackResidual trackResidual(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                            const Track &track, const std::vector<bool> &outliers, const PointEstimate &point,
-                            const NoiseModel &noise)
-{
-  return fitOf(camera, motion, CameraPoses(rig, motion), track, outliers, point, noise).summary;
 }
 
 namespace pipeline_detail {

@@ -448,7 +448,7 @@ void Refiner::addObservation(ceres::Problem &problem, TrackData &t, std::size_t 
    innovation for correlated tracker errors); returns the number of observations added. */
 int Refiner::addObservations(ceres::Problem &problem, ceres::ParameterBlockOrdering &ordering, bool robust)
 {
-  const double scale = o_.robust_threshold_px / std::max(o_.noise.sigma_px, kMinSigmaPx);
+  const double scale = o_.robust_threshold_px / std::max(o_.noise.sigma_px, kMinWeightPx);
   int observations = 0;
   for (TrackData &t : data_) {
     if (!t.active)

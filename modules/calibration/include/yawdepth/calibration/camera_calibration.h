@@ -182,7 +182,7 @@ CameraCalibration calibrateCamera(const BoardLayout &board, const std::vector<Ca
 */
 std::string vispCameraXmlText(const CameraCalibration &calibration, const std::string &camera_name = "",
                               const std::string &additional_info = "");
-/*! \brief vispCameraXmlText() written to `path` atomically (core/files.h). */
+/*! \brief vispCameraXmlText() written to `path` atomically (a temporary file beside it, renamed over it). */
 void saveVispCameraXml(const std::string &path, const CameraCalibration &calibration,
                        const std::string &camera_name = "Camera", const std::string &additional_info = "");
 

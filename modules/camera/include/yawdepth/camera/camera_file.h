@@ -58,7 +58,7 @@ void checkCameraPlausible(const CameraModel &camera, const std::string &what);
 */
 std::string cameraYamlText(const CameraModel &camera);
 /*!
-  \brief Write cameraYamlText() to `path` atomically (core/files.h).
+  \brief Write cameraYamlText() to `path` atomically (a temporary file beside it, renamed over it).
   \param path The file. \param camera The camera.
 */
 void saveCameraYaml(const std::string &path, const CameraModel &camera);
@@ -74,7 +74,7 @@ void saveCameraYaml(const std::string &path, const CameraModel &camera);
 */
 std::string rosCameraInfoYamlText(const CameraModel &camera, const std::string &camera_name);
 /*!
-  \brief Write rosCameraInfoYamlText() to `path` atomically (core/files.h).
+  \brief Write rosCameraInfoYamlText() to `path` atomically (a temporary file beside it, renamed over it).
   \param path The file. \param camera The camera. \param camera_name Its name (empty: "camera").
 */
 void saveRosCameraInfoYaml(const std::string &path, const CameraModel &camera, const std::string &camera_name);

@@ -1,7 +1,9 @@
 #pragma once
-/*!
-  \file files.h
-  \brief Files in and out, the careful way: inputs read as streams with a bound on their size, outputs
+/*
+  core/files.h, for the build tree only (not installed: the modules' and the command line's own
+  file safety; CMakeLists.txt of yawdepth::core).
+
+  Files in and out, the careful way: inputs read as streams with a bound on their size, outputs
   written atomically without ever replacing an input, a device or a read-only file.
 
   Inputs. Only a regular file or a pipe (FIFO, process substitution, standard input as
@@ -24,24 +26,19 @@
 #include <cstddef>
 #include <string>
 #include <vector>
+#include <yawdepth/core/input_limits.h>
 
 namespace yawdepth {
 
-/*! \brief Bounds on a text input (bytes). */
-struct InputLimits {
-  std::size_t max_bytes = std::size_t(256) << 20;     //!< Whole file: 256 MiB by default.
-  std::size_t max_line_bytes = std::size_t(1) << 20; //!< One line: 1 MiB.
-};
-
-/*!
-  \brief Throws yawdepth::Error unless `path` names a regular file or a pipe (symbolic links
+/*
+  Throws yawdepth::Error unless `path` names a regular file or a pipe (symbolic links
   followed): "<path>: cannot read: is a folder", "... is a character device, not a regular file or a
   pipe", "... no such file", ...
 */
 void checkInputFile(const std::string &path);
 
-/*!
-  \brief A text input read as a stream, line by line, within InputLimits.
+/*
+  A text input read as a stream, line by line, within InputLimits.
 
   LF or CRLF line ends (the CR is kept: callers strip it). A line longer than max_line_bytes or a
   file larger than max_bytes throws "<path>:<line>: line longer than N bytes" or "<path>: larger
@@ -49,19 +46,19 @@ void checkInputFile(const std::string &path);
 */
 class TextInput {
 public:
-  /*! \brief Open `path` (checkInputFile() first). \param path The file. \param limits Its bounds. */
+  /* Open `path` (checkInputFile() first). path: The file. limits: Its bounds. */
   explicit TextInput(const std::string &path, const InputLimits &limits = InputLimits());
   ~TextInput();
   TextInput(const TextInput &) = delete;
   TextInput &operator=(const TextInput &) = delete;
 
-  /*! \brief The next line, without its '\\n'; false at the end of the file. \param line Receives it. */
+  /* The next line, without its '\n'; false at the end of the file. line: Receives it. */
   bool getline(std::string &line);
-  /*! \brief The rest of the file, whole (within max_bytes; the line limit does not apply). */
+  /* The rest of the file, whole (within max_bytes; the line limit does not apply). */
   std::string readAll();
-  /*! \brief Number of the line last returned by getline() (1-based). */
+  /* Number of the line last returned by getline() (1-based). */
   std::size_t lineNumber() const { return line_number_; }
-  /*! \brief The path, as given. */
+  /* The path, as given. */
   const std::string &path() const { return path_; }
 
 private:
@@ -78,40 +75,40 @@ private:
   bool eof_ = false;
 };
 
-/*! \brief The whole of a text file, at most `max_bytes` (TextInput::readAll()). */
+/* The whole of a text file, at most `max_bytes` (TextInput::readAll()). */
 std::string readTextFile(const std::string &path, std::size_t max_bytes);
 
-/*!
-  \brief The whole of a binary file (an image), at most `max_bytes`; the same checks as
+/*
+  The whole of a binary file (an image), at most `max_bytes`; the same checks as
   checkInputFile(), and an empty file is an error.
 */
 std::vector<unsigned char> readBinaryFile(const std::string &path, std::size_t max_bytes);
 
-/*!
-  \brief True when both paths exist and are the same file (device and inode, after symbolic
+/*
+  True when both paths exist and are the same file (device and inode, after symbolic
   links: hard links, `./a` and `a` count as the same).
 */
 bool sameFile(const std::string &a, const std::string &b);
 
-/*! \brief A path named by a command-line option, for messages ("--out t.csv"). */
+/* A path named by a command-line option, for messages ("--out t.csv"). */
 struct NamedPath {
-  std::string option; //!< The option, e.g. "--out".
-  std::string path;   //!< Its value.
+  std::string option; // The option, e.g. "--out".
+  std::string path;   // Its value.
 };
 
-/*!
-  \brief Before anything is written: throws yawdepth::Error when an output would replace an input
+/*
+  Before anything is written: throws yawdepth::Error when an output would replace an input
   (same file, see sameFile()), when two outputs are the same file, or when an output's name is
   empty or a folder. Outputs that are character devices (`/dev/null`) may repeat. "-" is refused
   (writers would make a file named "-"): a program that sends an output to standard output for
   "-" leaves that output out of `outputs`.
-  \param inputs The files the command reads.
-  \param outputs The files it will write.
+  inputs: The files the command reads.
+  outputs: The files it will write.
 */
 void checkOutputs(const std::vector<NamedPath> &inputs, const std::vector<NamedPath> &outputs);
 
-/*!
-  \brief Files committed together: each add() checks its target and writes a temporary file
+/*
+  Files committed together: each add() checks its target and writes a temporary file
   beside it; commit() renames them all over their targets (or writes through to devices and
   pipes). Until commit(), nothing at any target has changed; the destructor removes what was not
   committed.
@@ -123,9 +120,9 @@ public:
   AtomicFiles(const AtomicFiles &) = delete;
   AtomicFiles &operator=(const AtomicFiles &) = delete;
 
-  /*! \brief Stage `contents` for `path`. \param path The target. \param contents Its bytes. */
+  /* Stage `contents` for `path`. path: The target. contents: Its bytes. */
   void add(const std::string &path, const std::string &contents);
-  /*! \brief Rename (or write through) every staged file. */
+  /* Rename (or write through) every staged file. */
   void commit();
 
 private:
@@ -139,29 +136,29 @@ private:
   std::vector<Entry> entries_;
 };
 
-/*!
-  \brief Write `contents` to `path` atomically (AtomicFiles with one file).
-  \param path The target. \param contents Its bytes.
+/*
+  Write `contents` to `path` atomically (AtomicFiles with one file).
+  path: The target. contents: Its bytes.
 */
 void writeFileAtomically(const std::string &path, const std::string &contents);
 
-/*!
-  \brief A scratch file in the system's temporary folder (`$TMPDIR`, else `/tmp`), for a library that
+/*
+  A scratch file in the system's temporary folder (`$TMPDIR`, else `/tmp`), for a library that
   must hand a file to another one (an SQLite bag decompressed for SQLite, say): created empty and
   unique (mkstemps), removed by the destructor, and by the handlers of
   removeTemporaryFilesOnSignals() when the program is interrupted.
 */
 class ScratchFile {
 public:
-  /*!
-    \param suffix The end of its name (e.g. ".db3").
-    \throws yawdepth::Error when it cannot be created.
+  /*
+    suffix: The end of its name (e.g. ".db3").
+    Throws yawdepth::Error when it cannot be created.
   */
   explicit ScratchFile(const std::string &suffix);
   ~ScratchFile();
   ScratchFile(const ScratchFile &) = delete;
   ScratchFile &operator=(const ScratchFile &) = delete;
-  /*! \brief Its path. */
+  /* Its path. */
   const std::string &path() const { return path_; }
 
 private:
@@ -169,8 +166,8 @@ private:
   int slot_ = -1;
 };
 
-/*!
-  \brief Install handlers for SIGINT, SIGTERM and SIGHUP (where the program has none) that remove
+/*
+  Install handlers for SIGINT, SIGTERM and SIGHUP (where the program has none) that remove
   the temporary files of writes in progress, then end the program by the same signal. For
   programs, such as the `yawdepth` command line; a library never calls it.
 */

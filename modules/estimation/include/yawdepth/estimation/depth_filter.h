@@ -173,8 +173,7 @@ public:
   double parallaxPx() const { return parallax_px_; } //!< Largest rotation-compensated parallax so far (px).
 
 private:
-  // The tests check the raw state (x, y, lambda, e) and its covariance against finite differences;
-  // users read the point through estimate(), depth() and logDepthSigma().
+  // The tests read the raw state (modules/estimation/src/depth_filter_test_access.h, not installed).
   friend struct DepthFilterTestAccess;
   Options o_;
   double kx_, ky_;

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 #include <visp3/core/vpPoseVector.h>
-#include <yawdepth/core/files.h>
+#include <yawdepth/core/input_limits.h>
 #include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
 
@@ -85,8 +85,8 @@ struct MotionLog {
   \brief Read a motion log CSV: columns frame,x,y,z,heading,yaw, or in the 6-DoF form
   frame,tx,ty,tz,tux,tuy,tuz[,yaw] (wMv as a vpPoseVector; MotionSample::six_dof), + optional image;
   column order free, unknown columns ignored. When the file has no `yaw` column, `fixed_yaw` is used
-  for every row; without either, it is an error for a planar log and yaw 0 for a 6-DoF one. Read as a stream within `limits` (core/files.h: a regular
-  file or a pipe, 256 MiB and 1 MiB per line by default).
+  for every row; without either, it is an error for a planar log and yaw 0 for a 6-DoF one. Read as a stream within `limits` (a regular
+  file or a pipe, 256 MiB and 1 MiB per line by default: InputLimits).
 */
 MotionLog readMotionCsv(const std::string &path, std::optional<double> fixed_yaw = std::nullopt,
                         const InputLimits &limits = InputLimits());

@@ -18,7 +18,7 @@
 #include <optional>
 #include <string>
 #include <vector>
-#include <yawdepth/core/files.h>
+#include <yawdepth/core/input_limits.h>
 #include <yawdepth/io/files.h>
 
 namespace yawdepth {

@@ -18,8 +18,8 @@
   reference pose's error shared and each pose's own; the yaw readings' noise is each reading's own
   plus the reference's. The variance is per pixel axis, isotropic: a stand-in for the full
   covariance that keeps the check O(observations) and overstates the motion's part somewhat (a
-  residual check on a correct model gives s0 below 1, never far above; relativePoseSigma() gives
-  the marginal per-axis sigmas the walk uses).
+  residual check on a correct model gives s0 below 1, never far above; the walk uses the
+  marginal per-axis sigmas of the pose between two rows).
 
   - **Noise from residuals** (the a-posteriori variance factor of adjustment theory): with at least
     `min_tracks` tracks, \f$ s_0^2 = \mathrm{median}_i\, \chi^2_i / m(\nu_i) \f$, where \f$ m(\nu) \f$
@@ -149,36 +149,10 @@ struct ResidualCheckResult {
 };
 
 /*!
-  \brief Per-axis 1-sigma of the pose between rows `a` and `b` of a motion log under `noise`: the
-  increments' noise composed for MotionNoise::Increment (translation per increment and per metre,
-  rotation per increment, per radian and per metre, and the translation the accumulated rotation
-  error moves over each later step), two poses' errors for MotionNoise::Absolute; two yaw readings
-  added to the rotation.
-  \param noise The noise model. \param motion The log. \param a, b Rows (any order; equal: no motion noise).
-  \param sigma_rot Receives the rotation sigma (rad). \param sigma_trans Receives the translation sigma (m).
-*/
-void relativePoseSigma(const NoiseModel &noise, const std::vector<MotionSample> &motion, std::size_t a, std::size_t b,
-                       double &sigma_rot, double &sigma_trans);
-
-/*! \brief Median of a chi-square variable with `dof` degrees of freedom (Wilson-Hilferty; dof >= 1). */
-double chiSquareMedian(int dof);
-/*! \brief The `p` quantile of a chi-square variable with `dof` degrees of freedom (Wilson-Hilferty, p in (0.5, 1)). */
-double chiSquareQuantile(int dof, double p);
-
-/*!
-  \brief One point against its track (see the file).
-  \param camera Camera model. \param rig Yaw rig. \param motion The log (sorted by frame).
-  \param track The feature's observations. \param outliers Per observation: flagged by the method
-         (empty: none). \param point The estimate (must be ok). \param noise The noise model.
-*/
-TrackResidual trackResidual(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                            const Track &track, const std::vector<bool> &outliers, const PointEstimate &point,
-                            const NoiseModel &noise);
-
-/*!
   \brief The check on every ok point (see the file): s0 from the residuals, the covariances scaled,
   the tracks that are not one point made `inconsistent`.
-  \param camera, rig, motion, noise As for trackResidual().
+  \param camera Camera model. \param rig Yaw rig. \param motion The log (sorted by frame).
+  \param noise The noise model.
   \param tracks The features. \param outliers Per track and observation: flagged by the method (may be empty).
   \param options Options (validated). \param points The estimates, one per track; changed in place.
 */
