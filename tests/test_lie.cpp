@@ -215,6 +215,29 @@ TEST_CASE("rotY is exp of a rotation about +Y, a one-parameter group", "[lie]")
   }
 }
 
+TEST_CASE("the model's rotation helpers: rotateY, rotateYT and yawedRotation against their matrices", "[lie]")
+{
+  std::mt19937_64 rng(kSeed + 13);
+  std::uniform_real_distribution<double> u(-2 * M_PI, 2 * M_PI);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int i = 0; i < kRandomPoints; ++i) {
+    const double a = u(rng);
+    const Eigen::Vector3d v(g(rng), g(rng), g(rng));
+    Eigen::Vector3d out, back;
+    refine_detail::rotateY(std::cos(a), std::sin(a), v.data(), out.data());
+    CHECK((out - rotY(a) * v).norm() < kRoundOff * (1 + v.norm()));
+    refine_detail::rotateYT(std::cos(a), std::sin(a), out.data(), back.data());
+    CHECK((back - v).norm() < kRoundOff * (1 + v.norm()));
+    // Rref Exp(d) Ry(yaw): a rotation, and each factor where it should be.
+    const Eigen::Matrix3d Rref = randomRotation(rng);
+    const Eigen::Vector3d d = randomRotationVector(rng, std::abs(u(rng)) / 2);
+    const double frame[7] = {g(rng), g(rng), g(rng), d.x(), d.y(), d.z(), a};
+    const Eigen::Matrix3d V = refine_detail::yawedRotation<double>(Rref, frame);
+    requireRotation(V);
+    CHECK(maxAbs(V - Rref * expSO3<double>(d) * rotY(a)) < kRoundOff);
+  }
+}
+
 TEST_CASE("wrapAngle: in (-pi, pi], the same direction", "[lie]")
 {
   std::mt19937_64 rng(kSeed + 10);

@@ -396,6 +396,17 @@ TEST_CASE("StreamEstimator: fused and window frame by frame, estimates carried t
   bad = StreamOptions();
   bad.window = 1;
   CHECK_THROWS_AS(StreamEstimator(camera, rig, bad), Error);
+  // The noise model's rules for the method (NoiseModel::validateFor, the pipeline's too): fused
+  // neither models the tracker's correlated errors nor takes a zero pixel noise; window models them.
+  bad = StreamOptions();
+  bad.noise.pixel_correlation = 0.5;
+  CHECK_NOTHROW(StreamEstimator(camera, rig, bad));
+  bad.method = StreamMethod::Fused;
+  CHECK_THROWS_WITH(StreamEstimator(camera, rig, bad), Catch::Contains("does not model correlated tracker errors"));
+  bad = StreamOptions();
+  bad.method = StreamMethod::Fused;
+  bad.noise.sigma_px = 0;
+  CHECK_THROWS_WITH(StreamEstimator(camera, rig, bad), Catch::Contains("needs at least 1e-6 px"));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -95,9 +95,9 @@ def test_the_leftovers(tmp_path):
     s = yawdepth.StreamOptions()
     s.method, s.noise, s.gates, s.window = "fused", n, g, 5
     s.robust_threshold_px, s.outlier_threshold_px, s.prior_depth, s.max_missing_frames = 1.0, 2.0, 3.0, 30
-    s.window_noise, s.window_gates = n, g  # the older names: the same fields
-    s.fused_sigma_px = 0.4
-    assert s.noise.sigma_px == 0.4 and s.window_noise.sigma_px == 0.4 and s.prior_depth == 3.0
+    assert s.prior_depth == 3.0 and s.noise.sigma_px == n.sigma_px
+    with pytest.raises(AttributeError):  # one noise model: the per-method ones are gone
+        s.fused_sigma_px = 0.4
     with pytest.raises(Exception, match="does not run frame by frame"):
         s.method = "paper"
     stream = yawdepth.StreamEstimator(camera, rig, s)

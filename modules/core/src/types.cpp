@@ -1,4 +1,6 @@
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <yawdepth/error.h>
 #include <yawdepth/core/types.h>
 
@@ -78,6 +80,8 @@ StreamMethod streamMethodFromString(const std::string &word)
   throw Error("method " + word + " does not run frame by frame (window or fused do)");
 }
 
+bool modelsTrackerCorrelation(Method m) { return m == Method::Window || m == Method::Refine; }
+
 Status statusFromString(const std::string &word)
 {
   for (Status s : {Status::Ok, Status::Degenerate, Status::Behind, Status::NoMotion, Status::TooFewFrames,
@@ -128,6 +132,22 @@ void NoiseModel::validate() const
     throw Error("invalid motion noise model");
   if (motion_noise == MotionNoise::Absolute && (odom_per_metre > 0 || rot_per_radian > 0 || rot_per_metre > 0))
     throw Error("absolute (per pose) motion noise has no per-metre or per-radian terms: they describe increments");
+}
+
+void NoiseModel::validateFor(Method m) const
+{
+  validate();
+  const std::string name = toString(m);
+  const bool weighted = m == Method::Fused || m == Method::Window || m == Method::Refine;
+  if (weighted && !(sigma_px >= kMinWeightPx))
+    throw Error("pixel noise " + std::to_string(sigma_px) + " px: method " + name +
+                " needs at least 1e-6 px (it weighs every observation by it)");
+  if (pixel_correlation > 0 && !modelsTrackerCorrelation(m)) {
+    char phi[32];
+    std::snprintf(phi, sizeof phi, "%.3g", pixel_correlation);
+    throw Error("method " + name + " does not model correlated tracker errors (pixel-correlation " + phi +
+                "): use window or refine, or 0");
+  }
 }
 
 double pixelCorrelationOver(double phi, long gap)

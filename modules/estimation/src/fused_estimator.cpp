@@ -175,6 +175,7 @@ IncrementPrior FusedEstimator::keyPrior(const Key &k, const DepthFilter &filter)
 std::vector<FusedEstimator::ObservationResult> FusedEstimator::addFrame(const MotionSample &row,
                                                                         const std::vector<FeatureObservation> &observations)
 {
+  // The streaming form of validateInputs()'s frame order (frames arrive one at a time).
   if (started_ && row.frame <= last_.frame)
     throw Error("fused: frame " + std::to_string(row.frame) + " does not follow frame " + std::to_string(last_.frame));
   const std::vector<UndistortedObservation> obs = undistortObservations(camera_, o_.filter.noise.sigma_px, observations);

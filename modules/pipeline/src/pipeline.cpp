@@ -115,9 +115,8 @@ void markUnconfirmed(PipelineResult &r)
 /* The whole log against the noise model given (see estimatePoints()). */
 constexpr double kMistakeS0 = 5;
 constexpr double kMistakeOutlierShare = 0.3;
-PipelineResult::Consistency wholeLog(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                                     const std::vector<Track> &tracks, const PipelineResult &r,
-                                     const PipelineOptions &options)
+PipelineResult::Consistency wholeLog(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                                     const PipelineResult &r, const PipelineOptions &options)
 {
   PipelineResult::Consistency out;
   std::size_t flagged = 0, total = 0;
@@ -130,7 +129,7 @@ PipelineResult::Consistency wholeLog(const CameraModel &camera, const YawRig &ri
   probe.scale_sigma = false;
   probe.correlated = false;
   std::vector<PointEstimate> points = r.points;
-  const ResidualCheckResult c = checkResiduals(camera, rig, motion, tracks, r.outliers, options.noise, probe, points);
+  const ResidualCheckResult c = checkResiduals(camera, rig, input, r.outliers, options.noise, probe, points);
   out.tracks_used = c.tracks_used;
   if (c.tracks_used >= options.residual_check.min_tracks)
     out.s0 = std::sqrt(c.variance_factor);
@@ -158,17 +157,11 @@ void PipelineOptions::validate() const
   } else if (method == Method::Refine) {
     refineOptionsOf(*this).validate();
   } else {
-    noise.validate();
     gates.validate();
-    if (method == Method::Fused && !(noise.sigma_px >= kMinWeightPx))
-      throw Error("pixel noise " + std::to_string(noise.sigma_px) +
-                  " px: method fused needs at least 1e-6 px (it weighs every observation by it)");
   }
+  noise.validateFor(method);
   if (threads < 1)
     throw Error("refine needs at least one thread");
-  if (noise.pixel_correlation > 0 && !modelsTrackerCorrelation(method))
-    throw Error("method " + name + " does not model correlated tracker errors (pixel-correlation " +
-                figure(noise.pixel_correlation) + "): use window or refine, or 0");
   residual_check.validate();
   if (!(std::isfinite(max_depth_sigma) && max_depth_sigma >= 0))
     throw Error("the largest relative depth sigma must be finite and non-negative (0: no gate)");
@@ -184,8 +177,6 @@ PipelineOptions naturalFeatureOptions()
 }
 
 bool methodAvailable(Method m) { return m != Method::Refine || refineAvailable(); }
-
-bool modelsTrackerCorrelation(Method m) { return m == Method::Window || m == Method::Refine; }
 
 Method bestMethod() { return refineAvailable() ? Method::Refine : Method::Fused; }
 
@@ -229,13 +220,13 @@ constexpr double kMinModelledCorrelation = 0.05;
 /* The noise model the residuals say: the pixel noise (pixelNoiseFromResiduals) and, for a method that
    models it and a model that does not set it, the correlation of the tracker's errors along a track
    (checkResiduals' estimate). */
-Reestimated noiseFromResiduals(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &motion,
-                               const std::vector<Track> &tracks, const PipelineResult &r, const PipelineOptions &options)
+Reestimated noiseFromResiduals(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                               const PipelineResult &r, const PipelineOptions &options)
 {
   ResidualCheckOptions probe = options.residual_check;
   probe.scale_sigma = false;
   std::vector<PointEstimate> points = r.points; // the probe's gate must not change the result
-  const ResidualCheckResult c = checkResiduals(camera, rig, motion, tracks, r.outliers, options.noise, probe, points);
+  const ResidualCheckResult c = checkResiduals(camera, rig, input, r.outliers, options.noise, probe, points);
   Reestimated out = pixelNoiseFromResiduals(c, options);
   // Only where the residuals cannot show the tracker's errors whole (a modelled drift persists in them
   // as the tracker's slow part does: no TrackerErrorModel): where they can, the check's floor from
@@ -352,7 +343,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
                            options.method == Method::Refine;
   if (whole_track) {
     markUnconfirmed(r);
-    r.consistency = wholeLog(camera, rig, motion, tracks, r, options);
+    r.consistency = wholeLog(camera, rig, input, r, options);
   }
   const PipelineResult::Consistency log = r.consistency; // a copy: a second run replaces r
   if (log.mistake) {
@@ -360,7 +351,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
     gate.scale_sigma = false;
     gate.correlated = false;
     gate.gate_at_model = true;
-    r.residuals = checkResiduals(camera, rig, motion, tracks, r.outliers, options.noise, gate, r.points);
+    r.residuals = checkResiduals(camera, rig, input, r.outliers, options.noise, gate, r.points);
     const std::string residuals =
         !std::isfinite(log.s0) ? "most estimates fall behind cameras that saw them, and "
         : log.s0 > kMistakeS0  ? "their residuals are " + figure(log.s0) + " times the noise model's and "
@@ -372,7 +363,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
   } else if (options.residual_check.enabled && whole_track) {
     Reestimated model{options.noise};
     if (options.residual_check.reestimate_noise)
-      model = noiseFromResiduals(camera, rig, motion, tracks, r, options);
+      model = noiseFromResiduals(camera, rig, input, r, options);
     if (model.changed(options.noise)) {
       PipelineOptions again = options;
       again.noise = model.noise;
@@ -380,7 +371,7 @@ PipelineResult estimatePoints(const CameraModel &camera, const YawRig &rig, cons
       markUnconfirmed(r);
       r.consistency = log;
     }
-    r.residuals = pipeline_detail::checkResidualsGated(camera, rig, motion, tracks, r.outliers, model.noise,
+    r.residuals = pipeline_detail::checkResidualsGated(camera, rig, input, r.outliers, model.noise,
                                                        options.residual_check, model.gate_scale, r.points);
     r.residuals.noise_scale = model.pixel_scale;
     r.noise = model.noise;

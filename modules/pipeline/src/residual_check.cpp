@@ -657,12 +657,13 @@ int varianceFactor(const std::vector<TrackResidual> &tracks, const std::vector<b
   return used;
 }
 
-ResidualCheckResult checkResidualsGated(const CameraModel &camera, const YawRig &rig,
-                                        const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+ResidualCheckResult checkResidualsGated(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
                                         const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
                                         const ResidualCheckOptions &options, double gate_scale,
                                         std::vector<PointEstimate> &points)
 {
+  const std::vector<MotionSample> &motion = input.motion();
+  const std::vector<Track> &tracks = input.tracks();
   options.validate();
   if (!(std::isfinite(gate_scale) && gate_scale >= 1))
     throw Error("residual check: the gate's scale must be finite and at least 1");
@@ -739,7 +740,15 @@ ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
                                    const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
                                    const ResidualCheckOptions &options, std::vector<PointEstimate> &points)
 {
-  return pipeline_detail::checkResidualsGated(camera, rig, motion, tracks, outliers, noise, options, 1.0, points);
+  return pipeline_detail::checkResidualsGated(camera, rig, validateInputs(motion, tracks), outliers, noise, options, 1.0,
+                                              points);
+}
+
+ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
+                                   const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
+                                   const ResidualCheckOptions &options, std::vector<PointEstimate> &points)
+{
+  return pipeline_detail::checkResidualsGated(camera, rig, input, outliers, noise, options, 1.0, points);
 }
 
 } // namespace yawdepth

@@ -27,8 +27,6 @@ struct Fit {
 
 Fit fit(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input, const PipelineOptions &options)
 {
-  const std::vector<MotionSample> &motion = input.motion();
-  const std::vector<Track> &tracks = input.tracks();
   TrackEstimatorOptions to;
   to.method = TrackMethod::Fused;
   to.noise = options.noise;
@@ -38,7 +36,7 @@ Fit fit(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input
   ResidualCheckOptions probe = options.residual_check;
   probe.scale_sigma = false;
   probe.correlated = false;
-  const ResidualCheckResult c = checkResiduals(camera, rig, motion, tracks, outliers, options.noise, probe, points);
+  const ResidualCheckResult c = checkResiduals(camera, rig, input, outliers, options.noise, probe, points);
   Fit f;
   f.measured = c.tracks_used >= options.residual_check.min_tracks;
   f.f2 = c.variance_factor;

@@ -23,8 +23,7 @@ int varianceFactor(const std::vector<TrackResidual> &tracks, const std::vector<b
 /* checkResiduals() with the gate's threshold multiplied by gate_scale (>= 1): estimatePoints() uses
    1 / s0^2 when it made the model tighter, so that the gate is never tighter than the model given,
    which says what counts as a track that is not one point. */
-ResidualCheckResult checkResidualsGated(const CameraModel &camera, const YawRig &rig,
-                                        const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+ResidualCheckResult checkResidualsGated(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
                                         const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
                                         const ResidualCheckOptions &options, double gate_scale,
                                         std::vector<PointEstimate> &points);

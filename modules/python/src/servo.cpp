@@ -144,8 +144,7 @@ Raises yawdepth.Error for a non-finite pose or a repeated id.)doc")
   py::class_<StreamOptions>(m, "StreamOptions", R"doc(
 Options of StreamEstimator: method ('window' or 'fused'); noise and gates (the call's one noise
 model); window (frames), robust_threshold_px, outlier_threshold_px for window; prior_depth (m) for
-both; max_missing_frames for fused. Defaults from C++ (StreamOptions). window_noise, window_gates and
-fused_sigma_px are older names of noise, gates and noise.sigma_px.)doc")
+both; max_missing_frames for fused. Defaults from C++ (StreamOptions).)doc")
       .def(py::init<>())
       .def_property("method", [](const StreamOptions &o) { return std::string(toString(o.method)); },
                     [](StreamOptions &o, const std::string &w) { o.method = streamMethodFromString(w); })
@@ -155,11 +154,7 @@ fused_sigma_px are older names of noise, gates and noise.sigma_px.)doc")
       .def_readwrite("robust_threshold_px", &StreamOptions::robust_threshold_px)
       .def_readwrite("outlier_threshold_px", &StreamOptions::outlier_threshold_px)
       .def_readwrite("prior_depth", &StreamOptions::prior_depth)
-      .def_readwrite("max_missing_frames", &StreamOptions::max_missing_frames)
-      .def_readwrite("window_noise", &StreamOptions::noise)
-      .def_readwrite("window_gates", &StreamOptions::gates)
-      .def_property("fused_sigma_px", [](const StreamOptions &o) { return o.noise.sigma_px; },
-                    [](StreamOptions &o, double v) { o.noise.sigma_px = v; });
+      .def_readwrite("max_missing_frames", &StreamOptions::max_missing_frames);
 
   py::class_<StreamEstimator>(m, "StreamEstimator", R"doc(
 Frames in one at a time, estimates out (window or fused; C++ yawdepth::StreamEstimator).

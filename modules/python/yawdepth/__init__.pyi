@@ -250,9 +250,6 @@ class StreamOptions:
     outlier_threshold_px: float
     prior_depth: float
     max_missing_frames: int
-    window_noise: NoiseModel  # older name of noise
-    window_gates: GateOptions  # older name of gates
-    fused_sigma_px: float  # older name of noise.sigma_px
     def __init__(self) -> None: ...
 
 class StreamEstimator:

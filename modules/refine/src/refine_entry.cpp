@@ -9,10 +9,8 @@ namespace yawdepth {
 
 void RefineOptions::validate() const
 {
-  noise.validate();
+  noise.validateFor(Method::Refine);
   gates.validate();
-  if (!(noise.sigma_px >= kMinWeightPx))
-    throw Error("refine: the pixel noise must be at least 1e-6 px (it weighs every observation)");
   if (!(robust_threshold_px >= kMinWeightPx))
     throw Error("refine: the robust threshold must be at least 1e-6 px (the scale of its robust loss)");
   if (!(std::isfinite(outlier_threshold_px) && outlier_threshold_px > 0))

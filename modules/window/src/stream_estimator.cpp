@@ -33,6 +33,7 @@ StreamEstimator::StreamEstimator(const CameraModel &camera, const YawRig &rig, c
 {
   if (!(std::isfinite(options.prior_depth) && options.prior_depth > 0))
     throw Error("stream estimator: prior_depth must be finite and positive");
+  options.noise.validateFor(toMethod(options.method));
   if (options.method == StreamMethod::Window)
     window_ = std::make_unique<WindowEstimator>(camera, rig, windowOptions(options));
   else

@@ -16,12 +16,10 @@ using namespace refine_detail;
 
 void WindowOptions::validate() const
 {
-  noise.validate();
+  noise.validateFor(Method::Window);
   gates.validate();
   if (window < 2)
     throw Error("window estimator: the window must hold at least 2 frames (got " + std::to_string(window) + ")");
-  if (!(noise.sigma_px >= kMinWeightPx))
-    throw Error("window estimator: the pixel noise must be at least 1e-6 px (it weighs every observation)");
   auto positive = [](double v, const char *what) {
     if (!(std::isfinite(v) && v > 0))
       throw Error(std::string("window estimator: ") + what + " must be finite and positive");
@@ -158,6 +156,8 @@ std::vector<Impl::ObservationResult> Impl::addObservations(const MotionSample &r
 std::vector<Impl::ObservationResult> Impl::addFrame(const MotionSample &row,
                                                     const std::vector<FeatureObservation> &observations)
 {
+  // The streaming form of validateInputs()'s log rules: frames arrive one at a time, so each is checked
+  // against the last (a batch driven from a TracksByFrame never trips them).
   if (started) {
     if (!(row.frame > frames.back().row.frame))
       throw Error("window estimator: frame " + std::to_string(row.frame) + " after frame " +

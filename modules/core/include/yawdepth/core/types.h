@@ -101,6 +101,10 @@ TrackMethod trackMethodFromString(const std::string &word);
 /*! \brief Parse "fused" or "window"; throws yawdepth::Error for any other word, naming it. */
 StreamMethod streamMethodFromString(const std::string &word);
 
+/*! \brief Whether the method models the tracker's correlated errors (NoiseModel::pixel_correlation):
+    window and refine; the others take only 0. */
+bool modelsTrackerCorrelation(Method m);
+
 /*!
   \brief A point estimate with its uncertainty.
 
@@ -184,6 +188,10 @@ struct NoiseModel {
   /*! \brief Throws yawdepth::Error unless every sigma is finite and non-negative (and the per-metre
       and per-radian terms are 0 for MotionNoise::Absolute). */
   void validate() const;
+  /*! \brief validate(), and what method `m` needs of the model: a pixel noise of at least
+      kMinWeightPx for the methods that weigh every observation by it (fused, window, refine), and
+      pixel_correlation 0 for a method that does not model it (modelsTrackerCorrelation()). */
+  void validateFor(Method m) const;
 };
 
 /*!

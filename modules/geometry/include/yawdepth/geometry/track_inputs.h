@@ -46,11 +46,13 @@ public:
     (e.g. without those no method can use). Throws yawdepth::Error when they are not such a subset.
   */
   TracksByFrame withFewer(const std::vector<Track> &fewer) const;
+  TracksByFrame withFewer(std::vector<Track> &&) const = delete; //!< A view of a temporary would dangle.
   /*!
     \brief The same tracks with another reading of the same log: `motion` has this log's frames (e.g.
     its yaw readings negated). Throws yawdepth::Error when its frames or row kinds differ.
   */
   TracksByFrame withMotion(const std::vector<MotionSample> &motion) const;
+  TracksByFrame withMotion(std::vector<MotionSample> &&) const = delete; //!< A view of a temporary would dangle.
 
 private:
   friend TracksByFrame validateInputs(const std::vector<MotionSample> &motion, const std::vector<Track> &tracks);
@@ -68,5 +70,9 @@ private:
   \throws yawdepth::Error naming the first rule broken (the feature, the frame).
 */
 TracksByFrame validateInputs(const std::vector<MotionSample> &motion, const std::vector<Track> &tracks);
+/* A view of a temporary would dangle: refused at compile time. */
+TracksByFrame validateInputs(std::vector<MotionSample> &&, const std::vector<Track> &) = delete;
+TracksByFrame validateInputs(const std::vector<MotionSample> &, std::vector<Track> &&) = delete;
+TracksByFrame validateInputs(std::vector<MotionSample> &&, std::vector<Track> &&) = delete;
 
 } // namespace yawdepth

@@ -12,6 +12,11 @@
     outside what the lens model can undistort): taken out before estimation and flagged as
     outliers, so that one broken pixel does not spoil a feature;
   - refine's start: `fused` on the same tracks, then the joint refinement;
+  - the tracker's correlated errors for the methods that model them (modelsTrackerCorrelation(),
+    core/types.h): when the model leaves NoiseModel::pixel_correlation 0, the residual check runs and
+    the residuals cannot show the tracker's errors whole (a drifting motion: no
+    ResidualCheckResult::error_model), the correlation is measured from them and the method run again
+    with it;
   - the outlier flags per observation and the motion as the method estimated it (refine's refined
     rows; the measured rows for the others).
 */
@@ -94,12 +99,6 @@ PipelineOptions naturalFeatureOptions();
 bool methodAvailable(Method m);
 /*! \brief The most accurate method this build has: refine with Ceres, else fused. */
 Method bestMethod();
-/*! \brief Whether the method models the tracker's correlated errors (NoiseModel::pixel_correlation):
-    window and refine; the others take only 0. When the model leaves it 0, the residual check runs and
-    the residuals cannot show the tracker's errors whole (a drifting motion: no
-    ResidualCheckResult::error_model), estimatePoints() measures that correlation from them and runs
-    the method with it. */
-bool modelsTrackerCorrelation(Method m);
 
 /*!
   \brief Estimate every track's point with the chosen method.

@@ -86,6 +86,7 @@
 #include <yawdepth/camera/camera_model.h>
 #include <yawdepth/core/types.h>
 #include <yawdepth/geometry/rig.h>
+#include <yawdepth/geometry/track_inputs.h>
 
 namespace yawdepth {
 
@@ -151,13 +152,21 @@ struct ResidualCheckResult {
 /*!
   \brief The check on every ok point (see the file): s0 from the residuals, the covariances scaled,
   the tracks that are not one point made `inconsistent`.
-  \param camera Camera model. \param rig Yaw rig. \param motion The log (sorted by frame).
+  \param camera Camera model. \param rig Yaw rig. \param motion The log.
   \param noise The noise model.
-  \param tracks The features. \param outliers Per track and observation: flagged by the method (may be empty).
+  \param tracks The features (with the log, validated first: yawdepth::validateInputs()). \param outliers Per track and observation: flagged by the method (may be empty).
   \param options Options (validated). \param points The estimates, one per track; changed in place.
 */
 ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig,
                                    const std::vector<MotionSample> &motion, const std::vector<Track> &tracks,
+                                   const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
+                                   const ResidualCheckOptions &options, std::vector<PointEstimate> &points);
+
+/*!
+  \brief checkResiduals() on input already validated (yawdepth::validateInputs(): what
+  yawdepth::estimatePoints() passes); the same results.
+*/
+ResidualCheckResult checkResiduals(const CameraModel &camera, const YawRig &rig, const TracksByFrame &input,
                                    const std::vector<std::vector<bool>> &outliers, const NoiseModel &noise,
                                    const ResidualCheckOptions &options, std::vector<PointEstimate> &points);
 

@@ -82,8 +82,8 @@ struct RefineOptions {
   /*! Called as refine goes: after each solver iteration and before the covariances, on the
       calling thread; empty (the default): not called. The library itself never prints. */
   std::function<void(const RefineProgress &)> progress;
-  /*! \brief Throws yawdepth::Error for a bad noise model or gate, a pixel noise or robust threshold
-      under kMinWeightPx, an outlier threshold that is not positive, negative max_iterations or fewer
+  /*! \brief Throws yawdepth::Error for a bad noise model (NoiseModel::validateFor()) or gate, a robust
+      threshold under kMinWeightPx, an outlier threshold that is not positive, negative max_iterations or fewer
       than one thread. */
   void validate() const;
 };
