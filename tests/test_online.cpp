@@ -451,3 +451,53 @@ TEST_CASE("OnlineMeasurer: bad input throws an Error naming it", "[online]")
   CHECK(badOptions([](OnlineOptions &o) { o.noise.sigma_px = -1; }, "sigma-px"));
   CHECK(badOptions([](OnlineOptions &o) { o.klt.window = 4; }, "window"));
 }
+
+TEST_CASE("OnlineMeasurer: 6-DoF poses carrying the yaw, no joint stream", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  // The same drive as 6-DoF rows (wMv as theta-u), the yaw in each row (100 Hz), no joint readings.
+  std::vector<std::pair<double, MotionSample>> rows;
+  for (const auto &p : d.poses) {
+    MotionSample r = MotionSample::fromPose(0, wMv(p.second), onlineTruthRow(p.first).yaw);
+    rows.emplace_back(p.first, r);
+  }
+  OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
+  std::vector<OnlineFrame> frames;
+  std::size_t next_row = 0;
+  for (std::size_t i = 0; i < d.image_times.size(); ++i) {
+    const double tm = d.image_times[i] + kOnlineTimeOffset;
+    while (next_row < rows.size() && rows[next_row].first <= tm + 0.01) { // the pose after the image too
+      m.pushPose(rows[next_row].first, rows[next_row].second);
+      ++next_row;
+    }
+    m.pushImage(d.image_times[i], d.images[i]);
+    for (OnlineFrame &f : m.process())
+      frames.push_back(std::move(f));
+  }
+  REQUIRE(frames.size() == d.images.size());
+  double worst = 0;
+  OnlineCheck c;
+  for (const OnlineFrame &f : frames) {
+    const std::size_t j = static_cast<std::size_t>(
+        std::upper_bound(rows.begin(), rows.end(), f.t_motion,
+                         [](double v, const std::pair<double, MotionSample> &e) { return v < e.first; }) -
+        rows.begin());
+    const MotionSample e = interpolateMotion(rows[j - 1].second, rows[j].second,
+                                             (f.t_motion - rows[j - 1].first) / (rows[j].first - rows[j - 1].first));
+    CHECK(f.pose.six_dof);
+    worst = std::max({worst, (f.pose.position() - e.position()).norm(), (f.pose.theta_u - e.theta_u).norm(),
+                      std::abs(f.pose.yaw - e.yaw)});
+    for (const OnlinePoint &p : f.points) {
+      if (!p.estimate.ok())
+        continue;
+      const double z = onlineWallDepth(d, f.pose, p.u, p.v);
+      ++c.ok;
+      c.within += std::abs(p.estimate.c_P.z() - z) <= 3 * p.estimate.sigmaZ() ? 1 : 0;
+    }
+  }
+  CHECK(worst < 1e-12);
+  INFO("ok points " << c.ok << ", within 3 sigma " << c.within);
+  REQUIRE(c.ok > 1000);
+  CHECK(static_cast<double>(c.within) >= 0.9 * static_cast<double>(c.ok));
+  CHECK(m.stats().buffered_joints == 0);
+}
