@@ -501,3 +501,52 @@ TEST_CASE("OnlineMeasurer: 6-DoF poses carrying the yaw, no joint stream", "[onl
   CHECK(static_cast<double>(c.within) >= 0.9 * static_cast<double>(c.ok));
   CHECK(m.stats().buffered_joints == 0);
 }
+
+TEST_CASE("OnlineMeasurer: a pose stream as odometry increments, planar and 6-DoF", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  for (const bool six_dof : {false, true}) {
+    INFO((six_dof ? "6-DoF" : "planar"));
+    OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
+    MotionSample first = d.poses.front().second;
+    if (six_dof)
+      first = MotionSample::fromPose(0, wMv(first), first.yaw);
+    CHECK_THROWS_WITH(m.pushOdometryIncrement(0.001, vpHomogeneousMatrix()), Catch::Contains("no pose to start from"));
+    m.pushPose(d.poses.front().first, first);
+    std::vector<OnlineFrame> frames;
+    for (const OnlineEvent &e : onlineEvents(d)) {
+      if (e.stream == 0 && e.index == 0)
+        continue;
+      if (e.stream == 0) // the increment from the previous pose: v_prev M v_cur
+        m.pushOdometryIncrement(d.poses[e.index].first,
+                                wMv(d.poses[e.index - 1].second).inverse() * wMv(d.poses[e.index].second));
+      else
+        onlinePush(m, d, e);
+      for (OnlineFrame &f : m.process())
+        frames.push_back(std::move(f));
+    }
+    REQUIRE(frames.size() == d.images.size());
+    double worst = 0;
+    for (const OnlineFrame &f : frames) {
+      const MotionSample e = onlineExpectedPose(d, f.t_motion);
+      CHECK(f.pose.six_dof == six_dof);
+      const Eigen::Vector3d w_t_c = toIsometry(wMc(d.rig, f.pose)).translation(),
+                            w_t_c_expected = toIsometry(wMc(d.rig, e)).translation();
+      const Eigen::Matrix3d R = toIsometry(wMc(d.rig, f.pose)).rotation(),
+                            R_expected = toIsometry(wMc(d.rig, e)).rotation();
+      worst = std::max({worst, (w_t_c - w_t_c_expected).norm(), logSO3(R_expected.transpose() * R).norm()});
+    }
+    CHECK(worst < 1e-9); // the increments compose back to the poses (slerp of 6-DoF rows = the planar heading's)
+    // A planar stream refuses an increment that tilts.
+    if (!six_dof) {
+      vpHomogeneousMatrix tilt(0, 0, 0, 0.1, 0, 0);
+      CHECK_THROWS_WITH(m.pushOdometryIncrement(100.0, tilt), Catch::Contains("about +Y only"));
+    }
+    vpHomogeneousMatrix bad;
+    bad[0][3] = std::nan("");
+    CHECK_THROWS_WITH(m.pushOdometryIncrement(101.0, bad), Catch::Contains("non-finite"));
+    CHECK_THROWS_WITH(m.pushOdometryIncrement(std::nan(""), vpHomogeneousMatrix()), Catch::Contains("not finite"));
+    m.pushOdometryIncrement(0.0, vpHomogeneousMatrix()); // not after the previous pose: counted
+    CHECK(m.stats().out_of_order_poses == 1);
+  }
+}

@@ -152,6 +152,48 @@ void OnlineMeasurer::pushPose(double t, const MotionSample &row)
     ++stats_.out_of_order_poses;
     return;
   }
+  appendPoseLocked(t, row);
+}
+
+void OnlineMeasurer::pushOdometryIncrement(double t, const vpHomogeneousMatrix &vprevMvcur)
+{
+  if (!std::isfinite(t))
+    throw Error("online measurer: pushOdometryIncrement: the increment time is not finite");
+  for (unsigned i = 0; i < 3; ++i)
+    for (unsigned j = 0; j < 4; ++j)
+      if (!std::isfinite(vprevMvcur[i][j]))
+        throw Error("online measurer: pushOdometryIncrement: the increment at t = " + std::to_string(t) +
+                    " has a non-finite value");
+  Eigen::Matrix3d dR;
+  Eigen::Vector3d d;
+  fromVisp(vprevMvcur, dR, d);
+  const Eigen::Vector3d turn = logSO3(dR);
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  if (poses_.empty()) // trimming keeps the newest pose: empty only before the first
+    throw Error("online measurer: pushOdometryIncrement: no pose to start from (push a first one with pushPose)");
+  if (!(t > last_pose_t_)) {
+    ++stats_.out_of_order_poses;
+    return;
+  }
+  const MotionSample &last = poses_.back().second;
+  MotionSample next = last;
+  if (!last.six_dof) {
+    if (std::hypot(turn.x(), turn.z()) > 1e-9)
+      throw Error("online measurer: pushOdometryIncrement: a planar pose stream takes increments turning about +Y "
+                  "only (this one turns " + std::to_string(std::hypot(turn.x(), turn.z())) + " rad about X/Z)");
+    const Eigen::Vector3d w_d = rotY(last.heading) * d;
+    next.x += w_d.x();
+    next.y += w_d.y();
+    next.z += w_d.z();
+    next.heading += turn.y();
+  } else {
+    next = MotionSample::fromPose(last.frame, wMv(last) * vprevMvcur, last.yaw);
+  }
+  appendPoseLocked(t, next);
+}
+
+void OnlineMeasurer::appendPoseLocked(double t, const MotionSample &row)
+{
   have_pose_form_ = true;
   six_dof_ = row.six_dof;
   last_pose_t_ = t;

@@ -28,7 +28,8 @@
   future image may need. A timestamp not after its stream's previous one is counted and dropped (a
   live stream must not die on one glitch); a non-finite one is an Error.
 
-  Not here yet: odometry increments (a pose stream is pushed as poses; integrate increments before).
+  A pose stream may also come as odometry increments (pushOdometryIncrement()), composed onto the
+  stream's last pose.
 */
 #include <chrono>
 #include <cstddef>
@@ -128,6 +129,17 @@ public:
   */
   void pushPose(double t, const MotionSample &row);
   /*!
+    \brief Add a pose as an odometry increment: the vision frame's pose at `t` in its pose at the
+    previous pose pushed (\f$ {}^{v,prev}M_{v,cur} \f$), composed onto that pose:
+    \f$ {}^wM_{v,cur} = {}^wM_{v,prev}\, {}^{v,prev}M_{v,cur} \f$, and queued as pushPose() would
+    (the same stream, its yaw the previous pose's). A planar stream stays planar: its increments
+    must turn about +Y only (else Error); a 6-DoF stream takes any. Needs a first pose from
+    pushPose() (else Error). Thread-safe, non-blocking.
+    \param t Its time, motion clock (s): finite (else Error), after the previous pose's (else counted, dropped).
+    \param vprevMvcur The increment; every value finite (else Error).
+  */
+  void pushOdometryIncrement(double t, const vpHomogeneousMatrix &vprevMvcur);
+  /*!
     \brief Add a joint reading: the camera's yaw relative to the vision frame (rad). Once one is
     pushed, every image needs joint readings around its time. Thread-safe, non-blocking.
     \param t Its time, motion clock (s): finite (else Error), after the previous reading's (else counted, dropped).
@@ -166,6 +178,7 @@ private:
   struct Job;
   bool nextJob(Job &job);
   void noteTime(double t_motion);
+  void appendPoseLocked(double t, const MotionSample &row);
   void trimBuffers(double t_needed);
 
   CameraModel camera_;
