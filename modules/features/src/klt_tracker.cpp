@@ -409,6 +409,18 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
   return trackSequence(camera, rig, samples, files, noise, options, gate, progress);
 }
 
+KltMotion kltMotion(const YawRig &rig, const MotionSample &prev, const MotionSample &cur, const NoiseModel &noise)
+{
+  KltMotion m;
+  m.cMp = wMc(rig, cur).inverse() * wMc(rig, prev);
+  const double dist = std::sqrt((cur.x - prev.x) * (cur.x - prev.x) + (cur.y - prev.y) * (cur.y - prev.y) +
+                                (cur.z - prev.z) * (cur.z - prev.z));
+  m.sigma_trans = incrementTranslationSigma(noise, dist);
+  const double turn = cur.six_dof ? noise.sigma_rot : noise.sigma_heading;
+  m.sigma_rot = std::sqrt(turn * turn + 2 * noise.sigma_yaw * noise.sigma_yaw);
+  return m;
+}
+
 SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const std::vector<MotionSample> &samples,
                              const FrameSource &frames, const NoiseModel &noise, const KltOptions &options, bool gate,
                              const std::function<void(std::size_t, std::size_t)> &progress)
@@ -429,13 +441,7 @@ SequenceTracks trackSequence(const CameraModel &camera, const YawRig &rig, const
     FrameDetection d;
     d.frame = s.frame;
     if (i > 0 && gate) {
-      const MotionSample &p = samples[i - 1];
-      KltMotion m;
-      m.cMp = wMc(rig, s).inverse() * wMc(rig, p);
-      const double dist = std::sqrt((s.x - p.x) * (s.x - p.x) + (s.y - p.y) * (s.y - p.y) + (s.z - p.z) * (s.z - p.z));
-      m.sigma_trans = incrementTranslationSigma(noise, dist);
-      const double turn = s.six_dof ? noise.sigma_rot : noise.sigma_heading;
-      m.sigma_rot = std::sqrt(turn * turn + 2 * noise.sigma_yaw * noise.sigma_yaw);
+      const KltMotion m = kltMotion(rig, samples[i - 1], s, noise);
       d.features = tracker.track(image, &m);
     } else {
       d.features = tracker.track(image, nullptr);

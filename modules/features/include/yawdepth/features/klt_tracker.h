@@ -136,6 +136,14 @@ struct KltMotion {
   double sigma_trans = 0;   //!< 1-sigma of its translation (m, per axis)
 };
 
+/*!
+  \brief The motion trackSequence() gates the step from row `prev` to row `cur` with: cMp the previous
+  camera's pose in the current camera's frame (wMc of each row through the rig), its translation
+  sigma incrementTranslationSigma() of the step's length, its rotation sigma the heading's
+  (sigma_heading, planar rows) or sigma_rot (6-DoF rows) with two yaw readings' noise added in variance.
+*/
+KltMotion kltMotion(const YawRig &rig, const MotionSample &prev, const MotionSample &cur, const NoiseModel &noise);
+
 /*! \brief What one KltTracker::track() call did. */
 struct KltStats {
   int tracked = 0;          //!< tracks continued into this frame

@@ -1,0 +1,552 @@
+// yawdepth::OnlineMeasurer (issue 37): a rendered drive past a textured wall (benchmarks/klt_wall.h's
+// texture and homography), poses at 100 Hz, joint readings at 50 Hz, images at 30 Hz on another
+// clock phase and a time offset, pushed in time order or from three threads in real time.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <yawdepth/error.h>
+#include <yawdepth/online/online_measurer.h>
+
+#include "klt_wall.h"
+
+using namespace yawdepth;
+
+namespace {
+
+using bench::wall::kFocal;
+using bench::wall::kHeight;
+using bench::wall::kU0;
+using bench::wall::kV0;
+using bench::wall::kWallDepth;
+using bench::wall::kWidth;
+
+constexpr double kOnlineTimeOffset = 0.02; // the image at camera time t was taken at motion time t + 0.02
+constexpr double kOnlineDuration = 3.0;    // s of images
+
+/* The drive: what each stream pushes (times on their clocks) and each image's truth. */
+struct OnlineDrive {
+  YawRig rig{Eigen::Vector3d(-0.05, 0, 0)};
+  std::vector<std::pair<double, MotionSample>> poses; // motion clock, 100 Hz
+  std::vector<std::pair<double, double>> joints;      // motion clock, 50 Hz, another phase
+  std::vector<double> image_times;                    // camera clock, 30 Hz, another phase
+  std::vector<MotionSample> image_poses;              // each image's pose (rendered with it)
+  std::vector<cv::Mat> images;
+};
+
+/* The truth's pose row at motion time `t` (its yaw from the joint's motion). */
+MotionSample onlineTruthRow(double t)
+{
+  MotionSample m;
+  m.x = 0.12 * t;
+  m.heading = 0.0175 * std::sin(3.75 * t);
+  m.yaw = 0.03 * std::sin(2.0 * t);
+  return m;
+}
+
+/* interpolateMotion() of the pushed samples around `t` (the reference the measurer must match). */
+MotionSample onlineExpectedPose(const OnlineDrive &d, double t)
+{
+  auto upper = [](const auto &buffer, double v) {
+    return static_cast<std::size_t>(
+        std::upper_bound(buffer.begin(), buffer.end(), v, [](double a, const auto &e) { return a < e.first; }) -
+        buffer.begin());
+  };
+  const std::size_t j = upper(d.poses, t), k = upper(d.joints, t);
+  MotionSample s = interpolateMotion(d.poses[j - 1].second, d.poses[j].second,
+                                     (t - d.poses[j - 1].first) / (d.poses[j].first - d.poses[j - 1].first));
+  MotionSample a, b;
+  a.yaw = d.joints[k - 1].second;
+  b.yaw = d.joints[k].second;
+  s.yaw = interpolateMotion(a, b, (t - d.joints[k - 1].first) / (d.joints[k].first - d.joints[k - 1].first)).yaw;
+  return s;
+}
+
+const OnlineDrive &onlineDrive()
+{
+  static const OnlineDrive drive = [] {
+    OnlineDrive d;
+    for (int j = 0; j * 0.01 <= kOnlineDuration + 0.3; ++j)
+      d.poses.emplace_back(j * 0.01, onlineTruthRow(j * 0.01));
+    for (int j = 0; 0.003 + j * 0.02 <= kOnlineDuration + 0.3; ++j)
+      d.joints.emplace_back(0.003 + j * 0.02, onlineTruthRow(0.003 + j * 0.02).yaw);
+    for (int k = 0; 0.0137 + k / 30.0 <= kOnlineDuration; ++k)
+      d.image_times.push_back(0.0137 + k / 30.0);
+    // The texture (as klt_wall.h's): smoothed uniform noise, seeded.
+    cv::Mat noise(kHeight, kWidth, CV_32F), smooth, texture;
+    cv::RNG rng(37);
+    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
+    cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 2.0);
+    cv::normalize(smooth, smooth, 20, 235, cv::NORM_MINMAX);
+    smooth.convertTo(texture, CV_8U);
+    for (double tc : d.image_times)
+      d.image_poses.push_back(onlineExpectedPose(d, tc + kOnlineTimeOffset));
+    for (const MotionSample &s : d.image_poses) {
+      const vpHomogeneousMatrix cMc0 = wMc(d.rig, s).inverse() * wMc(d.rig, d.image_poses.front());
+      cv::Mat warped, blurred, frame_noise(kHeight, kWidth, CV_32F), f;
+      cv::warpPerspective(texture, warped, cv::Mat(bench::planeHomography(cMc0, kWallDepth, kFocal, kU0, kV0)),
+                          texture.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
+      cv::GaussianBlur(warped, blurred, cv::Size(0, 0), 0.8);
+      rng.fill(frame_noise, cv::RNG::NORMAL, 0.0, 2.0);
+      blurred.convertTo(f, CV_32F);
+      d.images.push_back(bench::photoFinish(f + frame_noise));
+    }
+    return d;
+  }();
+  return drive;
+}
+
+CameraModel onlineCamera() { return CameraModel::brown(kFocal, kFocal, kU0, kV0, {0, 0, 0, 0}, kWidth, kHeight); }
+
+OnlineOptions onlineTestOptions()
+{
+  OnlineOptions o;
+  o.time_offset = kOnlineTimeOffset;
+  o.noise.sigma_px = 0.5;
+  o.noise.motion_noise = MotionNoise::Absolute; // the render's poses are exact
+  o.noise.sigma_odom = 1e-4;
+  o.noise.sigma_heading = 1e-4;
+  o.noise.sigma_yaw = 1e-4;
+  o.klt.max_features = 200;
+  return o;
+}
+
+/* The depth (camera Z at `pose`) where the ray of pixel (u, v) meets the wall (Z = kWallDepth in the
+   first image's camera). */
+double onlineWallDepth(const OnlineDrive &d, const MotionSample &pose, double u, double v)
+{
+  const vpHomogeneousMatrix c0Mc = wMc(d.rig, d.image_poses.front()).inverse() * wMc(d.rig, pose);
+  const double x = (u - kU0) / kFocal, y = (v - kV0) / kFocal;
+  const double dz = c0Mc[2][0] * x + c0Mc[2][1] * y + c0Mc[2][2];
+  const double t = (kWallDepth - c0Mc[2][3]) / dz;
+  return t > 0 ? t : std::nan("");
+}
+
+/* Every stream's events in time order (motion clock), the poses in (stall_from, stall_to) left out. */
+struct OnlineEvent {
+  double t_motion;
+  int stream; // 0 pose, 1 joint, 2 image
+  std::size_t index;
+};
+std::vector<OnlineEvent> onlineEvents(const OnlineDrive &d, double stall_from = 1e9, double stall_to = 1e9)
+{
+  std::vector<OnlineEvent> e;
+  for (std::size_t i = 0; i < d.poses.size(); ++i)
+    if (!(d.poses[i].first > stall_from && d.poses[i].first < stall_to))
+      e.push_back({d.poses[i].first, 0, i});
+  for (std::size_t i = 0; i < d.joints.size(); ++i)
+    e.push_back({d.joints[i].first, 1, i});
+  for (std::size_t i = 0; i < d.image_times.size(); ++i)
+    e.push_back({d.image_times[i] + kOnlineTimeOffset, 2, i});
+  std::stable_sort(e.begin(), e.end(), [](const OnlineEvent &a, const OnlineEvent &b) { return a.t_motion < b.t_motion; });
+  return e;
+}
+
+void onlinePush(OnlineMeasurer &m, const OnlineDrive &d, const OnlineEvent &e)
+{
+  if (e.stream == 0)
+    m.pushPose(d.poses[e.index].first, d.poses[e.index].second);
+  else if (e.stream == 1)
+    m.pushJoint(d.joints[e.index].first, d.joints[e.index].second);
+  else
+    m.pushImage(d.image_times[e.index], d.images[e.index]);
+}
+
+/* Checks each frame's pose against interpolateMotion of the pushed truth, and counts the ok points
+   within 3 sigma of the wall. */
+struct OnlineCheck {
+  std::size_t ok = 0, within = 0;
+  double worst_pose = 0;
+  std::vector<double> rel_sigma, rel_error; // sigmaZ / Z and |error| / Z of the ok points
+  double median(std::vector<double> v) const
+  {
+    if (v.empty())
+      return std::nan("");
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  }
+};
+OnlineCheck onlineCheckFrames(const OnlineDrive &d, const std::vector<OnlineFrame> &frames)
+{
+  OnlineCheck c;
+  for (const OnlineFrame &f : frames) {
+    const MotionSample e = onlineExpectedPose(d, f.t_motion);
+    c.worst_pose = std::max({c.worst_pose, std::abs(f.pose.x - e.x), std::abs(f.pose.y - e.y),
+                             std::abs(f.pose.z - e.z), std::abs(f.pose.heading - e.heading),
+                             std::abs(f.pose.yaw - e.yaw), std::abs(f.t_motion - f.t - kOnlineTimeOffset)});
+    for (const OnlinePoint &p : f.points) {
+      if (!p.estimate.ok())
+        continue;
+      const double z = onlineWallDepth(d, f.pose, p.u, p.v);
+      ++c.ok;
+      c.rel_sigma.push_back(p.estimate.sigmaZ() / z);
+      c.rel_error.push_back(std::abs(p.estimate.c_P.z() - z) / z);
+      c.within += std::abs(p.estimate.c_P.z() - z) <= 3 * p.estimate.sigmaZ() ? 1 : 0;
+    }
+  }
+  return c;
+}
+
+} // namespace
+
+TEST_CASE("OnlineMeasurer: streams in time order, every image measured at its interpolated pose, depths honest",
+          "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
+  std::vector<OnlineFrame> frames;
+  for (const OnlineEvent &e : onlineEvents(d)) {
+    onlinePush(m, d, e);
+    for (OnlineFrame &f : m.process())
+      frames.push_back(std::move(f));
+  }
+  const OnlineStats s = m.stats();
+  REQUIRE(frames.size() == d.images.size());
+  CHECK(s.images_measured == d.images.size());
+  CHECK(s.dropped_stale + s.dropped_uncovered + s.dropped_overflow == 0);
+  CHECK(s.out_of_order_images + s.out_of_order_poses + s.out_of_order_joints == 0);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    CHECK(frames[i].frame == static_cast<long>(i));
+    CHECK(frames[i].t == d.image_times[i]);
+    CHECK(frames[i].latency_ms >= frames[i].track_ms);
+  }
+  const OnlineCheck c = onlineCheckFrames(d, frames);
+  CHECK(c.worst_pose < 1e-12);
+  INFO("ok points " << c.ok << ", within 3 sigma " << c.within << ", median sigma/Z " << c.median(c.rel_sigma)
+                     << ", median |error|/Z " << c.median(c.rel_error));
+  REQUIRE(c.ok > 1000);
+  CHECK(c.median(c.rel_sigma) < 0.05); // not a vacuous 3 sigma
+  CHECK(static_cast<double>(c.within) >= 0.9 * static_cast<double>(c.ok));
+  // Bounded buffers: only what a later image may need.
+  CHECK(s.queued_images == 0);
+  CHECK(s.buffered_poses < 40);
+  CHECK(s.buffered_joints < 20);
+
+  // The servo loop's read: the last frame's features carried to the newest pose (the wall about 2 m away).
+  std::vector<long> ids;
+  for (const OnlinePoint &p : frames.back().points)
+    ids.push_back(p.id);
+  ids.push_back(-5); // never a feature
+  const std::vector<PointEstimate> now = m.depths(ids);
+  REQUIRE(now.size() == ids.size());
+  CHECK(now.back().status == Status::TooFewFrames);
+  MotionSample current;
+  REQUIRE(m.currentPose(current));
+  CHECK(current.x == d.poses.back().second.x);
+  CHECK(current.yaw == d.joints.back().second);
+  std::size_t near_wall = 0, ok_now = 0;
+  for (std::size_t i = 0; i + 1 < now.size(); ++i) {
+    if (!now[i].ok())
+      continue;
+    ++ok_now;
+    near_wall += std::abs(now[i].c_P.z() - kWallDepth) < 0.2 ? 1 : 0;
+  }
+  CHECK(ok_now > ids.size() / 2);
+  CHECK(static_cast<double>(near_wall) >= 0.9 * static_cast<double>(ok_now));
+}
+
+TEST_CASE("OnlineMeasurer: three threads pushing in real time, a consumer thread measuring", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  OnlineOptions o = onlineTestOptions();
+  o.max_image_age = 1.0;   // a consumer on a loaded machine may lag; the streams are timely
+  o.max_queued_images = 64;
+  OnlineMeasurer m(onlineCamera(), d.rig, o);
+  const double play = 1.5; // s of the drive played in real time
+  const auto start = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
+  auto at = [&](double t) { return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(t)); };
+  std::atomic<int> done{0};
+  std::atomic<double> slowest_push_ms{0};
+  auto note = [&](std::chrono::steady_clock::time_point t0) {
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    double prev = slowest_push_ms.load();
+    while (ms > prev && !slowest_push_ms.compare_exchange_weak(prev, ms)) {
+    }
+  };
+  std::thread poses([&] {
+    for (const auto &p : d.poses) {
+      if (p.first > play + 0.1)
+        break;
+      std::this_thread::sleep_until(at(p.first));
+      const auto t0 = std::chrono::steady_clock::now();
+      m.pushPose(p.first, p.second);
+      note(t0);
+    }
+    ++done;
+  });
+  std::thread joints([&] {
+    for (const auto &j : d.joints) {
+      if (j.first > play + 0.1)
+        break;
+      std::this_thread::sleep_until(at(j.first));
+      const auto t0 = std::chrono::steady_clock::now();
+      m.pushJoint(j.first, j.second);
+      note(t0);
+    }
+    ++done;
+  });
+  std::size_t pushed_images = 0;
+  std::thread images([&] {
+    for (std::size_t i = 0; i < d.image_times.size() && d.image_times[i] <= play; ++i) {
+      std::this_thread::sleep_until(at(d.image_times[i] + kOnlineTimeOffset));
+      const auto t0 = std::chrono::steady_clock::now();
+      m.pushImage(d.image_times[i], d.images[i]);
+      note(t0);
+      ++pushed_images;
+    }
+    ++done;
+  });
+  std::vector<OnlineFrame> frames;
+  for (;;) {
+    const bool finished = done.load() == 3;
+    std::vector<OnlineFrame> got = m.process();
+    for (OnlineFrame &f : got)
+      frames.push_back(std::move(f));
+    if (finished && got.empty())
+      break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  poses.join();
+  joints.join();
+  images.join();
+  const OnlineStats s = m.stats();
+  REQUIRE(pushed_images > 40);
+  CHECK(frames.size() == pushed_images);
+  CHECK(s.images_measured == pushed_images);
+  CHECK(s.dropped_stale + s.dropped_uncovered + s.dropped_overflow == 0);
+  CHECK(slowest_push_ms.load() < 50); // a push only enqueues
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    CHECK(frames[i].frame == static_cast<long>(i));
+  const OnlineCheck c = onlineCheckFrames(d, frames);
+  CHECK(c.worst_pose < 1e-12);
+  INFO("ok points " << c.ok << ", within 3 sigma " << c.within);
+  REQUIRE(c.ok > 300);
+  CHECK(static_cast<double>(c.within) >= 0.9 * static_cast<double>(c.ok));
+  CHECK(s.last_latency_ms > 0);
+}
+
+TEST_CASE("OnlineMeasurer: a pose stream stalled for 1 s: images wait, go stale, and measuring resumes", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  OnlineOptions o = onlineTestOptions();
+  o.max_image_age = 0.3;
+  o.max_queued_images = 32;
+  OnlineMeasurer m(onlineCamera(), d.rig, o);
+  const double stall_from = 1.0, stall_to = 2.0; // no pose in (1, 2) s
+  std::vector<OnlineFrame> frames;
+  std::size_t most_queued = 0;
+  double slowest_push_ms = 0;
+  for (const OnlineEvent &e : onlineEvents(d, stall_from, stall_to)) {
+    const auto t0 = std::chrono::steady_clock::now();
+    onlinePush(m, d, e);
+    slowest_push_ms = std::max(slowest_push_ms,
+                               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    for (OnlineFrame &f : m.process())
+      frames.push_back(std::move(f));
+    most_queued = std::max(most_queued, m.stats().queued_images);
+  }
+  const OnlineStats s = m.stats();
+  std::size_t before = 0, during = 0, after = 0;
+  for (const OnlineFrame &f : frames)
+    (f.t_motion <= stall_from ? before : f.t_motion < stall_to ? during : after) += 1;
+  std::size_t in_stall = 0, after_stall = 0;
+  for (double t : d.image_times) {
+    const double tm = t + kOnlineTimeOffset;
+    in_stall += tm > stall_from && tm < stall_to ? 1 : 0;
+    after_stall += tm >= stall_to ? 1 : 0;
+  }
+  INFO("stale " << s.dropped_stale << ", uncovered " << s.dropped_uncovered << ", measured " << frames.size());
+  CHECK(during == 0);                              // never extrapolated
+  CHECK(before >= 29);                             // every image before the stall
+  CHECK(after == after_stall);                     // resumed: every image after it
+  CHECK(s.dropped_stale > 0);                      // waited max_image_age, then dropped
+  CHECK(s.dropped_stale + s.dropped_uncovered == in_stall);
+  CHECK(s.dropped_overflow == 0);
+  CHECK(most_queued <= 10);                        // 0.3 s of images at 30 Hz, no more
+  CHECK(slowest_push_ms < 50);
+  CHECK(s.buffered_poses < 40);
+  // The features tracked across the stall's jump are cut or new: the frames after it still have ok points.
+  std::size_t ok_after = 0;
+  for (const OnlineFrame &f : frames)
+    if (f.t_motion > stall_to + 0.5)
+      for (const OnlinePoint &p : f.points)
+        ok_after += p.estimate.ok() ? 1 : 0;
+  CHECK(ok_after > 100);
+}
+
+TEST_CASE("OnlineMeasurer: out-of-order timestamps are counted and dropped, not thrown", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
+  m.pushPose(0.5, d.poses[50].second);
+  m.pushPose(0.5, d.poses[50].second); // equal: not after
+  m.pushPose(0.4, d.poses[40].second);
+  m.pushJoint(0.5, 0.0);
+  m.pushJoint(0.49, 0.0);
+  m.pushImage(0.45, d.images[0]);
+  m.pushImage(0.45, d.images[1]);
+  m.pushImage(0.2, d.images[2]);
+  m.pushImage(0.46, d.images[3]);
+  const OnlineStats s = m.stats();
+  CHECK(s.out_of_order_poses == 2);
+  CHECK(s.out_of_order_joints == 1);
+  CHECK(s.out_of_order_images == 2);
+  CHECK(s.images_pushed == 2);
+  CHECK(s.buffered_poses == 1);
+  CHECK(s.buffered_joints == 1);
+}
+
+TEST_CASE("OnlineMeasurer: bad input throws an Error naming it", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  const CameraModel camera = onlineCamera();
+  auto throwsNaming = [](const std::function<void()> &f, const std::string &word) {
+    try {
+      f();
+    } catch (const Error &e) {
+      INFO(e.what());
+      CHECK(std::string(e.what()).find(word) != std::string::npos);
+      return true;
+    }
+    return false;
+  };
+  OnlineMeasurer m(camera, d.rig, onlineTestOptions());
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  CHECK(throwsNaming([&] { m.pushImage(nan, d.images[0]); }, "image time is not finite"));
+  CHECK(throwsNaming([&] { m.pushPose(inf, d.poses[0].second); }, "pose time is not finite"));
+  CHECK(throwsNaming([&] { m.pushJoint(nan, 0.0); }, "joint time is not finite"));
+  CHECK(throwsNaming([&] { m.pushJoint(1.0, inf); }, "yaw"));
+  MotionSample bad = d.poses[0].second;
+  bad.x = nan;
+  CHECK(throwsNaming([&] { m.pushPose(1.0, bad); }, "non-finite"));
+  cv::Mat color(kHeight, kWidth, CV_8UC3, cv::Scalar(0, 0, 0)), wide(kHeight, kWidth, CV_16UC1, cv::Scalar(0));
+  CHECK(throwsNaming([&] { m.pushImage(1.0, color); }, "8-bit single channel"));
+  CHECK(throwsNaming([&] { m.pushImage(1.0, wide); }, "8-bit single channel"));
+  CHECK(throwsNaming([&] { m.pushImage(1.0, cv::Mat(100, 100, CV_8UC1, cv::Scalar(0))); }, "100x100"));
+  m.pushPose(1.0, d.poses[0].second);
+  CHECK(throwsNaming([&] { m.pushPose(1.1, MotionSample::fromPose(0, vpHomogeneousMatrix())); }, "6-DoF"));
+  CHECK(m.stats().images_pushed == 0);
+
+  auto badOptions = [&](const std::function<void(OnlineOptions &)> &edit, const std::string &field) {
+    OnlineOptions o = onlineTestOptions();
+    edit(o);
+    return throwsNaming([&] { OnlineMeasurer(camera, d.rig, o); }, field);
+  };
+  CHECK(badOptions([](OnlineOptions &o) { o.max_image_age = 0; }, "max_image_age"));
+  CHECK(badOptions([](OnlineOptions &o) { o.max_pose_gap = -1; }, "max_pose_gap"));
+  CHECK(badOptions([](OnlineOptions &o) { o.max_queued_images = 0; }, "max_queued_images"));
+  CHECK(badOptions([](OnlineOptions &o) { o.window = 1; }, "window"));
+  CHECK(badOptions([](OnlineOptions &o) { o.time_offset = std::nan(""); }, "time_offset"));
+  CHECK(badOptions([](OnlineOptions &o) { o.prior_depth = 0; }, "prior_depth"));
+  CHECK(badOptions([](OnlineOptions &o) { o.noise.sigma_px = -1; }, "sigma-px"));
+  CHECK(badOptions([](OnlineOptions &o) { o.klt.window = 4; }, "window"));
+}
+
+TEST_CASE("OnlineMeasurer: 6-DoF poses carrying the yaw, no joint stream", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  // The same drive as 6-DoF rows (wMv as theta-u), the yaw in each row (100 Hz), no joint readings.
+  std::vector<std::pair<double, MotionSample>> rows;
+  for (const auto &p : d.poses) {
+    MotionSample r = MotionSample::fromPose(0, wMv(p.second), onlineTruthRow(p.first).yaw);
+    rows.emplace_back(p.first, r);
+  }
+  OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
+  std::vector<OnlineFrame> frames;
+  std::size_t next_row = 0;
+  for (std::size_t i = 0; i < d.image_times.size(); ++i) {
+    const double tm = d.image_times[i] + kOnlineTimeOffset;
+    while (next_row < rows.size() && rows[next_row].first <= tm + 0.01) { // the pose after the image too
+      m.pushPose(rows[next_row].first, rows[next_row].second);
+      ++next_row;
+    }
+    m.pushImage(d.image_times[i], d.images[i]);
+    for (OnlineFrame &f : m.process())
+      frames.push_back(std::move(f));
+  }
+  REQUIRE(frames.size() == d.images.size());
+  double worst = 0;
+  OnlineCheck c;
+  for (const OnlineFrame &f : frames) {
+    const std::size_t j = static_cast<std::size_t>(
+        std::upper_bound(rows.begin(), rows.end(), f.t_motion,
+                         [](double v, const std::pair<double, MotionSample> &e) { return v < e.first; }) -
+        rows.begin());
+    const MotionSample e = interpolateMotion(rows[j - 1].second, rows[j].second,
+                                             (f.t_motion - rows[j - 1].first) / (rows[j].first - rows[j - 1].first));
+    CHECK(f.pose.six_dof);
+    worst = std::max({worst, (f.pose.position() - e.position()).norm(), (f.pose.theta_u - e.theta_u).norm(),
+                      std::abs(f.pose.yaw - e.yaw)});
+    for (const OnlinePoint &p : f.points) {
+      if (!p.estimate.ok())
+        continue;
+      const double z = onlineWallDepth(d, f.pose, p.u, p.v);
+      ++c.ok;
+      c.within += std::abs(p.estimate.c_P.z() - z) <= 3 * p.estimate.sigmaZ() ? 1 : 0;
+    }
+  }
+  CHECK(worst < 1e-12);
+  INFO("ok points " << c.ok << ", within 3 sigma " << c.within);
+  REQUIRE(c.ok > 1000);
+  CHECK(static_cast<double>(c.within) >= 0.9 * static_cast<double>(c.ok));
+  CHECK(m.stats().buffered_joints == 0);
+}
+
+TEST_CASE("OnlineMeasurer: a pose stream as odometry increments, planar and 6-DoF", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  for (const bool six_dof : {false, true}) {
+    INFO((six_dof ? "6-DoF" : "planar"));
+    OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
+    MotionSample first = d.poses.front().second;
+    if (six_dof)
+      first = MotionSample::fromPose(0, wMv(first), first.yaw);
+    CHECK_THROWS_WITH(m.pushOdometryIncrement(0.001, vpHomogeneousMatrix()), Catch::Contains("no pose to start from"));
+    m.pushPose(d.poses.front().first, first);
+    std::vector<OnlineFrame> frames;
+    for (const OnlineEvent &e : onlineEvents(d)) {
+      if (e.stream == 0 && e.index == 0)
+        continue;
+      if (e.stream == 0) // the increment from the previous pose: v_prev M v_cur
+        m.pushOdometryIncrement(d.poses[e.index].first,
+                                wMv(d.poses[e.index - 1].second).inverse() * wMv(d.poses[e.index].second));
+      else
+        onlinePush(m, d, e);
+      for (OnlineFrame &f : m.process())
+        frames.push_back(std::move(f));
+    }
+    REQUIRE(frames.size() == d.images.size());
+    double worst = 0;
+    for (const OnlineFrame &f : frames) {
+      const MotionSample e = onlineExpectedPose(d, f.t_motion);
+      CHECK(f.pose.six_dof == six_dof);
+      const Eigen::Vector3d w_t_c = toIsometry(wMc(d.rig, f.pose)).translation(),
+                            w_t_c_expected = toIsometry(wMc(d.rig, e)).translation();
+      const Eigen::Matrix3d R = toIsometry(wMc(d.rig, f.pose)).rotation(),
+                            R_expected = toIsometry(wMc(d.rig, e)).rotation();
+      worst = std::max({worst, (w_t_c - w_t_c_expected).norm(), logSO3(R_expected.transpose() * R).norm()});
+    }
+    CHECK(worst < 1e-9); // the increments compose back to the poses (slerp of 6-DoF rows = the planar heading's)
+    // A planar stream refuses an increment that tilts.
+    if (!six_dof) {
+      vpHomogeneousMatrix tilt(0, 0, 0, 0.1, 0, 0);
+      CHECK_THROWS_WITH(m.pushOdometryIncrement(100.0, tilt), Catch::Contains("about +Y only"));
+    }
+    vpHomogeneousMatrix bad;
+    bad[0][3] = std::nan("");
+    CHECK_THROWS_WITH(m.pushOdometryIncrement(101.0, bad), Catch::Contains("non-finite"));
+    CHECK_THROWS_WITH(m.pushOdometryIncrement(std::nan(""), vpHomogeneousMatrix()), Catch::Contains("not finite"));
+    m.pushOdometryIncrement(0.0, vpHomogeneousMatrix()); // not after the previous pose: counted
+    CHECK(m.stats().out_of_order_poses == 1);
+  }
+}
