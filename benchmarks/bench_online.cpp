@@ -4,10 +4,10 @@
 
     bench_online [--seconds S] [--max-features N] [--method window|fused] [--warmup N]
 
-  Scene: a textured wall 2 m in front of the first camera (klt_wall.h's texture: smoothed uniform
-  noise, seeded; each frame blurred 0.8 px, noise 2 gray levels, photo_like.h's response curve and
-  JPEG round trip), 640x480, the camera driving 0.12 m/s sideways with a slow heading sway (+-1 degree)
-  and the pan sweeping +-1.7 degrees; every image rendered before timing. Streams played in real time
+  Scene: online_drive.h's rendered drive (klt_wall.h's textured wall 2 m in front of the first
+  camera, texture seed 11, photo-like images, 640x480; the camera driving 0.12 m/s sideways with a
+  slow heading sway of +-1 degree and the pan sweeping +-1.7 degrees); every image rendered before
+  timing. Streams played in real time
   by one producer thread on the motion clock: poses at 100 Hz, joint readings at 50 Hz (another
   phase), images at 30 Hz (another phase, camera clock 20 ms behind: time_offset 0.02 s), each pushed
   at its motion time. One consumer thread calls process() whenever a push wakes it. Computation on one
@@ -38,84 +38,20 @@
 #include <yawdepth/online/online_measurer.h>
 
 #include "bench_common.h"
-#include "klt_wall.h"
+#include "online_drive.h"
 
 using namespace yawdepth;
 using BenchClock = std::chrono::steady_clock;
 
 namespace {
 
-using bench::wall::kFocal;
-using bench::wall::kHeight;
-using bench::wall::kU0;
-using bench::wall::kV0;
-using bench::wall::kWallDepth;
-using bench::wall::kWidth;
-
-constexpr double kTimeOffset = 0.02;
-
-MotionSample truthRow(double t)
-{
-  MotionSample m;
-  m.x = 0.12 * t;
-  m.heading = 0.0175 * std::sin(3.75 * t);
-  m.yaw = 0.03 * std::sin(2.0 * t);
-  return m;
-}
-
-struct Event {
-  double t_motion;
-  int stream; // 0 pose, 1 joint, 2 image
-  std::size_t index;
-};
-
-struct Drive {
-  std::vector<std::pair<double, MotionSample>> poses;
-  std::vector<std::pair<double, double>> joints;
-  std::vector<double> image_times; // camera clock
-  std::vector<cv::Mat> images;
-  std::vector<Event> events;       // every push, in motion-clock order
-};
-
-Drive renderDrive(double seconds, const YawRig &rig)
-{
-  Drive d;
-  for (int j = 0; j * 0.01 <= seconds + 0.1; ++j)
-    d.poses.emplace_back(j * 0.01, truthRow(j * 0.01));
-  for (int j = 0; 0.003 + j * 0.02 <= seconds + 0.1; ++j)
-    d.joints.emplace_back(0.003 + j * 0.02, truthRow(0.003 + j * 0.02).yaw);
-  for (int k = 0; 0.0137 + k / 30.0 <= seconds; ++k)
-    d.image_times.push_back(0.0137 + k / 30.0);
-  cv::Mat noise(kHeight, kWidth, CV_32F), smooth, texture;
-  cv::RNG rng(11);
-  rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
-  cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 2.0);
-  cv::normalize(smooth, smooth, 20, 235, cv::NORM_MINMAX);
-  smooth.convertTo(texture, CV_8U);
-  MotionSample first;
-  for (std::size_t k = 0; k < d.image_times.size(); ++k) {
-    MotionSample s = truthRow(d.image_times[k] + kTimeOffset); // the render's truth (the measurer interpolates)
-    if (k == 0)
-      first = s;
-    const vpHomogeneousMatrix cMc0 = wMc(rig, s).inverse() * wMc(rig, first);
-    cv::Mat warped, blurred, frame_noise(kHeight, kWidth, CV_32F), f;
-    cv::warpPerspective(texture, warped, cv::Mat(bench::planeHomography(cMc0, kWallDepth, kFocal, kU0, kV0)),
-                        texture.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
-    cv::GaussianBlur(warped, blurred, cv::Size(0, 0), 0.8);
-    rng.fill(frame_noise, cv::RNG::NORMAL, 0.0, 2.0);
-    blurred.convertTo(f, CV_32F);
-    d.images.push_back(bench::photoFinish(f + frame_noise));
-  }
-  for (std::size_t i = 0; i < d.poses.size(); ++i)
-    d.events.push_back({d.poses[i].first, 0, i});
-  for (std::size_t i = 0; i < d.joints.size(); ++i)
-    d.events.push_back({d.joints[i].first, 1, i});
-  for (std::size_t i = 0; i < d.image_times.size(); ++i)
-    d.events.push_back({d.image_times[i] + kTimeOffset, 2, i});
-  std::stable_sort(d.events.begin(), d.events.end(),
-                   [](const Event &a, const Event &b) { return a.t_motion < b.t_motion; });
-  return d;
-}
+namespace drive = bench::drive;
+using drive::kFocal;
+using drive::kHeight;
+using drive::kU0;
+using drive::kV0;
+using drive::kWidth;
+constexpr unsigned kSeed = 11; // the texture's (klt_wall.h's)
 
 } // namespace
 
@@ -136,14 +72,14 @@ int main(int argc, char **argv)
   try {
     cv::setNumThreads(1);
     const CameraModel camera = CameraModel::brown(kFocal, kFocal, kU0, kV0, {0, 0, 0, 0}, kWidth, kHeight);
-    const YawRig rig(Eigen::Vector3d(-0.05, 0, 0));
-    const Drive d = renderDrive(seconds, rig);
+    const drive::Drive d = drive::renderDrive(seconds, kSeed);
+    const std::vector<drive::Event> events = drive::events(d);
     OnlineOptions o;
     o.method = streamMethodFromString(method);
-    o.time_offset = kTimeOffset;
+    o.time_offset = drive::kTimeOffset;
     o.noise.sigma_px = 0.5;
     o.klt.max_features = max_features;
-    OnlineMeasurer measurer(camera, rig, o);
+    OnlineMeasurer measurer(camera, d.rig, o);
 
     std::mutex wake_mutex;
     std::condition_variable wake;
@@ -151,12 +87,12 @@ int main(int argc, char **argv)
     bool finished = false;
     const BenchClock::time_point start = BenchClock::now() + std::chrono::milliseconds(100);
     std::thread producer([&] {
-      for (const Event &e : d.events) {
+      for (const drive::Event &e : events) {
         std::this_thread::sleep_until(
             start + std::chrono::duration_cast<BenchClock::duration>(std::chrono::duration<double>(e.t_motion)));
-        if (e.stream == 0)
+        if (e.stream == drive::Event::Pose)
           measurer.pushPose(d.poses[e.index].first, d.poses[e.index].second);
-        else if (e.stream == 1)
+        else if (e.stream == drive::Event::Joint)
           measurer.pushJoint(d.joints[e.index].first, d.joints[e.index].second);
         else
           measurer.pushImage(d.image_times[e.index], d.images[e.index]);

@@ -1,5 +1,5 @@
-// yawdepth::OnlineMeasurer (issue 37): a rendered drive past a textured wall (benchmarks/klt_wall.h's
-// texture and homography), poses at 100 Hz, joint readings at 50 Hz, images at 30 Hz on another
+// yawdepth::OnlineMeasurer (issue 37): the rendered drive of benchmarks/online_drive.h (klt_wall.h's
+// textured wall), poses at 100 Hz, joint readings at 50 Hz, images at 30 Hz on another
 // clock phase and a time offset, pushed in time order or from three threads in real time.
 #include <catch2/catch.hpp>
 
@@ -18,92 +18,32 @@
 #include <yawdepth/error.h>
 #include <yawdepth/online/online_measurer.h>
 
-#include "klt_wall.h"
+#include "online_drive.h"
 
 using namespace yawdepth;
 
 namespace {
 
-using bench::wall::kFocal;
-using bench::wall::kHeight;
-using bench::wall::kU0;
-using bench::wall::kV0;
-using bench::wall::kWallDepth;
-using bench::wall::kWidth;
+namespace drive = bench::drive;
+using drive::kFocal;
+using drive::kHeight;
+using drive::kU0;
+using drive::kV0;
+using drive::kWallDepth;
+using drive::kWidth;
+using OnlineDrive = drive::Drive;
+using OnlineEvent = drive::Event;
 
-constexpr double kOnlineTimeOffset = 0.02; // the image at camera time t was taken at motion time t + 0.02
-constexpr double kOnlineDuration = 3.0;    // s of images
+constexpr double kOnlineTimeOffset = drive::kTimeOffset; // the image at camera time t was taken at motion time t + 0.02
+constexpr double kOnlineDuration = 3.0;                  // s of images
+constexpr unsigned kOnlineSeed = 37;
 
-/* The drive: what each stream pushes (times on their clocks) and each image's truth. */
-struct OnlineDrive {
-  YawRig rig{Eigen::Vector3d(-0.05, 0, 0)};
-  std::vector<std::pair<double, MotionSample>> poses; // motion clock, 100 Hz
-  std::vector<std::pair<double, double>> joints;      // motion clock, 50 Hz, another phase
-  std::vector<double> image_times;                    // camera clock, 30 Hz, another phase
-  std::vector<MotionSample> image_poses;              // each image's pose (rendered with it)
-  std::vector<cv::Mat> images;
-};
-
-/* The truth's pose row at motion time `t` (its yaw from the joint's motion). */
-MotionSample onlineTruthRow(double t)
-{
-  MotionSample m;
-  m.x = 0.12 * t;
-  m.heading = 0.0175 * std::sin(3.75 * t);
-  m.yaw = 0.03 * std::sin(2.0 * t);
-  return m;
-}
-
-/* interpolateMotion() of the pushed samples around `t` (the reference the measurer must match). */
-MotionSample onlineExpectedPose(const OnlineDrive &d, double t)
-{
-  auto upper = [](const auto &buffer, double v) {
-    return static_cast<std::size_t>(
-        std::upper_bound(buffer.begin(), buffer.end(), v, [](double a, const auto &e) { return a < e.first; }) -
-        buffer.begin());
-  };
-  const std::size_t j = upper(d.poses, t), k = upper(d.joints, t);
-  MotionSample s = interpolateMotion(d.poses[j - 1].second, d.poses[j].second,
-                                     (t - d.poses[j - 1].first) / (d.poses[j].first - d.poses[j - 1].first));
-  MotionSample a, b;
-  a.yaw = d.joints[k - 1].second;
-  b.yaw = d.joints[k].second;
-  s.yaw = interpolateMotion(a, b, (t - d.joints[k - 1].first) / (d.joints[k].first - d.joints[k - 1].first)).yaw;
-  return s;
-}
+MotionSample onlineExpectedPose(const OnlineDrive &d, double t) { return drive::expectedPose(d, t); }
 
 const OnlineDrive &onlineDrive()
 {
-  static const OnlineDrive drive = [] {
-    OnlineDrive d;
-    for (int j = 0; j * 0.01 <= kOnlineDuration + 0.3; ++j)
-      d.poses.emplace_back(j * 0.01, onlineTruthRow(j * 0.01));
-    for (int j = 0; 0.003 + j * 0.02 <= kOnlineDuration + 0.3; ++j)
-      d.joints.emplace_back(0.003 + j * 0.02, onlineTruthRow(0.003 + j * 0.02).yaw);
-    for (int k = 0; 0.0137 + k / 30.0 <= kOnlineDuration; ++k)
-      d.image_times.push_back(0.0137 + k / 30.0);
-    // The texture (as klt_wall.h's): smoothed uniform noise, seeded.
-    cv::Mat noise(kHeight, kWidth, CV_32F), smooth, texture;
-    cv::RNG rng(37);
-    rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
-    cv::GaussianBlur(noise, smooth, cv::Size(0, 0), 2.0);
-    cv::normalize(smooth, smooth, 20, 235, cv::NORM_MINMAX);
-    smooth.convertTo(texture, CV_8U);
-    for (double tc : d.image_times)
-      d.image_poses.push_back(onlineExpectedPose(d, tc + kOnlineTimeOffset));
-    for (const MotionSample &s : d.image_poses) {
-      const vpHomogeneousMatrix cMc0 = wMc(d.rig, s).inverse() * wMc(d.rig, d.image_poses.front());
-      cv::Mat warped, blurred, frame_noise(kHeight, kWidth, CV_32F), f;
-      cv::warpPerspective(texture, warped, cv::Mat(bench::planeHomography(cMc0, kWallDepth, kFocal, kU0, kV0)),
-                          texture.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
-      cv::GaussianBlur(warped, blurred, cv::Size(0, 0), 0.8);
-      rng.fill(frame_noise, cv::RNG::NORMAL, 0.0, 2.0);
-      blurred.convertTo(f, CV_32F);
-      d.images.push_back(bench::photoFinish(f + frame_noise));
-    }
-    return d;
-  }();
-  return drive;
+  static const OnlineDrive d = drive::renderDrive(kOnlineDuration, kOnlineSeed);
+  return d;
 }
 
 CameraModel onlineCamera() { return CameraModel::brown(kFocal, kFocal, kU0, kV0, {0, 0, 0, 0}, kWidth, kHeight); }
@@ -121,42 +61,21 @@ OnlineOptions onlineTestOptions()
   return o;
 }
 
-/* The depth (camera Z at `pose`) where the ray of pixel (u, v) meets the wall (Z = kWallDepth in the
-   first image's camera). */
 double onlineWallDepth(const OnlineDrive &d, const MotionSample &pose, double u, double v)
 {
-  const vpHomogeneousMatrix c0Mc = wMc(d.rig, d.image_poses.front()).inverse() * wMc(d.rig, pose);
-  const double x = (u - kU0) / kFocal, y = (v - kV0) / kFocal;
-  const double dz = c0Mc[2][0] * x + c0Mc[2][1] * y + c0Mc[2][2];
-  const double t = (kWallDepth - c0Mc[2][3]) / dz;
-  return t > 0 ? t : std::nan("");
+  return drive::wallDepth(d, pose, u, v);
 }
 
-/* Every stream's events in time order (motion clock), the poses in (stall_from, stall_to) left out. */
-struct OnlineEvent {
-  double t_motion;
-  int stream; // 0 pose, 1 joint, 2 image
-  std::size_t index;
-};
 std::vector<OnlineEvent> onlineEvents(const OnlineDrive &d, double stall_from = 1e9, double stall_to = 1e9)
 {
-  std::vector<OnlineEvent> e;
-  for (std::size_t i = 0; i < d.poses.size(); ++i)
-    if (!(d.poses[i].first > stall_from && d.poses[i].first < stall_to))
-      e.push_back({d.poses[i].first, 0, i});
-  for (std::size_t i = 0; i < d.joints.size(); ++i)
-    e.push_back({d.joints[i].first, 1, i});
-  for (std::size_t i = 0; i < d.image_times.size(); ++i)
-    e.push_back({d.image_times[i] + kOnlineTimeOffset, 2, i});
-  std::stable_sort(e.begin(), e.end(), [](const OnlineEvent &a, const OnlineEvent &b) { return a.t_motion < b.t_motion; });
-  return e;
+  return drive::events(d, stall_from, stall_to);
 }
 
 void onlinePush(OnlineMeasurer &m, const OnlineDrive &d, const OnlineEvent &e)
 {
-  if (e.stream == 0)
+  if (e.stream == OnlineEvent::Pose)
     m.pushPose(d.poses[e.index].first, d.poses[e.index].second);
-  else if (e.stream == 1)
+  else if (e.stream == OnlineEvent::Joint)
     m.pushJoint(d.joints[e.index].first, d.joints[e.index].second);
   else
     m.pushImage(d.image_times[e.index], d.images[e.index]);
@@ -462,7 +381,7 @@ TEST_CASE("OnlineMeasurer: 6-DoF poses carrying the yaw, no joint stream", "[onl
   // The same drive as 6-DoF rows (wMv as theta-u), the yaw in each row (100 Hz), no joint readings.
   std::vector<std::pair<double, MotionSample>> rows;
   for (const auto &p : d.poses) {
-    MotionSample r = MotionSample::fromPose(0, wMv(p.second), onlineTruthRow(p.first).yaw);
+    MotionSample r = MotionSample::fromPose(0, wMv(p.second), drive::truthRow(p.first).yaw);
     rows.emplace_back(p.first, r);
   }
   OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
@@ -519,9 +438,9 @@ TEST_CASE("OnlineMeasurer: a pose stream as odometry increments, planar and 6-Do
     m.pushPose(d.poses.front().first, first);
     std::vector<OnlineFrame> frames;
     for (const OnlineEvent &e : onlineEvents(d)) {
-      if (e.stream == 0 && e.index == 0)
+      if (e.stream == OnlineEvent::Pose && e.index == 0)
         continue;
-      if (e.stream == 0) // the increment from the previous pose: v_prev M v_cur
+      if (e.stream == OnlineEvent::Pose) // the increment from the previous pose: v_prev M v_cur
         m.pushOdometryIncrement(d.poses[e.index].first,
                                 wMv(d.poses[e.index - 1].second).inverse() * wMv(d.poses[e.index].second));
       else
