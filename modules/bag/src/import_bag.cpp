@@ -28,6 +28,7 @@
 #include <yawdepth/core/files.h>
 #include <yawdepth/error.h>
 #include <yawdepth/io/files.h>
+#include <yawdepth/geometry/rig.h>
 #include <yawdepth/io/recording.h>
 
 #ifdef YAWDEPTH_BAG_TF2
@@ -98,20 +99,6 @@ struct Stamped {
 
 /* The vision frame of a pan joint in the body: +Y along `axis`, the origin at `origin` (the smallest
    rotation taking +Y to the axis). */
-vpHomogeneousMatrix panFrame(const std::array<double, 3> &axis, const std::array<double, 3> &origin)
-{
-  const Eigen::Matrix3d R =
-      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), Eigen::Vector3d(axis[0], axis[1], axis[2]))
-          .toRotationMatrix();
-  vpHomogeneousMatrix M;
-  for (unsigned i = 0; i < 3; ++i) {
-    for (unsigned j = 0; j < 3; ++j)
-      M[i][j] = R(i, j);
-    M[i][3] = origin[i];
-  }
-  return M;
-}
-
 /* The axis the vision frame turns about, in its own frame, summed over a pose series (each step's
    rotation vector, its sign aligned with the running sum), and the total angle turned. */
 Eigen::Vector3d turnAxis(const std::vector<Stamped> &motion, double &total)
@@ -145,66 +132,6 @@ int interpolate(const std::vector<std::pair<double, double>> &s, double t, doubl
   const double f = (t - a.first) / (b.first - a.first);
   value = a.second + f * (b.second - a.second);
   return 0;
-}
-
-CameraModel cameraOf(const CameraInfoMessage &ci, const std::string &topic)
-{
-  const std::string what = topic + ": camera_info";
-  bool zero = true;
-  for (double k : ci.K)
-    zero = zero && k == 0.0;
-  if (zero)
-    throw Error(what + " has no calibration (K is all zero)");
-  for (double k : ci.K)
-    if (!std::isfinite(k))
-      throw Error(what + " has a K that is not finite");
-  const double fx = ci.K[0], fy = ci.K[4], cx = ci.K[2], cy = ci.K[5];
-  const std::string &m = ci.distortion_model;
-  CameraModel cam;
-  try {
-    if (m == "plumb_bob" || (m.empty() && ci.D.size() <= 5) || m == "rational_polynomial") {
-      std::vector<double> d = ci.D;
-      while (d.size() > 5 && m == "plumb_bob" && d.back() == 0.0)
-        d.pop_back();
-      if (m == "rational_polynomial" && d.size() > 8) // k1 k2 p1 p2 k3 k4 k5 k6, then thin prism: must be 0
-        for (std::size_t i = 8; i < d.size(); ++i)
-          if (d[i] != 0.0)
-            throw Error(what + ": rational_polynomial with " + std::to_string(d.size()) +
-                        " coefficients (thin prism terms are not modelled)");
-      if (d.size() > 8)
-        d.resize(8);
-      bool all_zero = true;
-      for (double v : d)
-        all_zero = all_zero && v == 0.0;
-      if (all_zero)
-        d.clear();
-      else if (d.size() == 1 || d.size() == 2 || d.size() == 3)
-        d.resize(4, 0.0);
-      else if (d.size() == 6 || d.size() == 7)
-        d.resize(8, 0.0);
-      cam = CameraModel::brown(fx, fy, cx, cy, d, ci.width, ci.height);
-    } else if (m == "equidistant") {
-      std::vector<double> d = ci.D;
-      if (d.size() != 4)
-        throw Error(what + ": equidistant with " + std::to_string(d.size()) + " coefficients, not 4");
-      cam = CameraModel::kannalaBrandt(fx, fy, cx, cy, d, ci.width, ci.height);
-    } else {
-      throw Error(what + ": distortion model '" + m + "' (import-bag reads plumb_bob, rational_polynomial, equidistant)");
-    }
-  } catch (const Error &e) {
-    const std::string w = e.what();
-    if (w.rfind(topic, 0) == 0)
-      throw;
-    throw Error(what + ": " + w);
-  }
-  checkCameraPlausible(cam, what);
-  return cam;
-}
-
-bool sameCalibration(const CameraInfoMessage &a, const CameraInfoMessage &b)
-{
-  return a.width == b.width && a.height == b.height && a.distortion_model == b.distortion_model && a.D == b.D &&
-         a.K == b.K;
 }
 
 /* A folder removed on destruction unless released. */
@@ -578,7 +505,7 @@ BagImportResult importBag(const BagImportOptions &o)
     throw Error(path + ": " + joint_topic->name + " has no joint " + o.joint + " (joints: " +
                 (names.empty() ? std::string("none") : names) + ")");
   }
-  const CameraModel camera = cameraOf(*info, info_topic.name);
+  const CameraModel camera = cameraFromCameraInfo(*info, info_topic.name);
   if (info_changed)
     r.warnings.push_back(info_topic.name + ": camera_info changes during the bag (first at t = " +
                          bag_detail::secondsText(info_changed_at) + " s): camera.yaml is the first one's");
@@ -690,7 +617,8 @@ BagImportResult importBag(const BagImportOptions &o)
   const bool use_joint = joint_topic && !moving_mount;
   // With a pan joint, the vision frame on the joint's axis (see BagImportOptions::joint_axis).
   if (use_joint) {
-    const vpHomogeneousMatrix bMv = panFrame(o.joint_axis, o.joint_origin);
+    const vpHomogeneousMatrix bMv = panJointFrame(Eigen::Vector3d(o.joint_axis[0], o.joint_axis[1], o.joint_axis[2]),
+                                                  Eigen::Vector3d(o.joint_origin[0], o.joint_origin[1], o.joint_origin[2]));
     for (Stamped &x : motion)
       x.M = x.M * bMv;
     bMc = bMv.inverse() * bMc;

@@ -1,5 +1,6 @@
 #include <yawdepth/error.h>
 #include <yawdepth/geometry/rig.h>
+#include <Eigen/Geometry>
 #include <algorithm>
 
 namespace yawdepth {
@@ -147,6 +148,15 @@ vpColVector YawRig::toCamera(double yaw, const vpColVector &v_P) const
 vpHomogeneousMatrix wMv(const MotionSample &s) { return toVisp(s.rotation(), s.position()); }
 
 vpHomogeneousMatrix wMc(const YawRig &rig, const MotionSample &s) { return wMv(s) * rig.vMc(s.yaw); }
+
+vpHomogeneousMatrix panJointFrame(const Eigen::Vector3d &axis, const Eigen::Vector3d &origin)
+{
+  if (!axis.allFinite() || !(axis.norm() > 1e-9))
+    throw Error("the pan joint's axis must be finite and not zero");
+  if (!origin.allFinite())
+    throw Error("the pan joint's origin must be finite");
+  return toVisp(Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), axis).toRotationMatrix(), origin);
+}
 
 vpHomogeneousMatrix curMprev(const YawRig &rig, const MotionSample &prev, const MotionSample &cur)
 {

@@ -227,6 +227,45 @@ void OnlineMeasurer::trimBuffers(double t_needed)
   onlineTrim(joints_, t_needed);
 }
 
+// Under queue_mutex_: the motion-log row at motion time `tm` (see motionAtLocked's declaration).
+int OnlineMeasurer::motionAtLocked(double tm, MotionSample &pose) const
+{
+  std::size_t lo = 0, hi = 0;
+  double s = 0;
+  const int pose_at = onlineBracket(poses_, tm, options_.max_pose_gap, lo, hi, s);
+  if (pose_at != 0)
+    return pose_at;
+  pose = lo == hi ? poses_[lo].second : interpolateMotion(poses_[lo].second, poses_[hi].second, s);
+  if (!joints_pushed_)
+    return 0;
+  std::size_t jlo = 0, jhi = 0;
+  double js = 0;
+  const int joint_at = onlineBracket(joints_, tm, options_.max_pose_gap, jlo, jhi, js);
+  if (joint_at != 0)
+    return joint_at;
+  if (jlo == jhi) {
+    pose.yaw = joints_[jlo].second;
+  } else { // interpolateMotion()'s yaw: linear along the shorter way round
+    MotionSample a, b;
+    a.yaw = joints_[jlo].second;
+    b.yaw = joints_[jhi].second;
+    pose.yaw = interpolateMotion(a, b, js).yaw;
+  }
+  return 0;
+}
+
+bool OnlineMeasurer::poseAt(double t_motion, MotionSample &pose) const
+{
+  if (!std::isfinite(t_motion))
+    throw Error("online measurer: poseAt: the time is not finite");
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  MotionSample p;
+  if (motionAtLocked(t_motion, p) != 0)
+    return false;
+  pose = p;
+  return true;
+}
+
 // Under queue_mutex_: the oldest image that can be measured now, its pose interpolated; drops the stale
 // and uncovered ones on the way. False when none is ready.
 bool OnlineMeasurer::nextJob(Job &job)
@@ -239,37 +278,15 @@ bool OnlineMeasurer::nextJob(Job &job)
       ++stats_.dropped_stale;
       continue;
     }
-    std::size_t lo = 0, hi = 0;
-    double s = 0;
-    const int pose_at = onlineBracket(poses_, tm, options_.max_pose_gap, lo, hi, s);
-    if (pose_at < 0) {
+    MotionSample pose;
+    const int at = motionAtLocked(tm, pose);
+    if (at < 0) {
       images_.pop_front();
       ++stats_.dropped_uncovered;
       continue;
     }
-    if (pose_at > 0)
-      return false; // wait for the poses after it (the later images wait behind it)
-    MotionSample pose = lo == hi ? poses_[lo].second : interpolateMotion(poses_[lo].second, poses_[hi].second, s);
-    if (joints_pushed_) {
-      std::size_t jlo = 0, jhi = 0;
-      double js = 0;
-      const int joint_at = onlineBracket(joints_, tm, options_.max_pose_gap, jlo, jhi, js);
-      if (joint_at < 0) {
-        images_.pop_front();
-        ++stats_.dropped_uncovered;
-        continue;
-      }
-      if (joint_at > 0)
-        return false;
-      if (jlo == jhi) {
-        pose.yaw = joints_[jlo].second;
-      } else { // interpolateMotion()'s yaw: linear along the shorter way round
-        MotionSample a, b;
-        a.yaw = joints_[jlo].second;
-        b.yaw = joints_[jhi].second;
-        pose.yaw = interpolateMotion(a, b, js).yaw;
-      }
-    }
+    if (at > 0)
+      return false; // wait for the poses (joint readings) after it (the later images wait behind it)
     job.image = std::move(images_.front());
     images_.pop_front();
     job.pose = pose;
@@ -298,6 +315,7 @@ std::vector<OnlineFrame> OnlineMeasurer::process()
     job.pose.frame = next_frame_++;
     f.frame = job.pose.frame;
     f.pose = job.pose;
+    f.image = job.image.gray;
     const Clock::time_point t0 = Clock::now();
     std::vector<FeatureObservation> observations;
     if (have_previous_) {

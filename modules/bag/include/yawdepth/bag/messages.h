@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 #include <yawdepth/bag/bag.h>
+#include <yawdepth/camera/camera_model.h>
 
 namespace yawdepth {
 
@@ -120,5 +121,16 @@ TfMessage decodeTf(const BagMessage &m);
 /*! \brief sensor_msgs/JointState. */
 JointStateMessage decodeJointState(const BagMessage &m);
 ///@}
+
+/*!
+  \brief The camera of a camera_info (import-bag's and the ROS node's): K's focal lengths and
+  principal point; `plumb_bob` (trailing zero coefficients dropped) and `rational_polynomial` (its
+  thin-prism terms must be zero) as Brown, `equidistant` as Kannala-Brandt, with the image size;
+  then checkCameraPlausible(). Throws yawdepth::Error "<topic>: camera_info ..." for an all-zero or
+  non-finite K, another distortion model, or an implausible camera.
+*/
+CameraModel cameraFromCameraInfo(const CameraInfoMessage &info, const std::string &topic);
+/*! \brief Whether two camera_info give the same calibration (size, distortion model, D and K). */
+bool sameCalibration(const CameraInfoMessage &a, const CameraInfoMessage &b);
 
 } // namespace yawdepth

@@ -197,6 +197,18 @@ private:
   bool axis_aligned_ = true;
 };
 
+/*!
+  \brief The vision frame of a pan joint on a robot's body: \f$ {}^bT_v \f$, whose +Y is the joint's
+  axis and whose origin is a point on it, both in the body frame b (e.g. REP 103's z-up base_link
+  with axis (0, 0, 1) and the joint's position from the URDF). The rotation is the smallest one
+  taking +Y to the axis. A positive joint position turns the camera right-handedly about the axis,
+  which is yawdepth's positive yaw about the vision frame's +Y. With it, a body pose wMb gives the
+  motion row's \f$ {}^wT_v = {}^wT_b\, {}^bT_v \f$ and a mount bMc at yaw 0 gives the rig's
+  \f$ {}^vT_c(0) = ({}^bT_v)^{-1}\, {}^bT_c \f$. Throws yawdepth::Error for a zero or non-finite axis
+  or a non-finite origin.
+*/
+vpHomogeneousMatrix panJointFrame(const Eigen::Vector3d &axis, const Eigen::Vector3d &origin);
+
 /*! \brief Pose of the vision frame in the world: \f$ {}^wT_v = [R_y(h) \;|\; (x, y, z)] \f$, or the 6-DoF pose. */
 vpHomogeneousMatrix wMv(const MotionSample &s);
 /*! \brief Pose of the camera in the world: \f$ {}^wT_c = {}^wT_v\, {}^vT_c(\theta) \f$. */

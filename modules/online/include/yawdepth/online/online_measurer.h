@@ -76,6 +76,7 @@ struct OnlineFrame {
   double t_motion = 0;     //!< Its motion-clock time, t + time_offset (s).
   long frame = 0;          //!< Frame number: the measured images before it (0, 1, ...: consecutive, the estimator's frames).
   MotionSample pose;       //!< The motion-log row used: the pose (and yaw) interpolated at t_motion; `frame` set.
+  cv::Mat image;           //!< The measured image (8-bit gray; shares the copy pushImage() made).
   std::vector<OnlinePoint> points; //!< The features tracked in this image.
   double latency_ms = 0;   //!< Wall time from pushImage() to this frame's result (ms).
   double wait_ms = 0;      //!< Of it: from pushImage() until process() took the image (waiting for its motion) (ms).
@@ -160,6 +161,15 @@ public:
     Waits for a process() call under way.
   */
   std::vector<PointEstimate> depths(const std::vector<long> &ids) const;
+  /*!
+    \brief The motion-log row at motion time `t_motion`, interpolated as an image's is (the poses and,
+    once pushed, the joint readings around it; never extrapolated), e.g. for a servo client's image
+    at camera time t: poseAt(t + time_offset). False when not covered: after the newest pose (or
+    reading), in a gap over max_pose_gap, or before the buffers' start (they keep only what the
+    images still queued may need, from the last measured image's time on). Throws yawdepth::Error for
+    a non-finite time.
+  */
+  bool poseAt(double t_motion, MotionSample &pose) const;
   /*! \brief The newest pose pushed, its yaw the newest joint reading when joint readings are pushed;
       false before any pose. */
   bool currentPose(MotionSample &pose) const;
@@ -176,6 +186,9 @@ private:
     Clock::time_point pushed;
   };
   struct Job;
+  /* The row at motion time tm: 0 covered (pose set), 1 not yet (wait), -1 never (before the first
+     kept, or in a gap over max_pose_gap). Under queue_mutex_. */
+  int motionAtLocked(double tm, MotionSample &pose) const;
   bool nextJob(Job &job);
   void noteTime(double t_motion);
   void appendPoseLocked(double t, const MotionSample &row);
