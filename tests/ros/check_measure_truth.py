@@ -2,7 +2,7 @@
 """measure's points against make_drive_bag's truth wall (standard library only).
 
     check_measure_truth.py TRUTH.json POINTS.csv MEASURE.err [--min-ok 200] [--min-within 0.9]
-                           [--max-median-rel 0.02]
+                           [--max-median-rel 0.02] [--label TEXT] [--stats FILE]
 
 POINTS.csv is `yawdepth measure`'s points output (docs/formats.md, "Points output"): one row per
 feature at its last frame, `xc, yc, zc` the point in that frame's camera (camera_optical, REP 103
@@ -46,6 +46,7 @@ def main():
     ap.add_argument("--min-ok", type=int, default=200)
     ap.add_argument("--min-within", type=float, default=0.9)
     ap.add_argument("--max-median-rel", type=float, default=0.02)
+    ap.add_argument("--stats", help="also write 'OK MEDIAN_REL WITHIN_FRACTION' to this file")
     a = ap.parse_args()
     try:
         truth = json.load(open(a.truth))
@@ -83,6 +84,9 @@ def main():
         print(f"{a.label}: no ok point (statuses: {statuses})")
         return 1
     med_dist, med_rel, frac = statistics.median(dist), statistics.median(rel), within / ok
+    if a.stats:
+        with open(a.stats, "w") as f:
+            f.write(f"{ok} {med_rel:.9g} {frac:.9g}\n")
     print(f"{a.label}: {len(rows)} points, {ok} ok (statuses: {statuses}); median |distance to wall| "
           f"{1000 * med_dist:.2f} mm; median relative depth error {100 * med_rel:.3f} %; "
           f"within 3 sigma {within}/{ok} = {100 * frac:.1f} %; median sigma_zc/zc "
