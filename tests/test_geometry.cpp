@@ -291,3 +291,27 @@ TEST_CASE("panJointFrame: +Y on the joint's axis; a joint turn is yawdepth's yaw
   CHECK_THROWS_AS(panJointFrame(Eigen::Vector3d(0, 0, std::nan("")), origin), Error);
   CHECK_THROWS_AS(panJointFrame(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, INFINITY)), Error);
 }
+
+TEST_CASE("TurnAxis: a frame turning about its +Y is on the pan axis; about another axis, or barely, it is not",
+          "[geometry]")
+{
+  auto turnAbout = [](const Eigen::Vector3d &axis, double step, int steps) {
+    TurnAxis t;
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    for (int k = 0; k < steps; ++k) {
+      const double sway = k % 2 ? 1.0 : -0.5; // back and forth: the sign alignment keeps one axis
+      const Eigen::Matrix3d next = R * Eigen::AngleAxisd(sway * step, axis.normalized()).toRotationMatrix();
+      t.add(R, next);
+      R = next;
+    }
+    return t;
+  };
+  const TurnAxis about_y = turnAbout(Eigen::Vector3d(0, 1, 0), 0.02, 40);
+  CHECK(std::abs(about_y.turned() - 40 * 0.75 * 0.02) < 1e-9);
+  CHECK(about_y.sum().normalized().cwiseAbs().isApprox(Eigen::Vector3d(0, 1, 0), 1e-9));
+  CHECK_FALSE(about_y.offPanAxis());
+  CHECK_FALSE(turnAbout(Eigen::Vector3d(0.2, 1, 0), 0.02, 40).offPanAxis()); // 11 degrees off: a floor's tilt
+  CHECK(turnAbout(Eigen::Vector3d(0, 0, 1), 0.02, 40).offPanAxis());          // a z-up body read with +Y
+  CHECK(turnAbout(Eigen::Vector3d(0.5, 1, 0), 0.02, 40).offPanAxis());        // 27 degrees off
+  CHECK_FALSE(turnAbout(Eigen::Vector3d(0, 0, 1), 0.001, 40).offPanAxis());   // 0.03 rad: too little to say
+}

@@ -150,6 +150,8 @@ TEST_CASE("OnlineMeasurer: streams in time order, every image measured at its in
   CHECK(c.median(c.rel_sigma) < 0.05); // not a vacuous 3 sigma
   CHECK(static_cast<double>(c.within) >= 0.9 * static_cast<double>(c.ok));
   CHECK(s.queued_images == 0);
+  CHECK(s.turned > 0.1);               // the heading sways about the vision frame's +Y: the pan axis
+  CHECK_FALSE(s.turns_off_pan_axis);
   // Bounded buffers: max_image_age (0.5 s) of 100 Hz poses and 50 Hz joint readings, and the one before.
   CHECK(s.buffered_poses <= kPosesKept);
   CHECK(s.buffered_joints <= kJointsKept);

@@ -99,19 +99,13 @@ struct Stamped {
 
 /* The vision frame of a pan joint in the body: +Y along `axis`, the origin at `origin` (the smallest
    rotation taking +Y to the axis). */
-/* The axis the vision frame turns about, in its own frame, summed over a pose series (each step's
-   rotation vector, its sign aligned with the running sum), and the total angle turned. */
-Eigen::Vector3d turnAxis(const std::vector<Stamped> &motion, double &total)
+Eigen::Matrix3d rotationOf(const vpHomogeneousMatrix &M)
 {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  total = 0;
-  for (std::size_t i = 1; i < motion.size(); ++i) {
-    const vpThetaUVector tu((motion[i - 1].M.inverse() * motion[i].M).getRotationMatrix());
-    const Eigen::Vector3d w(tu[0], tu[1], tu[2]);
-    total += w.norm();
-    sum += w.dot(sum) < 0 ? Eigen::Vector3d(-w) : w;
-  }
-  return sum;
+  Eigen::Matrix3d R;
+  for (unsigned i = 0; i < 3; ++i)
+    for (unsigned j = 0; j < 3; ++j)
+      R(i, j) = M[i][j];
+  return R;
 }
 
 /* Linear interpolation of a sorted (stamp, value) series; -1 before, 1 after, 2 in a gap, 0 ok. */
@@ -624,16 +618,12 @@ BagImportResult importBag(const BagImportOptions &o)
     bMc = bMv.inverse() * bMc;
     // A robot that turns about another axis than the pan's (REP 103's z-up base_link with the
     // default +Y): the data reveal it, so say so.
-    double turned = 0;
-    const Eigen::Vector3d axis = turnAxis(motion, turned);
-    constexpr double kMinTurn = 0.1;           // rad, over the window
-    constexpr double kMaxAxisAngle = M_PI / 9; // 20 degrees
-    if (turned > kMinTurn && axis.norm() > 0.5 * turned && std::abs(axis.y()) < std::cos(kMaxAxisAngle) * axis.norm()) {
-      Eigen::Matrix3d R;
-      for (unsigned i = 0; i < 3; ++i)
-        for (unsigned j = 0; j < 3; ++j)
-          R(i, j) = bMv[i][j];
-      const Eigen::Vector3d b = R * axis.normalized();
+    TurnAxis turn;
+    for (std::size_t i = 1; i < motion.size(); ++i)
+      turn.add(rotationOf(motion[i - 1].M), rotationOf(motion[i].M));
+    if (turn.offPanAxis()) {
+      const Eigen::Vector3d axis = turn.sum();
+      const Eigen::Vector3d b = rotationOf(bMv) * axis.normalized();
       char buf[160];
       std::snprintf(buf, sizeof buf, "(%.2f, %.2f, %.2f)", b.x(), b.y(), b.z());
       r.warnings.push_back(path + ": the body turns about " + buf + " in " + body_frame +

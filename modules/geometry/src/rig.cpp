@@ -149,6 +149,20 @@ vpHomogeneousMatrix wMv(const MotionSample &s) { return toVisp(s.rotation(), s.p
 
 vpHomogeneousMatrix wMc(const YawRig &rig, const MotionSample &s) { return wMv(s) * rig.vMc(s.yaw); }
 
+void TurnAxis::add(const Eigen::Matrix3d &R_prev, const Eigen::Matrix3d &R_cur)
+{
+  const Eigen::Vector3d w = logSO3(R_prev.transpose() * R_cur);
+  turned_ += w.norm();
+  sum_ += w.dot(sum_) < 0 ? Eigen::Vector3d(-w) : w;
+}
+
+bool TurnAxis::offPanAxis() const
+{
+  constexpr double kMinTurn = 0.1;           // rad: less says nothing
+  constexpr double kMaxAxisAngle = M_PI / 9; // 20 degrees
+  return turned_ > kMinTurn && sum_.norm() > 0.5 * turned_ && std::abs(sum_.y()) < std::cos(kMaxAxisAngle) * sum_.norm();
+}
+
 vpHomogeneousMatrix panJointFrame(const Eigen::Vector3d &axis, const Eigen::Vector3d &origin)
 {
   if (!axis.allFinite() || !(axis.norm() > 1e-9))

@@ -198,6 +198,8 @@ void OnlineMeasurer::appendPoseLocked(double t, const MotionSample &row)
   six_dof_ = row.six_dof;
   last_pose_t_ = t;
   noteTime(t);
+  if (!poses_.empty())
+    turn_.add(poses_.back().second.rotation(), row.rotation());
   poses_.emplace_back(t, row);
   trimBuffers();
 }
@@ -399,6 +401,9 @@ OnlineStats OnlineMeasurer::stats() const
   s.queued_images = images_.size();
   s.buffered_poses = poses_.size();
   s.buffered_joints = joints_.size();
+  s.turned = turn_.turned();
+  s.turn_axis = turn_.sum();
+  s.turns_off_pan_axis = joints_pushed_ && turn_.offPanAxis();
   return s;
 }
 

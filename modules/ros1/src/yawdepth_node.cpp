@@ -589,8 +589,24 @@ private:
       const yawdepth::OnlineStats st = m->stats();
       const std::size_t dropped = st.dropped_stale + st.dropped_uncovered + st.dropped_overflow;
       const bool dropping = dropped > last_dropped_;
-      s.level = dropping || bad_messages_ > 0 ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK;
-      s.message = dropping ? "images dropped" : bad_messages_ > 0 ? "bad messages" : "measuring";
+      // The body turning about another axis than the pan's: a wrong ~joint_axis (or mount), which the
+      // data reveal (the library's TurnAxis rule, as import-bag's warning).
+      std::string off_axis;
+      if (st.turns_off_pan_axis) {
+        const Eigen::Vector3d v_axis = st.turn_axis.normalized();
+        Eigen::Vector3d b_axis;
+        for (unsigned i = 0; i < 3; ++i)
+          b_axis[i] = bMv_[i][0] * v_axis[0] + bMv_[i][1] * v_axis[1] + bMv_[i][2] * v_axis[2];
+        char text[200];
+        std::snprintf(text, sizeof text, "the body turns about (%.2f, %.2f, %.2f) in the body frame, not about ~joint_axis",
+                      b_axis.x(), b_axis.y(), b_axis.z());
+        off_axis = text;
+        ROS_WARN_ONCE("yawdepth_node: %s: check ~joint_axis (REP 103's base_link: [0, 0, 1]) and ~joint_origin",
+                      off_axis.c_str());
+      }
+      s.level = dropping || bad_messages_ > 0 || !off_axis.empty() ? diagnostic_msgs::DiagnosticStatus::WARN
+                                                                    : diagnostic_msgs::DiagnosticStatus::OK;
+      s.message = !off_axis.empty() ? off_axis : dropping ? "images dropped" : bad_messages_ > 0 ? "bad messages" : "measuring";
       last_dropped_ = dropped;
       add("images pushed", std::to_string(st.images_pushed));
       add("images measured", std::to_string(st.images_measured));

@@ -209,6 +209,32 @@ private:
 */
 vpHomogeneousMatrix panJointFrame(const Eigen::Vector3d &axis, const Eigen::Vector3d &origin);
 
+/*!
+  \brief The axis a moving frame turns about, accumulated over its poses in order: each step's rotation
+  vector \f$ \log(R_{prev}^T R_{cur}) \f$ (in the frame before the step), its sign aligned with the
+  running sum, summed; and the total angle turned. A pan rig's vision frame on a robot driving on a
+  floor turns about its own +Y (the pan axis is vertical); offPanAxis() says when it clearly does not,
+  the sign of a wrong pan axis (import-bag's and the online measurer's warning).
+*/
+class TurnAxis {
+public:
+  /*! \brief One step, from the orientation \p R_prev to \p R_cur (in the world). */
+  void add(const Eigen::Matrix3d &R_prev, const Eigen::Matrix3d &R_cur);
+  /*! \brief The summed rotation vector (rad; its direction the axis, in the moving frame). */
+  const Eigen::Vector3d &sum() const { return sum_; }
+  /*! \brief The total angle turned (rad). */
+  double turned() const { return turned_; }
+  /*!
+    \brief Whether the frame turned more than 0.1 rad, mostly about one axis (the sum is over half the
+    total), and that axis is more than 20 degrees from its +Y.
+  */
+  bool offPanAxis() const;
+
+private:
+  Eigen::Vector3d sum_ = Eigen::Vector3d::Zero();
+  double turned_ = 0;
+};
+
 /*! \brief Pose of the vision frame in the world: \f$ {}^wT_v = [R_y(h) \;|\; (x, y, z)] \f$, or the 6-DoF pose. */
 vpHomogeneousMatrix wMv(const MotionSample &s);
 /*! \brief Pose of the camera in the world: \f$ {}^wT_c = {}^wT_v\, {}^vT_c(\theta) \f$. */

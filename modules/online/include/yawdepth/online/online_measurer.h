@@ -98,6 +98,12 @@ struct OnlineStats {
   std::size_t buffered_poses = 0;     //!< Poses kept now.
   std::size_t buffered_joints = 0;    //!< Joint readings kept now.
   double last_latency_ms = 0;         //!< The last measured image's OnlineFrame::latency_ms.
+  /*! With joint readings (a pan rig): the vision frame's turn so far (geometry/rig.h's TurnAxis over
+      the poses pushed). `turns_off_pan_axis` when it clearly turns about another axis than its +Y,
+      the pan axis: on a robot driving on a floor, the sign of a wrong pan axis (or mount). */
+  double turned = 0;                  //!< Total angle the vision frame turned (rad).
+  Eigen::Vector3d turn_axis = Eigen::Vector3d::Zero(); //!< Its summed rotation vector, in the vision frame (rad).
+  bool turns_off_pan_axis = false;    //!< TurnAxis::offPanAxis(), with joint readings only.
 };
 
 /*!
@@ -206,6 +212,7 @@ private:
   bool have_pose_form_ = false;
   bool six_dof_ = false;
   bool joints_pushed_ = false;
+  TurnAxis turn_; // over the poses pushed
   double last_image_t_, last_pose_t_, last_joint_t_, newest_t_;
   OnlineStats stats_;
 
