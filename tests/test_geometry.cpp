@@ -5,6 +5,8 @@
 #include <random>
 #include <visp3/core/vpPoseVector.h>
 #include <visp3/core/vpThetaUVector.h>
+#include <cmath>
+#include <yawdepth/error.h>
 #include <yawdepth/geometry/rig.h>
 
 using namespace yawdepth;
@@ -257,4 +259,35 @@ TEST_CASE("expSO3 and logSO3 are ViSP's theta-u, and expSO3's derivative at zero
   for (unsigned i = 0; i < 3; ++i)
     for (unsigned j = 0; j < 3; ++j)
       REQUIRE(expSO3<double>(tiny)(i, j) == Approx(Rt[i][j]).margin(1e-16));
+}
+
+TEST_CASE("panJointFrame: +Y on the joint's axis; a joint turn is yawdepth's yaw about the vision frame's +Y",
+          "[geometry]")
+{
+  const Eigen::Vector3d origin(0.1, -0.02, 0.3);
+  for (const Eigen::Vector3d &axis : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, -2), Eigen::Vector3d(0, 1, 0),
+                                      Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(1, 1, 1)}) {
+    const vpHomogeneousMatrix bMv = panJointFrame(axis, origin);
+    const Eigen::Vector3d a = axis.normalized();
+    for (unsigned i = 0; i < 3; ++i) {
+      CHECK(std::abs(bMv[i][1] - a[i]) < 1e-12); // the vision frame's +Y is the axis
+      CHECK(std::abs(bMv[i][3] - origin[i]) < 1e-12);
+    }
+    // A camera at pan q: bMv R_y(q) vMc(0) = (the body's right-handed rotation by q about the axis,
+    // through the origin) bMc(0).
+    const double q = 0.4;
+    const YawRig rig(Eigen::Vector3d(-0.05, 0.01, 0.02));
+    const vpHomogeneousMatrix turned = bMv * rig.vMc(q);
+    vpHomogeneousMatrix about(vpTranslationVector(origin[0], origin[1], origin[2]),
+                              vpThetaUVector(q * a[0], q * a[1], q * a[2]));
+    const vpHomogeneousMatrix expected =
+        about * vpHomogeneousMatrix(vpTranslationVector(-origin[0], -origin[1], -origin[2]), vpThetaUVector(0, 0, 0)) *
+        bMv * rig.vMc(0);
+    for (unsigned i = 0; i < 3; ++i)
+      for (unsigned j = 0; j < 4; ++j)
+        CHECK(std::abs(turned[i][j] - expected[i][j]) < 1e-12);
+  }
+  CHECK_THROWS_AS(panJointFrame(Eigen::Vector3d::Zero(), origin), Error);
+  CHECK_THROWS_AS(panJointFrame(Eigen::Vector3d(0, 0, std::nan("")), origin), Error);
+  CHECK_THROWS_AS(panJointFrame(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, INFINITY)), Error);
 }

@@ -16,6 +16,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <yawdepth/error.h>
+#include <yawdepth/online/frame_outputs.h>
 #include <yawdepth/online/online_measurer.h>
 
 #include "online_drive.h"
@@ -472,4 +473,97 @@ TEST_CASE("OnlineMeasurer: a pose stream as odometry increments, planar and 6-Do
     m.pushOdometryIncrement(0.0, vpHomogeneousMatrix()); // not after the previous pose: counted
     CHECK(m.stats().out_of_order_poses == 1);
   }
+}
+
+TEST_CASE("OnlineMeasurer: poseAt interpolates as an image's pose is, never extrapolates", "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
+  MotionSample p;
+  CHECK_FALSE(m.poseAt(0.5, p)); // nothing pushed
+  for (std::size_t i = 0; i < 60; ++i)
+    m.pushPose(d.poses[i].first, d.poses[i].second);
+  for (std::size_t i = 0; i < 25; ++i)
+    m.pushJoint(d.joints[i].first, d.joints[i].second);
+  // Covered (poses to 0.59 s, joints to 0.483 s, both kept from max_image_age = 0.5 s before the newest
+  // time): equal to the drive's reference interpolation.
+  for (double t : {0.1, 0.2, 0.3333, 0.47}) {
+    REQUIRE(m.poseAt(t, p));
+    const MotionSample e = drive::expectedPose(d, t);
+    CHECK(std::abs(p.x - e.x) < 1e-12);
+    CHECK(std::abs(p.heading - e.heading) < 1e-12);
+    CHECK(std::abs(p.yaw - e.yaw) < 1e-12);
+  }
+  CHECK_FALSE(m.poseAt(0.5, p));  // after the newest joint reading: not extrapolated
+  CHECK_FALSE(m.poseAt(0.7, p));  // after the newest pose
+  CHECK_FALSE(m.poseAt(-0.1, p)); // before the first pose
+  CHECK_FALSE(m.poseAt(0.05, p));  // more than max_image_age behind the newest time: trimmed
+  CHECK_THROWS_AS(m.poseAt(std::nan(""), p), Error);
+}
+
+TEST_CASE("frame outputs: the cloud lies on the wall in the world, its intervals hold it, counts and drawing",
+          "[online]")
+{
+  const OnlineDrive &d = onlineDrive();
+  OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
+  std::vector<OnlineFrame> frames;
+  for (const OnlineEvent &e : onlineEvents(d)) {
+    onlinePush(m, d, e);
+    for (OnlineFrame &f : m.process())
+      frames.push_back(std::move(f));
+  }
+  REQUIRE(frames.size() == d.images.size());
+  // The wall in the world: Z = kWallDepth in the first image's camera.
+  const vpHomogeneousMatrix c0Mw = wMc(d.rig, d.image_poses.front()).inverse();
+  auto wallZ = [&](const Eigen::Vector3d &w) {
+    return c0Mw[2][0] * w.x() + c0Mw[2][1] * w.y() + c0Mw[2][2] * w.z() + c0Mw[2][3];
+  };
+  constexpr double kIntervalSigmas = 2.0;
+  constexpr double kHoldFraction = 0.9; // a 2-sigma interval (along the ray) holds the wall for ~95 % of honest points
+  std::size_t points = 0, held = 0, on_wall = 0;
+  for (const OnlineFrame &f : frames) {
+    const std::vector<CloudPoint> cloud = frameCloud(f, d.rig, kIntervalSigmas);
+    std::size_t ok = 0;
+    for (const OnlinePoint &p : f.points)
+      ok += p.estimate.ok() ? 1 : 0;
+    REQUIRE(cloud.size() == ok);
+    std::size_t counted = 0;
+    for (const auto &[status, n] : countByStatus(f))
+      counted += n;
+    CHECK(counted == f.points.size());
+    const vpHomogeneousMatrix M = wMc(d.rig, f.pose);
+    for (const CloudPoint &c : cloud) {
+      ++points;
+      // w_P is wMc c_P; the interval's ends lie on the ray through the pixel.
+      for (unsigned i = 0; i < 3; ++i)
+        CHECK(std::abs(c.w_P[i] - (M[i][0] * c.c_P.x() + M[i][1] * c.c_P.y() + M[i][2] * c.c_P.z() + M[i][3])) < 1e-9);
+      CHECK(c.sigma_z > 0);
+      const double z_near = wallZ(c.w_near), z_far = wallZ(c.w_far);
+      held += (z_near - kWallDepth) * (z_far - kWallDepth) <= 0 ? 1 : 0;
+      on_wall += std::abs(wallZ(c.w_P) - kWallDepth) < 0.05 * kWallDepth ? 1 : 0;
+      const int col = static_cast<int>(std::lround(c.u)), row = static_cast<int>(std::lround(c.v));
+      if (col >= 0 && row >= 0 && col < f.image.cols && row < f.image.rows)
+        CHECK(c.intensity == f.image.at<unsigned char>(row, col));
+    }
+  }
+  INFO("points " << points << ", interval holds the wall " << held << ", within 5 % of the wall " << on_wall);
+  REQUIRE(points > 1000);
+  CHECK(static_cast<double>(held) >= kHoldFraction * static_cast<double>(points));
+  CHECK(static_cast<double>(on_wall) >= 0.99 * static_cast<double>(points));
+  CHECK_THROWS_AS(frameCloud(frames.back(), d.rig, -1.0), Error);
+
+  // The drawing: the image in colour, its size, a green circle at an ok point.
+  const OnlineFrame &last = frames.back();
+  const cv::Mat drawn = drawTracks(last);
+  REQUIRE(drawn.type() == CV_8UC3);
+  REQUIRE(drawn.size() == last.image.size());
+  std::size_t green = 0;
+  for (int r = 0; r < drawn.rows; ++r)
+    for (int c = 0; c < drawn.cols; ++c) {
+      const cv::Vec3b px = drawn.at<cv::Vec3b>(r, c);
+      green += px[1] > 150 && px[0] < 80 && px[2] < 80 ? 1 : 0;
+    }
+  CHECK(green > 100);
+  OnlineFrame empty;
+  CHECK_THROWS_AS(drawTracks(empty), Error);
 }

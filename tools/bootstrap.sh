@@ -24,6 +24,10 @@ packages=(g++ make cmake pkg-config libvisp-dev libopencv-dev libeigen3-dev liba
           python3-camera-calibration-parsers python3-camera-calibration python3-opencv python3-cv-bridge python3-image-geometry
           librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
           libtf2-dev python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-tf2-msgs
+          libroscpp-dev libimage-transport-dev libcv-bridge-dev libtf2-ros-dev libvisualization-msgs-dev
+          libdiagnostic-msgs-dev libstd-msgs-dev python3-gencpp ros-std-msgs
+          python3-roslaunch python3-rosmaster rosout python3-rospy python3-rostopic python3-rosparam
+          python3-rosservice python3-rostest python3-diagnostic-msgs python3-visualization-msgs
           libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev zstd python3-ament-package
           pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pytest python3-matplotlib)
 # The ROS 2 bag writers of the tests (tests/data/bags/writers: @mcap/core and ROS 2's CDR from the npm
@@ -138,7 +142,8 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 [ -x /usr/bin/llvm-symbolizer-14 ] && export ASAN_SYMBOLIZER_PATH=/usr/bin/llvm-symbolizer-14
 
-# The libraries and the tests (no command line, no benchmarks, no examples, no Python module: its
+# The libraries and the tests (no command line, no benchmarks, no examples, no ROS node (its logic is
+# the online module's, tested here; its wiring is tested in the Release tree), no Python module: its
 # tests would need the ASan runtime preloaded into python, and they run in the Release tree) built by clang with
 # AddressSanitizer + UndefinedBehaviorSanitizer, and the fuzz targets in the same tree. The
 # command-line contract runs in the Release tree only (its file parsers are fuzzed here): CI's
@@ -152,7 +157,7 @@ build_sanitized() {
         -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DYAWDEPTH_HOT_MODULE_OPTIONS=-O2 \
         -DYAWDEPTH_SANITIZE=address,undefined -DYAWDEPTH_BUILD_FUZZERS=ON \
         -DYAWDEPTH_BUILD_BENCHMARKS=OFF -DYAWDEPTH_BUILD_EXAMPLES=OFF -DYAWDEPTH_BUILD_TOOLS=OFF \
-        -DYAWDEPTH_PYTHON=OFF >/dev/null
+        -DYAWDEPTH_PYTHON=OFF -DYAWDEPTH_ROS1=OFF >/dev/null
   cmake --build "$asan_dir" -j "$jobs"
 }
 

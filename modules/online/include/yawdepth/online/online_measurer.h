@@ -166,7 +166,8 @@ public:
     once pushed, the joint readings around it; never extrapolated), e.g. for a servo client's image
     at camera time t: poseAt(t + time_offset). False when not covered: after the newest pose (or
     reading), in a gap over max_pose_gap, or before the buffers' start (they keep only what the
-    images still queued may need, from the last measured image's time on). Throws yawdepth::Error for
+    images still queued may need: from the last measured image's time, and from max_image_age
+    behind the newest time, on). Throws yawdepth::Error for
     a non-finite time.
   */
   bool poseAt(double t_motion, MotionSample &pose) const;
