@@ -10,17 +10,18 @@
 #     bash tests/ros/node_bag_test.sh
 #
 # Every step is bounded (BUDGET seconds in all, below ctest's TIMEOUT); every process started here
-# runs in its own process group and is stopped on every exit path (EXIT, INT, TERM): TERM to the
-# group, KILL after a few seconds, then reaped. Needs ROS 1 (roscore, rosbag, rosparam, rospy,
+# runs in its own process group and is stopped on every exit path (EXIT, INT, TERM): INT to the
+# group, TERM and KILL after a few seconds, then reaped. Needs ROS 1 (roscore, rosbag, rosparam, rospy,
 # sensor_msgs, diagnostic_msgs for /usr/bin/python3). KEEP=1 keeps the temporary folder.
 set -euo pipefail
 YAWDEPTH=${YAWDEPTH:?set YAWDEPTH}
 MAKE_DRIVE_BAG=${MAKE_DRIVE_BAG:?set MAKE_DRIVE_BAG}
 YAWDEPTH_NODE=${YAWDEPTH_NODE:?set YAWDEPTH_NODE}
 PYTHON=${PYTHON:-/usr/bin/python3}     # ROS 1's Debian packages are /usr/bin/python3's, not pyenv's
+export PYTHONDONTWRITEBYTECODE=1       # drive_truth.py imported: no __pycache__ in the source tree
 SECONDS_OF_DRIVE=${SECONDS_OF_DRIVE:-4}
-BUDGET=${BUDGET:-210}                  # s: the whole test, below ctest's TIMEOUT (240) for the cleanup
-STOP_GRACE=5                           # s: TERM to KILL when stopping a process group
+BUDGET=${BUDGET:-200}                  # s: the whole test but the cleanup (<= 4 x 6 s), below ctest's 240
+STOP_GRACE=4                           # s: INT to TERM when stopping a process group (TERM to KILL: 2 s)
 here=$(cd "$(dirname "$0")" && pwd)
 start_time=$SECONDS
 
@@ -34,18 +35,20 @@ declare -A pid_of=()
 started=()   # names, in start order; each pid is its process group's id (setsid)
 
 stop_all() {
-  local name pg i alive
+  local pg i sig grace
   for ((i = ${#started[@]} - 1; i >= 0; --i)); do  # the last started first: roscore last
     pg=${pid_of[${started[i]}]}
-    kill -TERM -- "-$pg" 2>/dev/null || true
-    for _ in $(seq $((STOP_GRACE * 10))); do
+    # INT as roslaunch stops nodes (roscpp shuts down cleanly on it), TERM, then KILL.
+    for sig in INT TERM KILL; do
       kill -0 -- "-$pg" 2>/dev/null || break
-      sleep 0.1
+      [ "$sig" = INT ] || echo "node_bag_test: ${started[i]} (group $pg) still running: $sig" >&2
+      kill "-$sig" -- "-$pg" 2>/dev/null || true
+      [ "$sig" = INT ] && grace=$STOP_GRACE || grace=2
+      for _ in $(seq $((grace * 10))); do
+        kill -0 -- "-$pg" 2>/dev/null || break
+        sleep 0.1
+      done
     done
-    if kill -0 -- "-$pg" 2>/dev/null; then
-      echo "node_bag_test: ${started[i]} (group $pg) still running after TERM + ${STOP_GRACE} s: KILL" >&2
-      kill -KILL -- "-$pg" 2>/dev/null || true
-    fi
     wait "$pg" 2>/dev/null || true
   done
   started=()
@@ -126,13 +129,36 @@ wait_for roscore 30 "master at $ROS_MASTER_URI" timeout 5 rosparam get /run_id
 timeout 10 rosparam set /use_sim_time true || die "rosparam set /use_sim_time true"
 
 # 3. The node with the drive's parameters (the bag's frames, the pan joint on /joint_states about
-# base_link's z through (0.1, 0, 0.3), the 30 ms camera latency; the noise as measure's).
-node_args=(image:=/camera/image_raw __name:=yawdepth_node
-           _image_transport:=compressed _motion:=tf _world_frame:=odom _body_frame:=base_link
-           _joint:=pan_joint _joint_axis:=[0,0,1] _joint_origin:=[0.1,0,0.3] _camera_latency:=0.03
-           _sigma_px:=0.5 _motion_noise:=absolute _sigma_odom:=1e-4 _sigma_rot:=1e-4 _sigma_yaw:=1e-4)
-echo "+ yawdepth_node ${node_args[*]}"
-start node "$YAWDEPTH_NODE" "${node_args[@]}"
+# base_link's z through (0.1, 0, 0.3), the 30 ms camera latency; the noise as measure's): through
+# the package's launch file when the node's folder is the build tree's ROS package (package.xml and
+# launch/ beside it: ROS_PACKAGE_PATH finds it, `roslaunch yawdepth yawdepth.launch`), else the
+# executable itself with rosrun's arguments. NODE_START=launch or direct chooses.
+node_dir=$(cd "$(dirname "$YAWDEPTH_NODE")" && pwd)
+if [ -z "${NODE_START:-}" ]; then
+  [ -f "$node_dir/package.xml" ] && [ -f "$node_dir/launch/yawdepth.launch" ] && NODE_START=launch || NODE_START=direct
+fi
+case $NODE_START in
+  launch)
+    # YAML 1.1 (roslaunch's) reads 1e-4 as a string: 1.0e-4.
+    printf '%s\n' "sigma_px: 0.5" "motion_noise: absolute" "sigma_odom: 1.0e-4" "sigma_rot: 1.0e-4" \
+      "sigma_yaw: 1.0e-4" >"$W/node_params.yaml"
+    launch_args=(use_sim_time:=true image:=/camera/image_raw image_transport:=compressed motion:=tf
+                 world_frame:=odom body_frame:=base_link joint:=pan_joint "joint_axis:=[0, 0, 1]"
+                 "joint_origin:=[0.1, 0, 0.3]" camera_latency:=0.03 "params:=$W/node_params.yaml")
+    export ROS_PACKAGE_PATH=$node_dir${ROS_PACKAGE_PATH:+:$ROS_PACKAGE_PATH}
+    echo "+ ROS_PACKAGE_PATH=$node_dir roslaunch --wait yawdepth yawdepth.launch ${launch_args[*]}"
+    start node roslaunch --wait yawdepth yawdepth.launch "${launch_args[@]}"
+    ;;
+  direct)
+    node_args=(image:=/camera/image_raw __name:=yawdepth_node
+               _image_transport:=compressed _motion:=tf _world_frame:=odom _body_frame:=base_link
+               _joint:=pan_joint _joint_axis:=[0,0,1] _joint_origin:=[0.1,0,0.3] _camera_latency:=0.03
+               _sigma_px:=0.5 _motion_noise:=absolute _sigma_odom:=1e-4 _sigma_rot:=1e-4 _sigma_yaw:=1e-4)
+    echo "+ yawdepth_node ${node_args[*]}"
+    start node "$YAWDEPTH_NODE" "${node_args[@]}"
+    ;;
+  *) die "NODE_START=$NODE_START: launch or direct" ;;
+esac
 
 # 4. The checker, connected to the node's clouds with the node subscribed to its inputs.
 start checker "$PYTHON" "$here/check_node_clouds.py" "$W/truth.json" --measure-stats "$W/measure_stats" \
@@ -155,9 +181,11 @@ finish checker 160
 checker_rc=$finished_rc
 cat "$W/checker.log"
 checker_shown=1
-if grep -E -q '\[(WARN|ERROR|FATAL)\]' "$W/node.log"; then
-  echo "yawdepth_node's warnings and errors (first 20):"
-  grep -E '\[(WARN|ERROR|FATAL)\]' "$W/node.log" | head -n 20 | sed 's/^/  | /'
+# The node's warnings and errors, from /rosout's log (its stdout may be lost to a signal).
+rosout_log=$(ls "$ROS_LOG_DIR"/latest/rosout.log 2>/dev/null || true)
+if [ -n "$rosout_log" ] && grep -E -q ' (WARN|ERROR|FATAL) /yawdepth_node ' "$rosout_log"; then
+  echo "yawdepth_node's warnings and errors on /rosout (first 20):"
+  grep -E ' (WARN|ERROR|FATAL) /yawdepth_node ' "$rosout_log" | head -n 20 | cut -c1-400 | sed 's/^/  | /'
 fi
 alive node || die "yawdepth_node exited before the end (see node.log)"
 [ "$checker_rc" -eq 0 ] || die "check_node_clouds.py: exit $checker_rc"
