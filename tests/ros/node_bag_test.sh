@@ -30,6 +30,15 @@ remaining() { echo $((BUDGET - (SECONDS - start_time))); }
 # The smaller of $1 and the budget left (at least 1 s).
 bounded() { local r; r=$(remaining); [ "$r" -lt "$1" ] && echo $((r > 1 ? r : 1)) || echo "$1"; }
 
+# ROS 1's tools and rospy's messages (tools/bootstrap.sh installs them with the node's packages).
+missing=()
+for tool in roscore rosparam rosbag roslaunch timeout setsid; do
+  command -v "$tool" >/dev/null || missing+=("$tool")
+done
+"$PYTHON" -c 'import rospy, rosgraph, sensor_msgs.point_cloud2, diagnostic_msgs.msg' 2>/dev/null \
+  || missing+=("$PYTHON: rospy sensor_msgs diagnostic_msgs")
+[ ${#missing[@]} -eq 0 ] || die "missing: ${missing[*]}"
+
 W=$(mktemp -d "${TMPDIR:-/tmp}/yawdepth_node_bag.XXXXXX") || exit 1
 declare -A pid_of=()
 started=()   # names, in start order; each pid is its process group's id (setsid)
@@ -81,6 +90,13 @@ start() {
   started+=("$name")
 }
 alive() { kill -0 "${pid_of[$1]}" 2>/dev/null; }
+# The services that must outlive every wait: roscore and the node, once started.
+services_up() {
+  local s
+  for s in roscore node; do
+    [ -z "${pid_of[$s]:-}" ] || alive "$s" || die "$s exited (see $s.log)"
+  done
+}
 # wait_for NAME SECONDS DESCRIPTION TEST...: polls TEST until it succeeds; fails when NAME exits or
 # after SECONDS (bounded by the budget).
 wait_for() {
@@ -88,6 +104,7 @@ wait_for() {
   local end=$((SECONDS + limit))
   until "$@" >/dev/null 2>&1; do
     alive "$name" || die "$name exited while waiting for $what (see $name.log)"
+    services_up
     [ "$SECONDS" -lt "$end" ] || die "no $what after ${limit} s"
     sleep 0.2
   done
@@ -96,6 +113,7 @@ wait_for() {
 finish() {
   local limit; limit=$(bounded "$2"); local end=$((SECONDS + limit))
   while alive "$1"; do
+    [ "$1" = checker ] || services_up  # the checker may outlive a node that died after the bag
     [ "$SECONDS" -lt "$end" ] || die "$1 still running after ${limit} s"
     sleep 0.2
   done
@@ -160,10 +178,12 @@ case $NODE_START in
   *) die "NODE_START=$NODE_START: launch or direct" ;;
 esac
 
-# 4. The checker, connected to the node's clouds with the node subscribed to its inputs.
+# 4. The checker, connected to the node's clouds with the node subscribed to its inputs; its own
+# deadline 10 s inside ours.
+checker_timeout=$(( $(bounded 150) - 10 ))
+[ "$checker_timeout" -ge 10 ] || checker_timeout=10
 start checker "$PYTHON" "$here/check_node_clouds.py" "$W/truth.json" --measure-stats "$W/measure_stats" \
-  --ready "$W/ready" --done "$W/done" --node /yawdepth_node --ready-timeout 45 \
-  --timeout "$(( $(bounded 150) - 10 ))"
+  --ready "$W/ready" --done "$W/done" --node /yawdepth_node --ready-timeout 45 --timeout "$checker_timeout"
 wait_for checker 50 "checker ready (connected to the node, the node subscribed)" test -e "$W/ready"
 alive node || die "yawdepth_node exited (see node.log)"
 
