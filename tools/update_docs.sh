@@ -71,6 +71,7 @@ franka-measure	examples/franka_measure.sh "$Y"
 ros-calibration	/usr/bin/python3 benchmarks/ros_calibration_compare.py --yawdepth "$Y" --data tests/data/franka-eye-in-hand
 corners-real	"$B/benchmarks/bench_corners" --set opencv-left:9x6:0.025:$(ls /usr/share/doc/opencv-doc/examples/data/left[01]*.jpg | paste -sd,) --set opencv-right:9x6:0.025:$(ls /usr/share/doc/opencv-doc/examples/data/right[01]*.jpg | paste -sd,)
 time-offset	"$B/benchmarks/bench_time_offset"
+online-latency	"$B/benchmarks/bench_online" --seconds 10 --max-features 300 --method window --warmup 5
 bag-drive	examples/bag_drive/run.sh "$Y"
 python-cost	/usr/bin/python3 benchmarks/bench_python.py --build "$B"
 EOF

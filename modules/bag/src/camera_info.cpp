@@ -10,23 +10,23 @@
 
 namespace yawdepth {
 
-CameraModel cameraFromCameraInfo(const CameraInfoMessage &ci, const std::string &topic)
+CameraModel cameraFromCameraInfo(const CameraInfoMessage &info, const std::string &topic)
 {
   const std::string what = topic + ": camera_info";
   bool zero = true;
-  for (double k : ci.K)
+  for (double k : info.K)
     zero = zero && k == 0.0;
   if (zero)
     throw Error(what + " has no calibration (K is all zero)");
-  for (double k : ci.K)
+  for (double k : info.K)
     if (!std::isfinite(k))
       throw Error(what + " has a K that is not finite");
-  const double fx = ci.K[0], fy = ci.K[4], cx = ci.K[2], cy = ci.K[5];
-  const std::string &m = ci.distortion_model;
+  const double fx = info.K[0], fy = info.K[4], cx = info.K[2], cy = info.K[5];
+  const std::string &m = info.distortion_model;
   CameraModel cam;
   try {
-    if (m == "plumb_bob" || (m.empty() && ci.D.size() <= 5) || m == "rational_polynomial") {
-      std::vector<double> d = ci.D;
+    if (m == "plumb_bob" || (m.empty() && info.D.size() <= 5) || m == "rational_polynomial") {
+      std::vector<double> d = info.D;
       while (d.size() > 5 && m == "plumb_bob" && d.back() == 0.0)
         d.pop_back();
       if (m == "rational_polynomial" && d.size() > 8) // k1 k2 p1 p2 k3 k4 k5 k6, then thin prism: must be 0
@@ -45,12 +45,12 @@ CameraModel cameraFromCameraInfo(const CameraInfoMessage &ci, const std::string 
         d.resize(4, 0.0);
       else if (d.size() == 6 || d.size() == 7)
         d.resize(8, 0.0);
-      cam = CameraModel::brown(fx, fy, cx, cy, d, ci.width, ci.height);
+      cam = CameraModel::brown(fx, fy, cx, cy, d, info.width, info.height);
     } else if (m == "equidistant") {
-      std::vector<double> d = ci.D;
+      std::vector<double> d = info.D;
       if (d.size() != 4)
         throw Error(what + ": equidistant with " + std::to_string(d.size()) + " coefficients, not 4");
-      cam = CameraModel::kannalaBrandt(fx, fy, cx, cy, d, ci.width, ci.height);
+      cam = CameraModel::kannalaBrandt(fx, fy, cx, cy, d, info.width, info.height);
     } else {
       throw Error(what + ": distortion model '" + m + "' (import-bag reads plumb_bob, rational_polynomial, equidistant)");
     }

@@ -62,6 +62,7 @@ std::vector<std::pair<Status, std::size_t>> countByStatus(const OnlineFrame &fra
   for (const OnlinePoint &p : frame.points)
     ++n[static_cast<int>(p.estimate.status)];
   std::vector<std::pair<Status, std::size_t>> out;
+  out.reserve(n.size());
   for (const auto &[s, k] : n)
     out.emplace_back(static_cast<Status>(s), k);
   return out;

@@ -96,7 +96,7 @@ struct OnlineMeasurer::Job {
 OnlineMeasurer::OnlineMeasurer(const CameraModel &camera, const YawRig &rig, const OnlineOptions &options)
     : camera_(camera), rig_(rig), options_(options), last_image_t_(-std::numeric_limits<double>::infinity()),
       last_pose_t_(-std::numeric_limits<double>::infinity()), last_joint_t_(-std::numeric_limits<double>::infinity()),
-      newest_t_(-std::numeric_limits<double>::infinity()), measured_t_(-std::numeric_limits<double>::infinity()),
+      newest_t_(-std::numeric_limits<double>::infinity()),
       tracker_(camera, options.klt), estimator_(camera, rig, onlineStreamOptions(options))
 {
   if (camera.width() == 0 || camera.height() == 0)
@@ -199,8 +199,7 @@ void OnlineMeasurer::appendPoseLocked(double t, const MotionSample &row)
   last_pose_t_ = t;
   noteTime(t);
   poses_.emplace_back(t, row);
-  // Bounded without process(): what an image older than max_image_age would need is never used.
-  onlineTrim(poses_, std::max(measured_t_, newest_t_ - options_.max_image_age));
+  trimBuffers();
 }
 
 void OnlineMeasurer::pushJoint(double t, double yaw)
@@ -218,13 +217,16 @@ void OnlineMeasurer::pushJoint(double t, double yaw)
   last_joint_t_ = t;
   noteTime(t);
   joints_.emplace_back(t, yaw);
-  onlineTrim(joints_, std::max(measured_t_, newest_t_ - options_.max_image_age));
+  trimBuffers();
 }
 
-void OnlineMeasurer::trimBuffers(double t_needed)
+// Bounded: an image (or a poseAt() time) more than max_image_age behind the newest time is never
+// measured, so the poses and joint readings before it are dropped (the one at or before it stays).
+void OnlineMeasurer::trimBuffers()
 {
-  onlineTrim(poses_, t_needed);
-  onlineTrim(joints_, t_needed);
+  const double keep_from = newest_t_ - options_.max_image_age;
+  onlineTrim(poses_, keep_from);
+  onlineTrim(joints_, keep_from);
 }
 
 // Under queue_mutex_: the motion-log row at motion time `tm` (see motionAtLocked's declaration).
@@ -291,8 +293,6 @@ bool OnlineMeasurer::nextJob(Job &job)
     images_.pop_front();
     job.pose = pose;
     job.taken = Clock::now();
-    measured_t_ = tm;
-    trimBuffers(tm); // later images are later in time
     return true;
   }
   return false;

@@ -179,16 +179,6 @@ vpHomogeneousMatrix toVisp(const geometry_msgs::Transform &t)
   return vpHomogeneousMatrix(vpTranslationVector(t.translation.x, t.translation.y, t.translation.z), q);
 }
 
-vpHomogeneousMatrix toVisp(const geometry_msgs::Pose &p)
-{
-  geometry_msgs::Transform t;
-  t.translation.x = p.position.x;
-  t.translation.y = p.position.y;
-  t.translation.z = p.position.z;
-  t.rotation = p.orientation;
-  return toVisp(t);
-}
-
 yawdepth::CameraInfoMessage toYawdepth(const sensor_msgs::CameraInfo &m)
 {
   yawdepth::CameraInfoMessage c;
@@ -210,7 +200,11 @@ public:
   YawdepthNode() : pnh_("~"), config_(readConfig(pnh_)), it_(nh_)
   {
     // Inputs.
-    const std::string image_topic = nh_.resolveName("image");
+    std::string image_topic = nh_.resolveName("image");
+    // `image:=/camera/image_raw/compressed` names the transport's topic: the image topic is its parent.
+    if (config_.image_transport == "compressed" && image_topic.size() > 11 &&
+        image_topic.compare(image_topic.size() - 11, 11, "/compressed") == 0)
+      image_topic = ros::names::parentNamespace(image_topic);
     if (config_.image_transport == "compressed") {
       // Debian ships no image_transport plugin for compressed images: the CompressedImage topic read
       // directly, decoded by OpenCV (what the plugin does).
@@ -309,18 +303,28 @@ private:
       ROS_WARN_THROTTLE(5, "yawdepth_node: waiting for %s (its child_frame_id is the body)", nh_.resolveName("odom").c_str());
       return nullptr;
     }
+    // The mount: fixed on /tf_static; or moving on /tf (a pan joint published by robot_state_publisher),
+    // when the camera's own pose is the motion (as import-bag does).
     vpHomogeneousMatrix bMc;
+    bool moving = false;
     if (body != camera_frame) {
       std::string why;
-      if (!tf_.canTransform(body, camera_frame, ros::Time(0), &why)) {
+      if (static_tf_.canTransform(body, camera_frame, ros::Time(0), &why)) {
+        bMc = toVisp(static_tf_.lookupTransform(body, camera_frame, ros::Time(0)).transform);
+      } else if (tf_.canTransform(body, camera_frame, ros::Time(0))) {
+        moving = true;
+        ROS_WARN("yawdepth_node: the camera's mount %s -> %s moves in /tf: the camera's own pose is the motion%s",
+                 body.c_str(), camera_frame.c_str(), config_.joint.empty() ? "" : " (~joint is not used)");
+      } else {
         ROS_WARN_THROTTLE(5, "yawdepth_node: waiting for the camera mount %s -> %s on /tf_static (%s)", body.c_str(),
                           camera_frame.c_str(), why.c_str());
         return nullptr;
       }
-      bMc = toVisp(tf_.lookupTransform(body, camera_frame, ros::Time(0)).transform);
     }
-    bMv_ = config_.joint.empty() ? vpHomogeneousMatrix() : yawdepth::panJointFrame(config_.joint_axis, config_.joint_origin);
-    const yawdepth::YawRig rig(bMv_.inverse() * bMc);
+    moving_mount_ = moving;
+    bMv_ = config_.joint.empty() || moving ? vpHomogeneousMatrix()
+                                           : yawdepth::panJointFrame(config_.joint_axis, config_.joint_origin);
+    const yawdepth::YawRig rig = moving ? yawdepth::YawRig() : yawdepth::YawRig(bMv_.inverse() * bMc);
     const yawdepth::CameraModel camera = yawdepth::cameraFromCameraInfo(*info_, camera_info_topic_);
     rig_ = std::make_unique<yawdepth::YawRig>(rig);
     camera_frame_ = camera_frame;
@@ -385,8 +389,10 @@ private:
 
   void onTfStatic(const tf2_msgs::TFMessageConstPtr &msg)
   {
-    for (const geometry_msgs::TransformStamped &t : msg->transforms)
+    for (const geometry_msgs::TransformStamped &t : msg->transforms) {
       tf_.setTransform(t, "tf_static", true);
+      static_tf_.setTransform(t, "tf_static", true);
+    }
   }
 
   /* /tf into the buffer; then the chain world -> body at each new stamp of this message where it
@@ -404,10 +410,12 @@ private:
         return;
       std::sort(stamps.begin(), stamps.end());
       stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
+      // The body's pose (the camera's with a moving mount).
+      const std::string &target = moving_mount_ ? camera_frame_ : config_.body_frame;
       for (const ros::Time &s : stamps) {
-        if (!tf_.canTransform(config_.world_frame, config_.body_frame, s))
+        if (!tf_.canTransform(config_.world_frame, target, s))
           continue; // not every link of the chain has a reading around it (yet)
-        const vpHomogeneousMatrix wMb = toVisp(tf_.lookupTransform(config_.world_frame, config_.body_frame, s).transform);
+        const vpHomogeneousMatrix wMb = toVisp(tf_.lookupTransform(config_.world_frame, target, s).transform);
         m->pushPose(s.toSec(), yawdepth::MotionSample::fromPose(0, wMb * bMv_));
       }
       wake();
@@ -427,10 +435,25 @@ private:
                       ", where the first message gave " + odom_body_ + " in " + odom_world_);
         }
       }
+      geometry_msgs::TransformStamped wTb; // into the buffer too: a moving mount is chained onto it
+      wTb.header = msg->header;
+      wTb.child_frame_id = msg->child_frame_id;
+      wTb.transform.translation.x = msg->pose.pose.position.x;
+      wTb.transform.translation.y = msg->pose.pose.position.y;
+      wTb.transform.translation.z = msg->pose.pose.position.z;
+      wTb.transform.rotation = msg->pose.pose.orientation;
+      const vpHomogeneousMatrix wMb = toVisp(wTb.transform);
+      tf_.setTransform(wTb, "odom", false);
       std::shared_ptr<yawdepth::OnlineMeasurer> m = measurer();
       if (!m)
         return;
-      m->pushPose(msg->header.stamp.toSec(), yawdepth::MotionSample::fromPose(0, toVisp(msg->pose.pose) * bMv_));
+      vpHomogeneousMatrix bMc;
+      if (moving_mount_) { // the mount at this pose's time, or no pose yet (its readings come later)
+        if (!tf_.canTransform(odom_body_, camera_frame_, msg->header.stamp))
+          return;
+        bMc = toVisp(tf_.lookupTransform(odom_body_, camera_frame_, msg->header.stamp).transform);
+      }
+      m->pushPose(msg->header.stamp.toSec(), yawdepth::MotionSample::fromPose(0, wMb * bMv_ * bMc));
       wake();
     });
   }
@@ -444,7 +467,7 @@ private:
           continue;
         if (i >= msg->position.size())
           throw Error(joint_sub_.getTopic() + ": joint " + config_.joint + " has no position");
-        if (m)
+        if (m && !moving_mount_) // with a moving mount, the pan is in the camera's pose already
           m->pushJoint(msg->header.stamp.toSec(), msg->position[i]);
         wake();
         return;
@@ -642,11 +665,13 @@ private:
   ros::Publisher points_pub_, points_camera_pub_, markers_pub_, diagnostics_pub_;
   ros::ServiceServer depths_srv_;
   std::string camera_info_topic_;
-  tf2_ros::Buffer tf_{ros::Duration(30.0)};
+  tf2_ros::Buffer tf_{ros::Duration(30.0)};   // /tf, /tf_static (and the odometry): the motion
+  tf2::BufferCore static_tf_{ros::Duration(10.0)}; // /tf_static alone: whether the mount is fixed
 
   mutable std::mutex init_mutex_; // the measurer and what it is made of
   std::optional<yawdepth::CameraInfoMessage> info_;
   std::string odom_body_, odom_world_, camera_frame_;
+  bool moving_mount_ = false;
   vpHomogeneousMatrix bMv_;
   std::unique_ptr<yawdepth::YawRig> rig_;
   std::shared_ptr<yawdepth::OnlineMeasurer> measurer_;

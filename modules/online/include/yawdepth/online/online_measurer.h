@@ -24,8 +24,8 @@
   measuring resumes when poses return. An image before the first pose (or joint reading) kept, or
   between two poses (or joint readings) further apart than `max_pose_gap`, can never be measured and
   is dropped (`dropped_uncovered`). The queue holds at most `max_queued_images` images (the oldest
-  dropped, `dropped_overflow`); poses and joint readings are kept only as far back as a queued or
-  future image may need. A timestamp not after its stream's previous one is counted and dropped (a
+  dropped, `dropped_overflow`); poses and joint readings are kept from max_image_age behind the newest
+  time on (what a queued image, or poseAt(), may still need). A timestamp not after its stream's previous one is counted and dropped (a
   live stream must not die on one glitch); a non-finite one is an Error.
 
   A pose stream may also come as odometry increments (pushOdometryIncrement()), composed onto the
@@ -165,9 +165,8 @@ public:
     \brief The motion-log row at motion time `t_motion`, interpolated as an image's is (the poses and,
     once pushed, the joint readings around it; never extrapolated), e.g. for a servo client's image
     at camera time t: poseAt(t + time_offset). False when not covered: after the newest pose (or
-    reading), in a gap over max_pose_gap, or before the buffers' start (they keep only what the
-    images still queued may need: from the last measured image's time, and from max_image_age
-    behind the newest time, on). Throws yawdepth::Error for
+    reading), in a gap over max_pose_gap, or more than max_image_age behind the newest time of any
+    stream (the buffers keep no more). Throws yawdepth::Error for
     a non-finite time.
   */
   bool poseAt(double t_motion, MotionSample &pose) const;
@@ -193,7 +192,7 @@ private:
   bool nextJob(Job &job);
   void noteTime(double t_motion);
   void appendPoseLocked(double t, const MotionSample &row);
-  void trimBuffers(double t_needed);
+  void trimBuffers();
 
   CameraModel camera_;
   YawRig rig_;
@@ -208,7 +207,6 @@ private:
   bool six_dof_ = false;
   bool joints_pushed_ = false;
   double last_image_t_, last_pose_t_, last_joint_t_, newest_t_;
-  double measured_t_; // the motion time of the last image taken by process()
   OnlineStats stats_;
 
   // Guarded by work_mutex_: the tracker and the estimator (process(), depths()).
