@@ -16,25 +16,10 @@ within 3 sigma. Prints the numbers; exit 0 when the bounds hold, 1 when not, 2 o
 """
 import argparse
 import csv
-import json
 import re
-import statistics
 import sys
 
-
-def rot(q):
-    x, y, z, w = q
-    return [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-
-
-def apply(R, v):
-    return [sum(R[i][j] * v[j] for j in range(3)) for i in range(3)]
-
-
-def dot(a, b):
-    return sum(x * y for x, y in zip(a, b))
+import drive_truth
 
 
 def main():
@@ -49,7 +34,7 @@ def main():
     ap.add_argument("--stats", help="also write 'OK MEDIAN_REL WITHIN_FRACTION' to this file")
     a = ap.parse_args()
     try:
-        truth = json.load(open(a.truth))
+        truth = drive_truth.load(a.truth)
         rows = list(csv.DictReader(open(a.points)))
         log = open(a.log).read()
     except (OSError, ValueError) as e:
@@ -61,36 +46,25 @@ def main():
         print(f"check_measure_truth: {a.label}: the import matched {m.group(1) if m else '?'} images, the truth has "
               f"{len(images)}: frame numbers would not be the truth's image indices", file=sys.stderr)
         return 2
-    n, d = truth["wall"]["n"], truth["wall"]["d"]
-    dist, rel, rel_sigma, err_sigma, within, statuses = [], [], [], [], 0, {}
+    errors, statuses = [], {}
     for r in rows:
         statuses[r["status"]] = statuses.get(r["status"], 0) + 1
         if r["status"] != "ok":
             continue
-        im = images[int(r["frame"])]
-        R, t = rot(im["q"]), im["t"]
         c_P = [float(r["xc"]), float(r["yc"]), float(r["zc"])]
-        zc, sigma = c_P[2], float(r["sigma_zc"])
-        odom_P = [p + q for p, q in zip(apply(R, c_P), t)]
-        dist.append(abs(dot(n, odom_P) - d))
-        ray = apply(R, [c_P[0] / zc, c_P[1] / zc, 1.0])  # the pixel's ray, camera z = 1, in odom
-        z_true = (d - dot(n, t)) / dot(n, ray)
-        rel.append(abs(zc - z_true) / z_true)
-        rel_sigma.append(sigma / zc)
-        err_sigma.append(abs(zc - z_true) / sigma)
-        within += abs(zc - z_true) <= 3 * sigma
-    ok = len(dist)
-    if ok == 0:
+        errors.append(drive_truth.camera_point_errors(truth, images[int(r["frame"])], c_P, float(r["sigma_zc"])))
+    if not errors:
         print(f"{a.label}: no ok point (statuses: {statuses})")
         return 1
-    med_dist, med_rel, frac = statistics.median(dist), statistics.median(rel), within / ok
+    ok, med_dist, med_rel, frac, med_rel_sigma, med_err_sigma = drive_truth.summary(errors)
+    within = sum(e["within"] for e in errors)
     if a.stats:
         with open(a.stats, "w") as f:
             f.write(f"{ok} {med_rel:.9g} {frac:.9g}\n")
     print(f"{a.label}: {len(rows)} points, {ok} ok (statuses: {statuses}); median |distance to wall| "
           f"{1000 * med_dist:.2f} mm; median relative depth error {100 * med_rel:.3f} %; "
           f"within 3 sigma {within}/{ok} = {100 * frac:.1f} %; median sigma_zc/zc "
-          f"{100 * statistics.median(rel_sigma):.3f} %, median |error|/sigma {statistics.median(err_sigma):.2f}")
+          f"{100 * med_rel_sigma:.3f} %, median |error|/sigma {med_err_sigma:.2f}")
     bad = []
     if ok < a.min_ok:
         bad.append(f"{ok} ok points < {a.min_ok}")

@@ -14,6 +14,7 @@ set -u
 YAWDEPTH=${YAWDEPTH:?set YAWDEPTH}
 MAKE_DRIVE_BAG=${MAKE_DRIVE_BAG:?set MAKE_DRIVE_BAG}
 SECONDS_OF_DRIVE=${SECONDS_OF_DRIVE:-4}
+export PYTHONDONTWRITEBYTECODE=1 # check_measure_truth.py imports drive_truth.py: no __pycache__ in the source tree
 here=$(cd "$(dirname "$0")" && pwd)
 W=$(mktemp -d "${TMPDIR:-/tmp}/yawdepth_drive_bag.XXXXXX") || exit 1
 trap '[ -n "${KEEP:-}" ] && echo "kept $W" || rm -rf "$W"' EXIT

@@ -1,0 +1,212 @@
+#!/usr/bin/env bash
+# The ROS 1 node's wiring tested as a ROS package is (issue 37): make_drive_bag's bag of the rendered
+# drive, `yawdepth measure --bag` on it (the batch reference, check_measure_truth.py --stats), then a
+# private roscore on a free port, /use_sim_time, yawdepth_node with the drive's parameters, the
+# checker (check_node_clouds.py: stamps, frames, accuracy against the truth and against measure,
+# latency per message, /diagnostics) and `rosbag play --clock` of the bag. The node's logic is the
+# library's and tested without ROS; this checks only the wiring.
+#
+#   YAWDEPTH=.../yawdepth MAKE_DRIVE_BAG=.../make_drive_bag YAWDEPTH_NODE=.../yawdepth_node \
+#     bash tests/ros/node_bag_test.sh
+#
+# Every step is bounded (BUDGET seconds in all, below ctest's TIMEOUT); every process started here
+# runs in its own process group and is stopped on every exit path (EXIT, INT, TERM): INT to the
+# group, TERM and KILL after a few seconds, then reaped. Needs ROS 1 (roscore, rosbag, rosparam, rospy,
+# sensor_msgs, diagnostic_msgs for /usr/bin/python3). KEEP=1 keeps the temporary folder.
+set -euo pipefail
+YAWDEPTH=${YAWDEPTH:?set YAWDEPTH}
+MAKE_DRIVE_BAG=${MAKE_DRIVE_BAG:?set MAKE_DRIVE_BAG}
+YAWDEPTH_NODE=${YAWDEPTH_NODE:?set YAWDEPTH_NODE}
+PYTHON=${PYTHON:-/usr/bin/python3}     # ROS 1's Debian packages are /usr/bin/python3's, not pyenv's
+export PYTHONDONTWRITEBYTECODE=1       # drive_truth.py imported: no __pycache__ in the source tree
+SECONDS_OF_DRIVE=${SECONDS_OF_DRIVE:-4}
+BUDGET=${BUDGET:-200}                  # s: the whole test but the cleanup (<= 4 x 6 s), below ctest's 240
+STOP_GRACE=4                           # s: INT to TERM when stopping a process group (TERM to KILL: 2 s)
+here=$(cd "$(dirname "$0")" && pwd)
+start_time=$SECONDS
+
+die() { echo "node_bag_test: FAIL: $*" >&2; exit 1; }
+remaining() { echo $((BUDGET - (SECONDS - start_time))); }
+# The smaller of $1 and the budget left (at least 1 s).
+bounded() { local r; r=$(remaining); [ "$r" -lt "$1" ] && echo $((r > 1 ? r : 1)) || echo "$1"; }
+
+# ROS 1's tools and rospy's messages (tools/bootstrap.sh installs them with the node's packages).
+missing=()
+for tool in roscore rosparam rosbag roslaunch timeout setsid; do
+  command -v "$tool" >/dev/null || missing+=("$tool")
+done
+"$PYTHON" -c 'import rospy, rosgraph, sensor_msgs.point_cloud2, diagnostic_msgs.msg' 2>/dev/null \
+  || missing+=("$PYTHON: rospy sensor_msgs diagnostic_msgs")
+[ ${#missing[@]} -eq 0 ] || die "missing: ${missing[*]}"
+
+W=$(mktemp -d "${TMPDIR:-/tmp}/yawdepth_node_bag.XXXXXX") || exit 1
+declare -A pid_of=()
+started=()   # names, in start order; each pid is its process group's id (setsid)
+
+stop_all() {
+  local pg i sig grace
+  for ((i = ${#started[@]} - 1; i >= 0; --i)); do  # the last started first: roscore last
+    pg=${pid_of[${started[i]}]}
+    # INT as roslaunch stops nodes (roscpp shuts down cleanly on it), TERM, then KILL.
+    for sig in INT TERM KILL; do
+      kill -0 -- "-$pg" 2>/dev/null || break
+      [ "$sig" = INT ] || echo "node_bag_test: ${started[i]} (group $pg) still running: $sig" >&2
+      kill "-$sig" -- "-$pg" 2>/dev/null || true
+      [ "$sig" = INT ] && grace=$STOP_GRACE || grace=2
+      for _ in $(seq $((grace * 10))); do
+        kill -0 -- "-$pg" 2>/dev/null || break
+        sleep 0.1
+      done
+    done
+    wait "$pg" 2>/dev/null || true
+  done
+  started=()
+}
+
+cleanup() {
+  local rc=$?
+  trap - EXIT INT TERM
+  set +e
+  stop_all
+  if [ "$rc" -ne 0 ]; then
+    for f in roscore node checker play; do
+      [ "$f" = checker ] && [ -n "${checker_shown:-}" ] && continue
+      [ -s "$W/$f.log" ] && { echo "--- $f.log (last 40 lines)"; tail -n 40 "$W/$f.log"; }
+    done
+  fi
+  if [ -n "${KEEP:-}" ]; then echo "kept $W"; else rm -rf "$W"; fi
+  exit "$rc"
+}
+trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
+
+# start NAME CMD...: CMD in its own process group (setsid: its pid is the group's id), output to
+# $W/NAME.log.
+start() {
+  local name=$1; shift
+  setsid "$@" >"$W/$name.log" 2>&1 </dev/null &
+  pid_of[$name]=$!
+  started+=("$name")
+}
+alive() { kill -0 "${pid_of[$1]}" 2>/dev/null; }
+# The services that must outlive every wait: roscore and the node, once started.
+services_up() {
+  local s
+  for s in roscore node; do
+    [ -z "${pid_of[$s]:-}" ] || alive "$s" || die "$s exited (see $s.log)"
+  done
+}
+# wait_for NAME SECONDS DESCRIPTION TEST...: polls TEST until it succeeds; fails when NAME exits or
+# after SECONDS (bounded by the budget).
+wait_for() {
+  local name=$1 limit; limit=$(bounded "$2"); local what=$3; shift 3
+  local end=$((SECONDS + limit))
+  until "$@" >/dev/null 2>&1; do
+    alive "$name" || die "$name exited while waiting for $what (see $name.log)"
+    services_up
+    [ "$SECONDS" -lt "$end" ] || die "no $what after ${limit} s"
+    sleep 0.2
+  done
+}
+# finish NAME SECONDS: waits for NAME to exit (bounded), its exit status in $finished_rc.
+finish() {
+  local limit; limit=$(bounded "$2"); local end=$((SECONDS + limit))
+  while alive "$1"; do
+    [ "$1" = checker ] || services_up  # the checker may outlive a node that died after the bag
+    [ "$SECONDS" -lt "$end" ] || die "$1 still running after ${limit} s"
+    sleep 0.2
+  done
+  finished_rc=0
+  wait "${pid_of[$1]}" || finished_rc=$?
+}
+
+# 1. The bag and measure's numbers on it (as drive_bag_measure.sh measures it).
+timeout "$(bounded 60)" "$MAKE_DRIVE_BAG" --out "$W/drive.bag" --truth "$W/truth.json" --seconds "$SECONDS_OF_DRIVE" \
+  || die "make_drive_bag"
+measure_args=(--bag "$W/drive.bag" --image-topic /camera/image_raw/compressed --tf odom:base_link
+              --joint-topic /joint_states --joint pan_joint --joint-axis 0,0,1 --joint-origin 0.1,0,0.3
+              --features klt --sigma-px 0.5 --motion-noise absolute --sigma-odom 1e-4 --sigma-rot 1e-4
+              --sigma-yaw 1e-4 --time-offset -0.03)
+echo "+ yawdepth measure ${measure_args[*]} --out points.csv"
+t0=$(date +%s.%N)
+timeout "$(bounded 90)" "$YAWDEPTH" measure "${measure_args[@]}" --out "$W/points.csv" 2>"$W/measure.err" \
+  || { sed 's/^/  | /' "$W/measure.err"; die "yawdepth measure --bag"; }
+echo "measure --bag: $(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }') s"
+"$PYTHON" "$here/check_measure_truth.py" "$W/truth.json" "$W/points.csv" "$W/measure.err" \
+  --label "measure --bag (reference)" --stats "$W/measure_stats" || die "measure's own accuracy (check_measure_truth.py)"
+
+# 2. A private master: a free port, ROS_HOME and the logs in the temporary folder, loopback only.
+port=$("$PYTHON" -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+export ROS_MASTER_URI=http://127.0.0.1:$port ROS_IP=127.0.0.1 ROS_HOME=$W/ros_home ROS_LOG_DIR=$W/ros_log
+unset ROS_HOSTNAME ROS_NAMESPACE
+mkdir -p "$ROS_HOME" "$ROS_LOG_DIR"
+echo "+ roscore -p $port"
+start roscore roscore -p "$port"
+wait_for roscore 30 "master at $ROS_MASTER_URI" timeout 5 rosparam get /run_id
+timeout 10 rosparam set /use_sim_time true || die "rosparam set /use_sim_time true"
+
+# 3. The node with the drive's parameters (the bag's frames, the pan joint on /joint_states about
+# base_link's z through (0.1, 0, 0.3), the 30 ms camera latency; the noise as measure's): through
+# the package's launch file when the node's folder is the build tree's ROS package (package.xml and
+# launch/ beside it: ROS_PACKAGE_PATH finds it, `roslaunch yawdepth yawdepth.launch`), else the
+# executable itself with rosrun's arguments. NODE_START=launch or direct chooses.
+node_dir=$(cd "$(dirname "$YAWDEPTH_NODE")" && pwd)
+if [ -z "${NODE_START:-}" ]; then
+  [ -f "$node_dir/package.xml" ] && [ -f "$node_dir/launch/yawdepth.launch" ] && NODE_START=launch || NODE_START=direct
+fi
+case $NODE_START in
+  launch)
+    # YAML 1.1 (roslaunch's) reads 1e-4 as a string: 1.0e-4.
+    printf '%s\n' "sigma_px: 0.5" "motion_noise: absolute" "sigma_odom: 1.0e-4" "sigma_rot: 1.0e-4" \
+      "sigma_yaw: 1.0e-4" >"$W/node_params.yaml"
+    launch_args=(use_sim_time:=true image:=/camera/image_raw image_transport:=compressed motion:=tf
+                 world_frame:=odom body_frame:=base_link joint:=pan_joint "joint_axis:=[0, 0, 1]"
+                 "joint_origin:=[0.1, 0, 0.3]" camera_latency:=0.03 "params:=$W/node_params.yaml")
+    export ROS_PACKAGE_PATH=$node_dir${ROS_PACKAGE_PATH:+:$ROS_PACKAGE_PATH}
+    echo "+ ROS_PACKAGE_PATH=$node_dir roslaunch --wait yawdepth yawdepth.launch ${launch_args[*]}"
+    start node roslaunch --wait yawdepth yawdepth.launch "${launch_args[@]}"
+    ;;
+  direct)
+    node_args=(image:=/camera/image_raw __name:=yawdepth_node
+               _image_transport:=compressed _motion:=tf _world_frame:=odom _body_frame:=base_link
+               _joint:=pan_joint _joint_axis:=[0,0,1] _joint_origin:=[0.1,0,0.3] _camera_latency:=0.03
+               _sigma_px:=0.5 _motion_noise:=absolute _sigma_odom:=1e-4 _sigma_rot:=1e-4 _sigma_yaw:=1e-4)
+    echo "+ yawdepth_node ${node_args[*]}"
+    start node "$YAWDEPTH_NODE" "${node_args[@]}"
+    ;;
+  *) die "NODE_START=$NODE_START: launch or direct" ;;
+esac
+
+# 4. The checker, connected to the node's clouds with the node subscribed to its inputs; its own
+# deadline 10 s inside ours.
+checker_timeout=$(( $(bounded 150) - 10 ))
+[ "$checker_timeout" -ge 10 ] || checker_timeout=10
+start checker "$PYTHON" "$here/check_node_clouds.py" "$W/truth.json" --measure-stats "$W/measure_stats" \
+  --ready "$W/ready" --done "$W/done" --node /yawdepth_node --ready-timeout 45 --timeout "$checker_timeout"
+wait_for checker 50 "checker ready (connected to the node, the node subscribed)" test -e "$W/ready"
+alive node || die "yawdepth_node exited (see node.log)"
+
+# 5. The bag at its own rate, its clock published (-d: a second after advertising before publishing,
+# so the node's and the checker's connections are up for the first messages).
+echo "+ rosbag play --clock -q -d 1 drive.bag"
+start play timeout -k 5 "$(bounded $((SECONDS_OF_DRIVE + 60)))" rosbag play --clock -q -d 1 "$W/drive.bag"
+finish play $((SECONDS_OF_DRIVE + 70))
+[ "$finished_rc" -eq 0 ] || die "rosbag play: exit $finished_rc"
+alive node || die "yawdepth_node exited during the bag (see node.log)"
+touch "$W/done"
+
+# 6. The checker's verdict.
+finish checker 160
+checker_rc=$finished_rc
+cat "$W/checker.log"
+checker_shown=1
+# The node's warnings and errors, from /rosout's log (its stdout may be lost to a signal).
+rosout_log=$(ls "$ROS_LOG_DIR"/latest/rosout.log 2>/dev/null || true)
+if [ -n "$rosout_log" ] && grep -E -q ' (WARN|ERROR|FATAL) /yawdepth_node ' "$rosout_log"; then
+  echo "yawdepth_node's warnings and errors on /rosout (first 20):"
+  grep -E ' (WARN|ERROR|FATAL) /yawdepth_node ' "$rosout_log" | head -n 20 | cut -c1-400 | sed 's/^/  | /'
+fi
+alive node || die "yawdepth_node exited before the end (see node.log)"
+[ "$checker_rc" -eq 0 ] || die "check_node_clouds.py: exit $checker_rc"
+echo "node_bag_test: passed ($((SECONDS - start_time)) s)"
