@@ -7,7 +7,10 @@
 # library's and tested without ROS; this checks only the wiring.
 #
 #   YAWDEPTH=.../yawdepth MAKE_DRIVE_BAG=.../make_drive_bag YAWDEPTH_NODE=.../yawdepth_node \
-#     bash tests/ros/node_bag_test.sh
+#     [SERVO_CLIENT=.../servo_depths_client] bash tests/ros/node_bag_test.sh
+#
+# With SERVO_CLIENT, examples/ros/servo_depths_client asks the node's ~depths service for its own
+# KLT features' depths every image, checked against the truth (check_servo_depths.py).
 #
 # Every step is bounded (BUDGET seconds in all, below ctest's TIMEOUT); every process started here
 # runs in its own process group and is stopped on every exit path (EXIT, INT, TERM): INT to the
@@ -69,7 +72,7 @@ cleanup() {
   set +e
   stop_all
   if [ "$rc" -ne 0 ]; then
-    for f in roscore node checker play; do
+    for f in roscore node checker client play; do
       [ "$f" = checker ] && [ -n "${checker_shown:-}" ] && continue
       [ -s "$W/$f.log" ] && { echo "--- $f.log (last 40 lines)"; tail -n 40 "$W/$f.log"; }
     done
@@ -187,6 +190,15 @@ start checker "$PYTHON" "$here/check_node_clouds.py" "$W/truth.json" --measure-s
 wait_for checker 50 "checker ready (connected to the node, the node subscribed)" test -e "$W/ready"
 alive node || die "yawdepth_node exited (see node.log)"
 
+# 4b. The servo client (examples/ros/servo_depths_client, when SERVO_CLIENT is set): ViSP's KLT in the
+# images, yawdepth_node's ~depths each image, its answers to a CSV (checked after the bag).
+if [ -n "${SERVO_CLIENT:-}" ]; then
+  echo "+ servo_depths_client image:=/camera/image_raw _image_transport:=compressed _csv:=depths.csv"
+  start client "$SERVO_CLIENT" image:=/camera/image_raw _image_transport:=compressed "_csv:=$W/depths.csv"
+  wait_for client 30 "servo client subscribed to the images" \
+    bash -c 'rostopic info /camera/image_raw/compressed | grep -q servo_depths_client'
+fi
+
 # 5. The bag at its own rate, its clock published (-d: a second after advertising before publishing,
 # so the node's and the checker's connections are up for the first messages).
 echo "+ rosbag play --clock -q -d 1 drive.bag"
@@ -195,6 +207,13 @@ finish play $((SECONDS_OF_DRIVE + 70))
 [ "$finished_rc" -eq 0 ] || die "rosbag play: exit $finished_rc"
 alive node || die "yawdepth_node exited during the bag (see node.log)"
 touch "$W/done"
+
+# The servo client stopped (INT: roscpp shuts down, its CSV flushed) and its answers checked.
+if [ -n "${SERVO_CLIENT:-}" ]; then
+  alive client || die "servo_depths_client exited during the bag (see client.log)"
+  kill -INT -- "-${pid_of[client]}" 2>/dev/null || true
+  finish client 15
+fi
 
 # 6. The checker's verdict.
 finish checker 160
@@ -209,4 +228,7 @@ if [ -n "$rosout_log" ] && grep -E -q ' (WARN|ERROR|FATAL) /yawdepth_node ' "$ro
 fi
 alive node || die "yawdepth_node exited before the end (see node.log)"
 [ "$checker_rc" -eq 0 ] || die "check_node_clouds.py: exit $checker_rc"
+if [ -n "${SERVO_CLIENT:-}" ]; then
+  "$PYTHON" "$here/check_servo_depths.py" "$W/truth.json" "$W/depths.csv" || die "the servo client's depths (check_servo_depths.py)"
+fi
 echo "node_bag_test: passed ($((SECONDS - start_time)) s)"

@@ -227,8 +227,9 @@ public:
     if (!config_.joint.empty())
       joint_sub_ = nh_.subscribe("joint_states", 200, &YawdepthNode::onJoints, this, ros::TransportHints().tcpNoDelay());
     // Outputs.
-    points_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("points", 5);
-    points_camera_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("points_camera", 5);
+    // Queues of a second of images: a subscriber catching up after a burst loses no cloud.
+    points_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("points", 30);
+    points_camera_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("points_camera", 30);
     if (config_.publish_markers)
       markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 5);
     tracks_pub_ = it_.advertise(pnh_.resolveName("tracks"), 2);
@@ -620,8 +621,10 @@ private:
       add("queued images", std::to_string(st.queued_images));
       std::vector<double> l = latencies_ms_;
       std::sort(l.begin(), l.end());
-      add("latency median (ms)", l.empty() ? "-" : std::to_string(l[l.size() / 2]));
-      add("latency max (ms)", l.empty() ? "-" : std::to_string(l.back()));
+      if (!l.empty()) { // none without an image measured in the period
+        add("latency median (ms)", std::to_string(l[l.size() / 2]));
+        add("latency max (ms)", std::to_string(l.back()));
+      }
       add("points published (last image)", std::to_string(last_cloud_));
       for (const auto &[status, n] : last_counts_)
         add(std::string("points ") + yawdepth::toString(status) + " (last image)", std::to_string(n));
