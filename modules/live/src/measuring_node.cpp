@@ -1,0 +1,294 @@
+#include <yawdepth/live/measuring_node.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+#include <yawdepth/error.h>
+
+namespace yawdepth {
+
+namespace {
+
+std::string nodeNumber(double v)
+{
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f", v);
+  return text;
+}
+
+// To 2 decimals, without a "-0.00".
+double nodeRounded(double v) { return std::round(v * 100.0) / 100.0 + 0.0; }
+
+} // namespace
+
+void MeasuringNodeSettings::validate() const
+{
+  if (motion != "tf" && motion != "odom")
+    throw Error("motion: '" + motion + "' (tf or odom)");
+  if (motion == "tf" && (world_frame.empty() || body_frame.empty() || world_frame == body_frame))
+    throw Error("world_frame, body_frame: two different frames are needed with motion tf");
+  try {
+    panJointFrame(joint_axis, joint_origin);
+  } catch (const Error &e) {
+    throw Error(std::string("joint_axis, joint_origin: ") + e.what());
+  }
+  if (!std::isfinite(camera_latency))
+    throw Error("camera_latency: must be finite");
+  if (!std::isfinite(interval_sigmas) || interval_sigmas < 0)
+    throw Error("interval_sigmas: must be finite and not negative");
+  if (!std::isfinite(diagnostics_period) || !(diagnostics_period > 0))
+    throw Error("diagnostics_period: must be positive");
+  if (!std::isfinite(service_wait) || service_wait < 0)
+    throw Error("service_wait: must be finite and not negative");
+  onlineOptions().validate();
+}
+
+OnlineOptions MeasuringNodeSettings::onlineOptions() const
+{
+  OnlineOptions o = online;
+  o.time_offset = -camera_latency; // the image stamped t was exposed at motion time t - latency
+  return o;
+}
+
+MeasuringNode::MeasuringNode(const MeasuringNodeSettings &settings) : settings_(settings)
+{
+  settings_.validate();
+}
+
+MeasuringNode::~MeasuringNode() = default;
+
+bool MeasuringNode::setCameraInfo(const CameraInfoMessage &info, const std::string &topic)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!info_) {
+    cameraFromCameraInfo(info, topic); // refused now, with its reason, when bad
+    info_ = info;
+    info_topic_ = topic;
+    return true;
+  }
+  return sameCalibration(*info_, info);
+}
+
+void MeasuringNode::setOdometryFrames(const std::string &world, const std::string &body, const std::string &topic)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (odom_body_.empty()) {
+    if (body.empty())
+      throw Error(topic + ": the odometry has no child_frame_id: the body frame is unknown");
+    odom_world_ = world;
+    odom_body_ = body;
+  } else if (body != odom_body_ || world != odom_world_) {
+    throw Error(topic + ": the pose of " + body + " in " + world + ", where the first message gave " + odom_body_ +
+                " in " + odom_world_);
+  }
+}
+
+std::string MeasuringNode::bodyFrame() const
+{
+  if (settings_.motion == "tf")
+    return settings_.body_frame;
+  std::lock_guard<std::mutex> lock(mutex_);
+  return odom_body_;
+}
+
+std::string MeasuringNode::worldFrame() const
+{
+  if (settings_.motion == "tf")
+    return settings_.world_frame;
+  std::lock_guard<std::mutex> lock(mutex_);
+  return odom_world_;
+}
+
+std::string MeasuringNode::start(const std::string &image_frame,
+                                 const std::function<MountLookup(const std::string &, const std::string &)> &mount)
+{
+  if (started_)
+    return "";
+  const std::string body = bodyFrame(), world = worldFrame();
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (started_)
+    return "";
+  if (!info_)
+    return "waiting for camera_info";
+  const std::string camera = settings_.camera_frame.empty() ? image_frame : settings_.camera_frame;
+  if (camera.empty())
+    throw Error("the images have no frame_id: set camera_frame");
+  if (body.empty())
+    return "waiting for the odometry (its child_frame_id is the body)";
+  // The mount: fixed on the static transforms; or moving (a pan link published from the joint
+  // states), when the camera's own pose is the motion, as import-bag does.
+  vpHomogeneousMatrix bMc;
+  bool moving = false;
+  if (body != camera) {
+    const MountLookup m = mount(body, camera);
+    if (m.fixed)
+      bMc = *m.fixed;
+    else if (m.moving)
+      moving = true;
+    else
+      return "waiting for the camera mount " + body + " -> " + camera + " on /tf_static" +
+             (m.why.empty() ? std::string() : " (" + m.why + ")");
+  }
+  const bool pan = !settings_.joint.empty() && !moving;
+  bMv_ = pan ? panJointFrame(settings_.joint_axis, settings_.joint_origin) : vpHomogeneousMatrix();
+  rig_ = std::make_unique<YawRig>(moving ? YawRig() : YawRig(bMv_.inverse() * bMc));
+  const CameraModel camera_model = cameraFromCameraInfo(*info_, info_topic_);
+  measurer_ = std::make_unique<OnlineMeasurer>(camera_model, *rig_, settings_.onlineOptions());
+  DepthProviderOptions po;
+  po.method = settings_.online.method;
+  po.noise = settings_.online.noise;
+  po.window = settings_.online.window;
+  provider_ = std::make_unique<DepthProvider>(camera_model, *rig_, po);
+  camera_frame_ = camera;
+  body_frame_ = body;
+  world_frame_ = world;
+  moving_mount_ = moving;
+  last_diagnostics_ = std::chrono::steady_clock::now();
+  started_ = true;
+  return "";
+}
+
+void MeasuringNode::pushImage(double t, const cv::Mat &gray)
+{
+  if (started_)
+    measurer_->pushImage(t, gray);
+}
+
+void MeasuringNode::pushMotion(double t, const vpHomogeneousMatrix &wMb, const vpHomogeneousMatrix &bMc_t)
+{
+  if (started_)
+    measurer_->pushPose(t, MotionSample::fromPose(0, wMb * bMv_ * bMc_t));
+}
+
+bool MeasuringNode::pushJointState(double t, const std::vector<std::string> &names, const std::vector<double> &positions,
+                                   const std::string &topic)
+{
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] != settings_.joint)
+      continue;
+    if (i >= positions.size())
+      throw Error(topic + ": joint " + settings_.joint + " has no position (" + std::to_string(positions.size()) +
+                  " positions for " + std::to_string(names.size()) + " names)");
+    if (started_ && !moving_mount_) // with a moving mount, the pan is in the camera's pose already
+      measurer_->pushJoint(t, positions[i]);
+    return true;
+  }
+  return false;
+}
+
+std::vector<OnlineFrame> MeasuringNode::process()
+{
+  if (!started_)
+    return {};
+  std::vector<OnlineFrame> frames = measurer_->process();
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const OnlineFrame &f : frames) {
+    ++frames_;
+    latencies_ms_.push_back(f.latency_ms);
+    last_counts_ = countByStatus(f);
+  }
+  return frames;
+}
+
+std::vector<CloudPoint> MeasuringNode::cloud(const OnlineFrame &frame) const
+{
+  return frameCloud(frame, *rig_, settings_.interval_sigmas);
+}
+
+NodeDiagnostics MeasuringNode::diagnostics()
+{
+  NodeDiagnostics d;
+  auto add = [&d](const std::string &k, const std::string &v) { d.values.emplace_back(k, v); };
+  if (!started_) {
+    d.warn = true;
+    d.message = "waiting for camera_info, the camera mount or the motion";
+    return d;
+  }
+  const OnlineStats st = measurer_->stats();
+  const std::size_t bad = bad_messages_;
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = std::chrono::steady_clock::now();
+  const double period = std::chrono::duration<double>(now - last_diagnostics_).count();
+  last_diagnostics_ = now;
+  const std::size_t dropped = st.dropped_stale + st.dropped_uncovered + st.dropped_overflow;
+  const bool dropping = dropped > last_dropped_;
+  last_dropped_ = dropped;
+  // The body turning about another axis than the pan's: a wrong joint_axis (or mount), which the data
+  // reveal (TurnAxis, as import-bag's warning).
+  std::string off_axis;
+  if (st.turns_off_pan_axis) {
+    const Eigen::Vector3d v_axis = st.turn_axis.normalized();
+    Eigen::Vector3d b_axis;
+    for (unsigned i = 0; i < 3; ++i)
+      b_axis[i] = bMv_[i][0] * v_axis[0] + bMv_[i][1] * v_axis[1] + bMv_[i][2] * v_axis[2];
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "the body turns about (%.2f, %.2f, %.2f) in the body frame, not about joint_axis: check "
+                  "joint_axis (REP 103's base_link: [0, 0, 1]) and joint_origin",
+                  nodeRounded(b_axis.x()), nodeRounded(b_axis.y()), nodeRounded(b_axis.z()));
+    off_axis = text;
+  }
+  d.warn = dropping || bad > 0 || !off_axis.empty();
+  d.message = !off_axis.empty() ? off_axis : dropping ? "images dropped" : bad > 0 ? "bad messages" : "measuring";
+  add("images pushed", std::to_string(st.images_pushed));
+  add("images measured", std::to_string(st.images_measured));
+  add("measured rate (Hz)", nodeNumber(double(frames_) / std::max(period, 1e-9)));
+  add("dropped stale", std::to_string(st.dropped_stale));
+  add("dropped uncovered", std::to_string(st.dropped_uncovered));
+  add("dropped overflow", std::to_string(st.dropped_overflow));
+  add("out of order (images, poses, joints)", std::to_string(st.out_of_order_images) + ", " +
+                                                  std::to_string(st.out_of_order_poses) + ", " +
+                                                  std::to_string(st.out_of_order_joints));
+  add("queued images", std::to_string(st.queued_images));
+  std::vector<double> l = latencies_ms_;
+  std::sort(l.begin(), l.end());
+  if (!l.empty()) { // none without an image measured in the period
+    add("latency median (ms)", nodeNumber(l[l.size() / 2]));
+    add("latency max (ms)", nodeNumber(l.back()));
+  }
+  std::size_t ok = 0;
+  for (const auto &[status, n] : last_counts_)
+    ok += status == Status::Ok ? n : 0;
+  add("points published (last image)", std::to_string(ok));
+  for (const auto &[status, n] : last_counts_)
+    add(std::string("points ") + toString(status) + " (last image)", std::to_string(n));
+  add("bad messages", std::to_string(bad));
+  frames_ = 0;
+  latencies_ms_.clear();
+  return d;
+}
+
+ServoDepthAnswer MeasuringNode::depths(const ServoDepthRequest &r)
+{
+  ServoDepthAnswer a;
+  try {
+    if (!started_)
+      throw Error("not measuring yet (waiting for camera_info, the camera mount or the motion)");
+    if (r.u.size() != r.ids.size() || r.v.size() != r.ids.size())
+      throw Error("ids, u and v must have the same length");
+    const double t_motion = r.t - settings_.camera_latency;
+    MotionSample pose;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(settings_.service_wait);
+    while (!measurer_->poseAt(t_motion, pose)) {
+      if (std::chrono::steady_clock::now() >= until)
+        throw Error("no motion around t = " + nodeNumber(r.t) +
+                    " s (the pose or joint streams do not cover it, within service_wait)");
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    std::vector<std::pair<long, vpImagePoint>> points;
+    points.reserve(r.ids.size());
+    for (std::size_t i = 0; i < r.ids.size(); ++i)
+      points.emplace_back(r.ids[i], vpImagePoint(r.v[i], r.u[i]));
+    std::lock_guard<std::mutex> lock(provider_mutex_);
+    provider_->update(pose, points);
+    for (long id : r.ids)
+      a.depths.push_back(provider_->info(id));
+  } catch (const std::exception &e) {
+    a.depths.clear();
+    a.error = e.what();
+  }
+  return a;
+}
+
+} // namespace yawdepth

@@ -1,0 +1,258 @@
+// yawdepth::MeasuringNode (issue 37): the ROS node's logic without ROS, on benchmarks/online_drive.h's
+// rendered drive: settings, start (camera_info, the odometry's frames, a fixed or moving mount), the
+// motion with a pan joint's vision frame, diagnostics (the wrong-axis warning among them), and the
+// servo depth requests.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <string>
+#include <vector>
+#include <yawdepth/error.h>
+#include <yawdepth/live/measuring_node.h>
+
+#include "online_drive.h"
+
+using namespace yawdepth;
+
+namespace {
+
+namespace drive = bench::drive;
+constexpr double kLiveSeconds = 3.0;
+constexpr unsigned kLiveSeed = 37;
+constexpr double kWithin3SigmaFraction = 0.9; // honest sigmas: about 99.7 % of ok points
+
+const drive::Drive &liveDrive()
+{
+  static const drive::Drive d = drive::renderDrive(kLiveSeconds, kLiveSeed);
+  return d;
+}
+
+CameraInfoMessage liveCameraInfo()
+{
+  CameraInfoMessage c;
+  c.width = drive::kWidth;
+  c.height = drive::kHeight;
+  c.distortion_model = "plumb_bob";
+  c.D = {0, 0, 0, 0, 0};
+  c.K = {drive::kFocal, 0, drive::kU0, 0, drive::kFocal, drive::kV0, 0, 0, 1};
+  c.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  c.P = {drive::kFocal, 0, drive::kU0, 0, 0, drive::kFocal, drive::kV0, 0, 0, 0, 1, 0};
+  return c;
+}
+
+/* The drive as a node sees it: the body is the drive's vision frame (the pan about its +Y through its
+   origin: joint_axis (0, 1, 0), joint_origin 0), the mount bMc the rig at yaw 0, images stamped
+   -kTimeOffset late (camera_latency = -0.02: the drive's camera clock runs behind). */
+MeasuringNodeSettings liveSettings()
+{
+  MeasuringNodeSettings s;
+  s.motion = "odom";
+  s.joint = "pan";
+  s.camera_latency = -drive::kTimeOffset;
+  s.online.noise.sigma_px = 0.5;
+  s.online.noise.motion_noise = MotionNoise::Absolute; // the render's poses are exact
+  s.online.noise.sigma_odom = 1e-4;
+  s.online.noise.sigma_rot = 1e-4;
+  s.online.noise.sigma_yaw = 1e-4;
+  s.online.klt.max_features = 200;
+  return s;
+}
+
+MountLookup fixedMount(const std::string &, const std::string &)
+{
+  MountLookup m;
+  m.fixed = liveDrive().rig.vMc(0.0);
+  return m;
+}
+
+/* Every stream of the drive pushed in time order; the frames measured. */
+std::vector<OnlineFrame> liveRun(MeasuringNode &node, std::vector<double> *image_times = nullptr)
+{
+  const drive::Drive &d = liveDrive();
+  std::vector<OnlineFrame> frames;
+  for (const drive::Event &e : drive::events(d)) {
+    if (e.stream == drive::Event::Pose) {
+      node.setOdometryFrames("odom", "base_link", "/odom");
+      node.pushMotion(d.poses[e.index].first, wMv(d.poses[e.index].second));
+    } else if (e.stream == drive::Event::Joint) {
+      CHECK(node.pushJointState(d.joints[e.index].first, {"wheel", "pan"}, {0.5, d.joints[e.index].second}, "/joint_states"));
+    } else {
+      CHECK(node.start("camera_optical", fixedMount).empty());
+      node.pushImage(d.image_times[e.index], d.images[e.index]);
+      if (image_times)
+        image_times->push_back(d.image_times[e.index]);
+    }
+    for (OnlineFrame &f : node.process())
+      frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
+} // namespace
+
+TEST_CASE("MeasuringNode: settings name the bad parameter; the measurer's time offset is -camera_latency", "[live]")
+{
+  MeasuringNodeSettings s;
+  s.camera_latency = 0.03;
+  CHECK(s.onlineOptions().time_offset == -0.03);
+  auto refused = [](MeasuringNodeSettings bad, const std::string &name) {
+    INFO(name);
+    try {
+      MeasuringNode node(bad);
+      FAIL("accepted");
+    } catch (const Error &e) {
+      CHECK(std::string(e.what()).rfind(name, 0) == 0);
+    }
+  };
+  s = MeasuringNodeSettings();
+  s.motion = "gps";
+  refused(s, "motion");
+  s = MeasuringNodeSettings();
+  s.body_frame = s.world_frame;
+  refused(s, "world_frame");
+  s = MeasuringNodeSettings();
+  s.joint_axis = Eigen::Vector3d::Zero();
+  refused(s, "joint_axis");
+  s = MeasuringNodeSettings();
+  s.camera_latency = NAN;
+  refused(s, "camera_latency");
+  s = MeasuringNodeSettings();
+  s.interval_sigmas = -1;
+  refused(s, "interval_sigmas");
+  s = MeasuringNodeSettings();
+  s.diagnostics_period = 0;
+  refused(s, "diagnostics_period");
+  s = MeasuringNodeSettings();
+  s.service_wait = -1;
+  refused(s, "service_wait");
+  s = MeasuringNodeSettings();
+  s.online.window = 1;
+  refused(s, "online options");
+}
+
+TEST_CASE("MeasuringNode: start waits for camera_info, the odometry's frames and the mount", "[live]")
+{
+  MeasuringNode node(liveSettings());
+  const auto no_mount = [](const std::string &, const std::string &) {
+    MountLookup m;
+    m.why = "frame camera_optical does not exist";
+    return m;
+  };
+  CHECK(node.start("camera_optical", no_mount) == "waiting for camera_info");
+  CameraInfoMessage bad = liveCameraInfo();
+  bad.K = {};
+  CHECK_THROWS_WITH(node.setCameraInfo(bad, "/camera/camera_info"), Catch::Contains("/camera/camera_info"));
+  CHECK(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+  CameraInfoMessage other = liveCameraInfo();
+  other.K[0] = 610;
+  CHECK_FALSE(node.setCameraInfo(other, "/camera/camera_info")); // kept the first: warn
+  CHECK(node.start("camera_optical", no_mount).rfind("waiting for the odometry", 0) == 0);
+  node.setOdometryFrames("odom", "base_link", "/odom");
+  CHECK_THROWS_WITH(node.setOdometryFrames("map", "base_link", "/odom"), Catch::Contains("/odom"));
+  CHECK(node.worldFrame() == "odom");
+  CHECK(node.bodyFrame() == "base_link");
+  const std::string waiting = node.start("camera_optical", no_mount);
+  CHECK(waiting.find("base_link -> camera_optical") != std::string::npos);
+  CHECK(waiting.find("does not exist") != std::string::npos);
+  CHECK_FALSE(node.started());
+  CHECK(node.diagnostics().warn);
+  CHECK(node.depths({}).error.rfind("not measuring yet", 0) == 0);
+  CHECK_THROWS_AS(node.start("", no_mount), Error); // no frame id and no camera_frame
+  // A mount moving in the transforms: the camera's own pose is the motion, the joint not used.
+  const auto moving = [](const std::string &, const std::string &) {
+    MountLookup m;
+    m.moving = true;
+    return m;
+  };
+  CHECK(node.start("camera_optical", moving).empty());
+  CHECK(node.started());
+  CHECK(node.movingMount());
+  CHECK(node.motionFrame() == "camera_optical");
+  CHECK(node.pushJointState(0.1, {"pan"}, {0.2}, "/joint_states")); // found, not pushed
+  CHECK_THROWS_WITH(node.pushJointState(0.1, {"pan"}, {}, "/joint_states"), Catch::Contains("/joint_states"));
+  CHECK_FALSE(node.pushJointState(0.1, {"wheel"}, {0.2}, "/joint_states"));
+}
+
+TEST_CASE("MeasuringNode: the drive through a node: clouds on the wall, diagnostics, servo depths", "[live]")
+{
+  MeasuringNode node(liveSettings());
+  REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+  std::vector<double> image_times;
+  const std::vector<OnlineFrame> frames = liveRun(node, &image_times);
+  const drive::Drive &d = liveDrive();
+  REQUIRE(node.started());
+  CHECK_FALSE(node.movingMount());
+  CHECK(node.cameraFrame() == "camera_optical");
+  CHECK(frames.size() + 1 >= d.images.size()); // all but, at most, the one before the first pose
+  std::size_t ok = 0, within = 0;
+  for (const OnlineFrame &f : frames) {
+    // The pose used is the drive's (its yaw the joint's, from the joint state's "pan").
+    const MotionSample e = drive::expectedPose(d, f.t + drive::kTimeOffset);
+    CHECK(std::abs(f.pose.yaw - e.yaw) < 1e-12);
+    for (const CloudPoint &c : node.cloud(f)) {
+      ++ok;
+      const double z = drive::wallDepth(d, f.pose, c.u, c.v);
+      within += std::abs(c.c_P.z() - z) <= 3 * c.sigma_z ? 1 : 0;
+    }
+  }
+  INFO("ok points " << ok << ", within 3 sigma " << within);
+  REQUIRE(ok > 1000);
+  CHECK(static_cast<double>(within) >= kWithin3SigmaFraction * static_cast<double>(ok));
+
+  const NodeDiagnostics diag = node.diagnostics();
+  auto value = [&diag](const std::string &key) {
+    for (const auto &[k, v] : diag.values)
+      if (k == key)
+        return v;
+    return std::string("(absent)");
+  };
+  // The first image came before the node's first pose (the node starts with it): dropped, warned.
+  INFO(diag.message);
+  CHECK(diag.warn == (value("dropped uncovered") != "0"));
+  CHECK((diag.message == "measuring" || diag.message == "images dropped"));
+  CHECK(std::stoul(value("dropped uncovered")) + frames.size() == d.images.size());
+  CHECK(value("dropped stale") == "0");
+  CHECK(value("images measured") == std::to_string(frames.size()));
+  CHECK(value("latency median (ms)") != "(absent)");
+  CHECK(value("bad messages") == "0");
+  CHECK(value("points ok (last image)") == value("points published (last image)"));
+  CHECK(node.diagnostics().values.size() < diag.values.size()); // a period without an image: no latency
+  CHECK(node.diagnostics().message == "measuring"); // nothing dropped since
+  node.noteBadMessage();
+  const NodeDiagnostics bad = node.diagnostics();
+  CHECK(bad.warn);
+  CHECK(bad.message == "bad messages");
+
+  // Servo requests: the last image's features (a client's own ids) at its stamp.
+  ServoDepthRequest r;
+  r.t = image_times.back();
+  for (const OnlinePoint &p : frames.back().points) {
+    r.ids.push_back(1000 + p.id);
+    r.u.push_back(p.u);
+    r.v.push_back(p.v);
+  }
+  const ServoDepthAnswer a = node.depths(r);
+  REQUIRE(a.error.empty());
+  REQUIRE(a.depths.size() == r.ids.size());
+  CHECK(a.depths.front().id == r.ids.front());
+  r.u.pop_back();
+  CHECK(node.depths(r).error == "ids, u and v must have the same length");
+  ServoDepthRequest future;
+  future.t = image_times.back() + 10.0; // no motion there: answered with the reason, after service_wait
+  CHECK(node.depths(future).error.rfind("no motion around", 0) == 0);
+}
+
+TEST_CASE("MeasuringNode: a pan axis the body does not turn about is warned about", "[live]")
+{
+  MeasuringNodeSettings s = liveSettings();
+  s.joint_axis = Eigen::Vector3d(0, 0, 1); // the drive's pan and heading turn about the body's +Y
+  MeasuringNode node(s);
+  REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+  liveRun(node);
+  const NodeDiagnostics diag = node.diagnostics();
+  INFO(diag.message);
+  CHECK(diag.warn);
+  // About the body's y (either sign: the sum's), not the joint_axis given.
+  CHECK((diag.message.rfind("the body turns about (0.00, 1.00, 0.00) in the body frame, not about joint_axis", 0) == 0 ||
+         diag.message.rfind("the body turns about (0.00, -1.00, 0.00) in the body frame, not about joint_axis", 0) == 0));
+}
