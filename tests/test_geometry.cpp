@@ -298,20 +298,29 @@ TEST_CASE("TurnAxis: a frame turning about its +Y is on the pan axis; about anot
   auto turnAbout = [](const Eigen::Vector3d &axis, double step, int steps) {
     TurnAxis t;
     Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    t.add(R);
     for (int k = 0; k < steps; ++k) {
       const double sway = k % 2 ? 1.0 : -0.5; // back and forth: the sign alignment keeps one axis
-      const Eigen::Matrix3d next = R * Eigen::AngleAxisd(sway * step, axis.normalized()).toRotationMatrix();
-      t.add(R, next);
-      R = next;
+      R = R * Eigen::AngleAxisd(sway * step, axis.normalized()).toRotationMatrix();
+      t.add(R);
     }
     return t;
   };
-  const TurnAxis about_y = turnAbout(Eigen::Vector3d(0, 1, 0), 0.02, 40);
-  CHECK(std::abs(about_y.turned() - 40 * 0.75 * 0.02) < 1e-9);
+  const TurnAxis about_y = turnAbout(Eigen::Vector3d(0, 1, 0), 0.05, 40); // every turn a step (> kKeyStep)
+  CHECK(std::abs(about_y.turned() - 40 * 0.75 * 0.05) < 1e-9);
   CHECK(about_y.sum().normalized().cwiseAbs().isApprox(Eigen::Vector3d(0, 1, 0), 1e-9));
   CHECK_FALSE(about_y.offPanAxis());
-  CHECK_FALSE(turnAbout(Eigen::Vector3d(0.2, 1, 0), 0.02, 40).offPanAxis()); // 11 degrees off: a floor's tilt
-  CHECK(turnAbout(Eigen::Vector3d(0, 0, 1), 0.02, 40).offPanAxis());          // a z-up body read with +Y
-  CHECK(turnAbout(Eigen::Vector3d(0.5, 1, 0), 0.02, 40).offPanAxis());        // 27 degrees off
-  CHECK_FALSE(turnAbout(Eigen::Vector3d(0, 0, 1), 0.001, 40).offPanAxis());   // 0.03 rad: too little to say
+  CHECK_FALSE(turnAbout(Eigen::Vector3d(0.2, 1, 0), 0.05, 40).offPanAxis()); // 11 degrees off: a floor's tilt
+  CHECK(turnAbout(Eigen::Vector3d(0, 0, 1), 0.05, 40).offPanAxis());          // a z-up body read with +Y
+  CHECK(turnAbout(Eigen::Vector3d(0.5, 1, 0), 0.05, 40).offPanAxis());        // 27 degrees off
+  CHECK_FALSE(turnAbout(Eigen::Vector3d(0, 0, 1), 0.001, 40).offPanAxis());   // under a step each: nothing to say
+  // A frame at rest with jitter (1e-4 rad per axis, roll and pitch larger, 10 s at 100 Hz): no steps,
+  // no warning, whatever the jitter's axes.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> jitter(0.0, 1e-4);
+  TurnAxis rest;
+  for (int k = 0; k < 1000; ++k)
+    rest.add(expSO3<double>(Eigen::Vector3d(3 * jitter(rng), jitter(rng), 3 * jitter(rng))));
+  CHECK(rest.turned() == 0.0);
+  CHECK_FALSE(rest.offPanAxis());
 }

@@ -175,7 +175,9 @@ TEST_CASE("MeasuringNode: start waits for camera_info, the odometry's frames and
 
 TEST_CASE("MeasuringNode: the drive through a node: clouds on the wall, diagnostics, servo depths", "[live]")
 {
-  MeasuringNode node(liveSettings());
+  MeasuringNodeSettings settings = liveSettings();
+  settings.online.max_image_age = 5.0; // the whole drive's motion kept: servo requests at any of its images
+  MeasuringNode node(settings);
   REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
   std::vector<double> image_times;
   const std::vector<OnlineFrame> frames = liveRun(node, &image_times);
@@ -235,24 +237,118 @@ TEST_CASE("MeasuringNode: the drive through a node: clouds on the wall, diagnost
   REQUIRE(a.error.empty());
   REQUIRE(a.depths.size() == r.ids.size());
   CHECK(a.depths.front().id == r.ids.front());
+  // One request is one control period: new ids, no depth yet (the prior, the provider's status).
+  for (const FeatureDepth &f : a.depths) {
+    CHECK_FALSE(f.converged);
+    CHECK(f.depth == liveSettings().providerOptions().prior_depth);
+  }
+  // Requests at the last images' stamps: the same ids converge to the wall.
+  std::size_t converged = 0, near_truth = 0;
+  for (std::size_t k = frames.size() - 12; k < frames.size(); ++k) {
+    ServoDepthRequest q;
+    q.t = frames[k].t;
+    std::vector<double> truth;
+    for (const OnlinePoint &p : frames[k].points) {
+      q.ids.push_back(1000 + p.id);
+      q.u.push_back(p.u);
+      q.v.push_back(p.v);
+      truth.push_back(drive::wallDepth(d, frames[k].pose, p.u, p.v));
+    }
+    const ServoDepthAnswer b = node.depths(q);
+    REQUIRE(b.error.empty());
+    if (k + 1 < frames.size())
+      continue;
+    for (std::size_t i = 0; i < b.depths.size(); ++i) {
+      if (!b.depths[i].converged)
+        continue;
+      ++converged;
+      near_truth += std::abs(b.depths[i].depth - truth[i]) <= 3 * b.depths[i].sigma ? 1 : 0;
+    }
+  }
+  INFO("converged " << converged << ", within 3 sigma " << near_truth);
+  CHECK(converged > 50);
+  CHECK(static_cast<double>(near_truth) >= kWithin3SigmaFraction * static_cast<double>(converged));
   r.u.pop_back();
   CHECK(node.depths(r).error == "ids, u and v must have the same length");
   ServoDepthRequest future;
-  future.t = image_times.back() + 10.0; // no motion there: answered with the reason, after service_wait
+  future.t = image_times.back() + 10.0; // no motion there yet: answered with the reason, after service_wait
   CHECK(node.depths(future).error.rfind("no motion around", 0) == 0);
+  ServoDepthRequest past;
+  past.t = image_times.front() - 1.0; // before the first pose: answered at once
+  CHECK(node.depths(past).error.rfind("no motion at t", 0) == 0);
 }
 
-TEST_CASE("MeasuringNode: a pan axis the body does not turn about is warned about", "[live]")
+TEST_CASE("MeasuringNode: a pan axis the body does not turn about is warned about, the right one is not", "[live]")
 {
-  MeasuringNodeSettings s = liveSettings();
-  s.joint_axis = Eigen::Vector3d(0, 0, 1); // the drive's pan and heading turn about the body's +Y
-  MeasuringNode node(s);
-  REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
-  liveRun(node);
-  const NodeDiagnostics diag = node.diagnostics();
-  INFO(diag.message);
-  CHECK(diag.warn);
-  // About the body's y (either sign: the sum's), not the joint_axis given.
-  CHECK((diag.message.rfind("the body turns about (0.00, 1.00, 0.00) in the body frame, not about joint_axis", 0) == 0 ||
-         diag.message.rfind("the body turns about (0.00, -1.00, 0.00) in the body frame, not about joint_axis", 0) == 0));
+  // The drive's poses with a wider heading sway (+-5 degrees: 0.6 rad turned in 3 s), and its joint
+  // readings; no images (the warning is about the motion alone).
+  const drive::Drive &d = liveDrive();
+  for (const bool right_axis : {true, false}) {
+    MeasuringNodeSettings s = liveSettings();
+    if (!right_axis)
+      s.joint_axis = Eigen::Vector3d(0, 0, 1); // the body turns about its +Y
+    MeasuringNode node(s);
+    REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+    node.setOdometryFrames("odom", "base_link", "/odom");
+    REQUIRE(node.start("camera_optical", fixedMount).empty());
+    for (const drive::Event &e : drive::events(d)) {
+      if (e.stream == drive::Event::Pose) {
+        MotionSample p = d.poses[e.index].second;
+        p.heading *= 5;
+        node.pushMotion(d.poses[e.index].first, wMv(p));
+      } else if (e.stream == drive::Event::Joint) {
+        node.pushJointState(d.joints[e.index].first, {"pan"}, {d.joints[e.index].second}, "/joint_states");
+      }
+    }
+    const NodeDiagnostics diag = node.diagnostics();
+    INFO("right axis " << right_axis << ": " << diag.message);
+    if (right_axis) {
+      CHECK_FALSE(diag.warn);
+      CHECK(diag.message == "measuring");
+    } else {
+      CHECK(diag.warn);
+      // About the body's y (either sign: the sum's), not the joint_axis given.
+      CHECK((diag.message.rfind("the body turns about (0.00, 1.00, 0.00) in the body frame, not about joint_axis", 0) == 0 ||
+             diag.message.rfind("the body turns about (0.00, -1.00, 0.00) in the body frame, not about joint_axis", 0) == 0));
+    }
+  }
+}
+
+TEST_CASE("MeasuringNode: a pan rig without joint readings, and image stamps far from the motion's, are warned about",
+          "[live]")
+{
+  const drive::Drive &d = liveDrive();
+  // The joint states never arrive (a wrong topic): no image is measured at the poses' yaw.
+  {
+    MeasuringNode node(liveSettings());
+    REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+    node.setOdometryFrames("odom", "base_link", "/odom");
+    REQUIRE(node.start("camera_optical", fixedMount).empty());
+    std::size_t measured = 0;
+    for (const drive::Event &e : drive::events(d)) {
+      if (e.stream == drive::Event::Pose)
+        node.pushMotion(d.poses[e.index].first, wMv(d.poses[e.index].second));
+      else if (e.stream == drive::Event::Image)
+        node.pushImage(d.image_times[e.index], d.images[e.index]);
+      measured += node.process().size();
+    }
+    CHECK(measured == 0);
+    const NodeDiagnostics diag = node.diagnostics();
+    CHECK(diag.warn);
+    CHECK(diag.message == "no readings of the pan joint pan yet: check the joint states topic and joint");
+  }
+  // The camera_latency's sign wrong: the images 2 x 0.5 s behind the motion, all dropped as stale.
+  {
+    MeasuringNodeSettings s = liveSettings();
+    s.camera_latency = 1.0;
+    MeasuringNode node(s);
+    REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+    const std::vector<OnlineFrame> frames = liveRun(node);
+    CHECK(frames.empty());
+    const NodeDiagnostics diag = node.diagnostics();
+    INFO(diag.message);
+    CHECK(diag.warn);
+    CHECK(diag.message.rfind("images dropped: their stamps are", 0) == 0);
+    CHECK(diag.message.find("behind the motion's: check camera_latency and the clocks") != std::string::npos);
+  }
 }

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <string>
 #include <vector>
 
@@ -52,7 +53,7 @@ public:
       if (!csv_)
         throw std::runtime_error("~csv: cannot write " + csv);
       csv_ << "stamp,id,u,v,depth,sigma,status,converged\n";
-      csv_.precision(10);
+      csv_.precision(10); // depths, sigmas and pixels
     }
     client_ = nh_.serviceClient<yawdepth::FeatureDepths>(service);
     const std::string image = nh_.resolveName("image");
@@ -102,7 +103,8 @@ private:
       return;
     ++images_;
     if (!started_ || tracker_.getNbFeatures() < features_ / 2) {
-      tracker_.initTracking(gray); // new ids: yawdepth_node starts new features for them
+      tracker_.initTracking(gray); // vpKltOpencv numbers its points from 0 again: a new generation
+      ++generation_;
       started_ = true;
     } else {
       tracker_.track(gray);
@@ -113,7 +115,8 @@ private:
       long id = 0;
       float u = 0, v = 0;
       tracker_.getFeature(i, id, u, v);
-      call.request.ids.push_back(id);
+      // Ids never reused: a re-detected point is a new feature for yawdepth_node.
+      call.request.ids.push_back(generation_ * kIdsPerGeneration + id);
       call.request.u.push_back(u);
       call.request.v.push_back(v);
     }
@@ -133,8 +136,9 @@ private:
       vpFeatureBuilder::create(s[i], camera_, vpImagePoint(call.request.v[i], call.request.u[i]));
       s[i].set_Z(r.depth[i]);
       converged += r.converged[i] ? 1 : 0;
-      if (csv_.is_open())
-        csv_ << header.stamp.toSec() << ',' << call.request.ids[i] << ',' << call.request.u[i] << ','
+      if (csv_.is_open()) // the stamp exactly, as sec.nsec
+        csv_ << header.stamp.sec << '.' << std::setw(9) << std::setfill('0') << header.stamp.nsec << std::setfill(' ')
+             << ',' << call.request.ids[i] << ',' << call.request.u[i] << ','
              << call.request.v[i] << ',' << r.depth[i] << ',' << r.sigma[i] << ',' << r.status[i] << ','
              << (r.converged[i] ? 1 : 0) << '\n';
     }
@@ -153,6 +157,8 @@ private:
   vpCameraParameters camera_;
   bool have_camera_ = false, started_ = false;
   int features_ = 20, max_images_ = 0, images_ = 0;
+  static constexpr long kIdsPerGeneration = 1000000;
+  long generation_ = 0;
   std::ofstream csv_;
 };
 

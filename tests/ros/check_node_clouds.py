@@ -350,6 +350,13 @@ def main():
         s = node_status[-1][1]
         info("last status", f"level {ord(s.level) if isinstance(s.level, (bytes, str)) else s.level} "
              f"'{s.name}': {s.message}")
+        # A correct run: no bad message, and none of the warnings the data can raise (a wrong pan axis,
+        # stamps far from the motion's, no joint readings) in any report.
+        bad = [kv.value for _, st in node_status for kv in st.values if kv.key == "bad messages"]
+        check("node's bad messages", bad[-1] if bad else "none reported", "0", bool(bad) and bad[-1] == "0")
+        mistakes = sorted({st.message for _, st in node_status
+                           if st.message.startswith(("the body turns", "images dropped: their stamps", "no readings"))})
+        check("node's warnings of a mistake", "; ".join(mistakes) or "none", "none", not mistakes)
 
     width = max(len(r[0]) for r in rows)
     print(f"{'check':<{width}}  {'':4}  value  [bound]")

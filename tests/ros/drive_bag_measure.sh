@@ -65,7 +65,7 @@ elif [ -s "$W/stats" ]; then
     --label "measure --bag (no --time-offset)" --stats "$W/stats_no_offset"
   read -r ok rel _ <"$W/stats"
   read -r ok0 rel0 _ <"$W/stats_no_offset" 2>/dev/null || ok0=0 rel0=1
-  if ! python3 -c "import sys; sys.exit(0 if $ok0 < $ok or $rel0 >= 2 * $rel else 1)"; then
+  if ! python3 -c "import sys; sys.exit(0 if $rel0 >= 2 * $rel else 1)"; then
     echo "FAIL: without --time-offset the wall is as good ($ok0 ok, median relative error $rel0; with it: $ok, $rel): is the latency in the bag?"
     failed=1
   else
@@ -73,8 +73,9 @@ elif [ -s "$W/stats" ]; then
   fi
 fi
 
-# The default axis (0,1,0 through base_link's origin): wrong for this robot; the import must say so,
-# or the wall must come out wrong. Either way not a silent, confident good answer.
+# The default axis (0,1,0 through base_link's origin): wrong for this robot; the import must say so
+# (the data reveal it: the body turns about its z), and the wall must not come out confidently good
+# without that warning.
 echo "+ yawdepth measure ${common[*]} --out points_default.csv (the default --joint-axis and --joint-origin)"
 "$YAWDEPTH" measure "${common[@]}" --out "$W/points_default.csv" 2>"$W/measure_default.err"
 rc=$?
@@ -95,8 +96,8 @@ else
 fi
 echo "default axis: turn-axis warning $([ $warned = 1 ] && echo printed || echo NOT printed); accuracy bounds \
 $([ $bad_accuracy = 1 ] && echo failed || echo held)"
-if [ $warned = 0 ] && [ $bad_accuracy = 0 ]; then
-  echo "FAIL: the default --joint-axis on a z-up base_link gave a good answer without a warning"
+if [ $warned = 0 ]; then
+  echo "FAIL: the default --joint-axis on a z-up base_link: no turn-axis warning"
   failed=1
 fi
 

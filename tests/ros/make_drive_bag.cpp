@@ -20,7 +20,7 @@
   explicit rotation matrices and checked, for every image, against yawdepth's wMc(rig, pose) up to one
   constant odomMw' (1e-9); the program exits 1 otherwise.
 
-  Topics (all stamps T0 + motion time, T0 = 1000 s; each message logged at its stamp plus a transport
+  Topics (all stamps T0 + motion time, T0 = 1.7e9 s (November 2023, an epoch time as a robot's); each message logged at its stamp plus a transport
   delay, 2 ms, images 5 ms; /tf_static logged at T0; written in log-time order, uncompressed chunks):
     /tf_static                    tf2_msgs/TFMessage base_link -> camera_optical at q = 0, latched, once
     /tf                           tf2_msgs/TFMessage odom -> base_link, 100 Hz
@@ -61,7 +61,7 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
 constexpr unsigned kSeed = 7;                   // held apart from test_online's 37 and bench_online's 11
-constexpr double kT0 = 1000.0;                  // s: the bag's time of the drive's motion time 0 (sim time)
+constexpr double kT0 = 1.7e9; // s: the bag's time of the drive's motion time 0 (an epoch time, as a real recording's)
 constexpr double kSmallDelay = 0.002;           // s: log time - stamp, all but the images
 constexpr double kImageDelay = 0.005;           // s: log time - stamp, images
 const Vector3d kJointOrigin(0.10, 0.0, 0.30);   // m: a point on the pan axis, in base_link

@@ -23,7 +23,7 @@ YAWDEPTH_NODE=${YAWDEPTH_NODE:?set YAWDEPTH_NODE}
 PYTHON=${PYTHON:-/usr/bin/python3}     # ROS 1's Debian packages are /usr/bin/python3's, not pyenv's
 export PYTHONDONTWRITEBYTECODE=1       # drive_truth.py imported: no __pycache__ in the source tree
 SECONDS_OF_DRIVE=${SECONDS_OF_DRIVE:-4}
-BUDGET=${BUDGET:-200}                  # s: the whole test but the cleanup (<= 4 x 6 s), below ctest's 240
+BUDGET=${BUDGET:-200}                  # s: the whole test but the cleanup (<= 5 x 6 s), below ctest's 240
 STOP_GRACE=4                           # s: INT to TERM when stopping a process group (TERM to KILL: 2 s)
 here=$(cd "$(dirname "$0")" && pwd)
 start_time=$SECONDS
@@ -168,7 +168,9 @@ case $NODE_START in
                  "joint_origin:=[0.1, 0, 0.3]" camera_latency:=0.03 "params:=$W/node_params.yaml")
     export ROS_PACKAGE_PATH=$node_dir${ROS_PACKAGE_PATH:+:$ROS_PACKAGE_PATH}
     echo "+ ROS_PACKAGE_PATH=$node_dir roslaunch --wait yawdepth yawdepth.launch ${launch_args[*]}"
-    start node roslaunch --wait yawdepth yawdepth.launch "${launch_args[@]}"
+    # roslaunch starts the node in its own session: its stop timeouts short, so that the node is
+    # stopped by roslaunch within this script's stop (INT, then TERM after STOP_GRACE).
+    start node roslaunch --wait --sigint-timeout 2 --sigterm-timeout 1 yawdepth yawdepth.launch "${launch_args[@]}"
     ;;
   direct)
     node_args=(image:=/camera/image_raw __name:=yawdepth_node

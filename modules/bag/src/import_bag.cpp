@@ -619,10 +619,10 @@ BagImportResult importBag(const BagImportOptions &o)
     // A robot that turns about another axis than the pan's (REP 103's z-up base_link with the
     // default +Y): the data reveal it, so say so.
     TurnAxis turn;
-    for (std::size_t i = 1; i < motion.size(); ++i)
-      turn.add(rotationOf(motion[i - 1].M), rotationOf(motion[i].M));
+    for (const Stamped &x : motion)
+      turn.add(rotationOf(x.M));
     if (turn.offPanAxis()) {
-      const Eigen::Vector3d axis = turn.sum();
+      const Eigen::Vector3d &axis = turn.sum();
       const Eigen::Vector3d b = rotationOf(bMv) * axis.normalized();
       char buf[160];
       std::snprintf(buf, sizeof buf, "(%.2f, %.2f, %.2f)", b.x(), b.y(), b.z());

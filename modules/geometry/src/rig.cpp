@@ -149,11 +149,19 @@ vpHomogeneousMatrix wMv(const MotionSample &s) { return toVisp(s.rotation(), s.p
 
 vpHomogeneousMatrix wMc(const YawRig &rig, const MotionSample &s) { return wMv(s) * rig.vMc(s.yaw); }
 
-void TurnAxis::add(const Eigen::Matrix3d &R_prev, const Eigen::Matrix3d &R_cur)
+void TurnAxis::add(const Eigen::Matrix3d &R)
 {
-  const Eigen::Vector3d w = logSO3(R_prev.transpose() * R_cur);
+  if (!have_key_) {
+    R_key_ = R;
+    have_key_ = true;
+    return;
+  }
+  const Eigen::Vector3d w = logSO3(R_key_.transpose() * R);
+  if (w.norm() <= kKeyStep)
+    return;
   turned_ += w.norm();
   sum_ += w.dot(sum_) < 0 ? Eigen::Vector3d(-w) : w;
+  R_key_ = R;
 }
 
 bool TurnAxis::offPanAxis() const

@@ -42,6 +42,16 @@ void MeasuringNodeSettings::validate() const
   if (!std::isfinite(service_wait) || service_wait < 0)
     throw Error("service_wait: must be finite and not negative");
   onlineOptions().validate();
+  providerOptions().validate();
+}
+
+DepthProviderOptions MeasuringNodeSettings::providerOptions() const
+{
+  DepthProviderOptions p; // its own noise model (per control period) and convergence rules
+  p.method = online.method;
+  p.window = online.window;
+  p.prior_depth = online.prior_depth;
+  return p;
 }
 
 OnlineOptions MeasuringNodeSettings::onlineOptions() const
@@ -109,13 +119,16 @@ std::string MeasuringNode::start(const std::string &image_frame,
   std::lock_guard<std::mutex> lock(mutex_);
   if (started_)
     return "";
-  if (!info_)
-    return "waiting for camera_info";
   const std::string camera = settings_.camera_frame.empty() ? image_frame : settings_.camera_frame;
-  if (camera.empty())
-    throw Error("the images have no frame_id: set camera_frame");
-  if (body.empty())
-    return "waiting for the odometry (its child_frame_id is the body)";
+  waiting_ = !info_           ? "waiting for camera_info"
+             : camera.empty() ? "the images have no frame_id: set camera_frame"
+             : body.empty()   ? "waiting for the odometry (its child_frame_id is the body)"
+                              : "";
+  if (!waiting_.empty()) {
+    if (camera.empty() && info_)
+      throw Error(waiting_);
+    return waiting_;
+  }
   // The mount: fixed on the static transforms; or moving (a pan link published from the joint
   // states), when the camera's own pose is the motion, as import-bag does.
   vpHomogeneousMatrix bMc;
@@ -127,19 +140,17 @@ std::string MeasuringNode::start(const std::string &image_frame,
     else if (m.moving)
       moving = true;
     else
-      return "waiting for the camera mount " + body + " -> " + camera + " on /tf_static" +
-             (m.why.empty() ? std::string() : " (" + m.why + ")");
+      return waiting_ = "waiting for the camera mount " + body + " -> " + camera + " on /tf_static" +
+                        (m.why.empty() ? std::string() : " (" + m.why + ")");
   }
   const bool pan = !settings_.joint.empty() && !moving;
   bMv_ = pan ? panJointFrame(settings_.joint_axis, settings_.joint_origin) : vpHomogeneousMatrix();
   rig_ = std::make_unique<YawRig>(moving ? YawRig() : YawRig(bMv_.inverse() * bMc));
   const CameraModel camera_model = cameraFromCameraInfo(*info_, info_topic_);
-  measurer_ = std::make_unique<OnlineMeasurer>(camera_model, *rig_, settings_.onlineOptions());
-  DepthProviderOptions po;
-  po.method = settings_.online.method;
-  po.noise = settings_.online.noise;
-  po.window = settings_.online.window;
-  provider_ = std::make_unique<DepthProvider>(camera_model, *rig_, po);
+  OnlineOptions o = settings_.onlineOptions();
+  o.wait_for_joints = pan; // never measured at the poses' yaw while the joint readings have not come
+  measurer_ = std::make_unique<OnlineMeasurer>(camera_model, *rig_, o);
+  provider_ = std::make_unique<DepthProvider>(camera_model, *rig_, settings_.providerOptions());
   camera_frame_ = camera;
   body_frame_ = body;
   world_frame_ = world;
@@ -191,23 +202,29 @@ std::vector<OnlineFrame> MeasuringNode::process()
   return frames;
 }
 
-std::vector<CloudPoint> MeasuringNode::cloud(const OnlineFrame &frame) const
+std::vector<CloudPoint> MeasuringNode::cloud(const OnlineFrame &frame)
 {
-  return frameCloud(frame, *rig_, settings_.interval_sigmas);
+  std::vector<CloudPoint> c = frameCloud(frame, *rig_, settings_.interval_sigmas);
+  std::lock_guard<std::mutex> lock(mutex_);
+  last_cloud_ = c.size();
+  return c;
 }
 
 NodeDiagnostics MeasuringNode::diagnostics()
 {
   NodeDiagnostics d;
   auto add = [&d](const std::string &k, const std::string &v) { d.values.emplace_back(k, v); };
+  const std::size_t bad_total = bad_messages_;
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::size_t bad = bad_total - last_bad_; // in this period
+  last_bad_ = bad_total;
   if (!started_) {
     d.warn = true;
-    d.message = "waiting for camera_info, the camera mount or the motion";
+    d.message = waiting_.empty() ? "waiting for the first image" : waiting_;
+    add("bad messages", std::to_string(bad_total));
     return d;
   }
   const OnlineStats st = measurer_->stats();
-  const std::size_t bad = bad_messages_;
-  std::lock_guard<std::mutex> lock(mutex_);
   const auto now = std::chrono::steady_clock::now();
   const double period = std::chrono::duration<double>(now - last_diagnostics_).count();
   last_diagnostics_ = now;
@@ -229,8 +246,18 @@ NodeDiagnostics MeasuringNode::diagnostics()
                   nodeRounded(b_axis.x()), nodeRounded(b_axis.y()), nodeRounded(b_axis.z()));
     off_axis = text;
   }
-  d.warn = dropping || bad > 0 || !off_axis.empty();
-  d.message = !off_axis.empty() ? off_axis : dropping ? "images dropped" : bad > 0 ? "bad messages" : "measuring";
+  // The mistakes the streams reveal: no joint readings for a pan rig; image stamps far from the
+  // motion's (a wrong camera_latency, another clock).
+  std::string reason = off_axis;
+  const bool pan = !settings_.joint.empty() && !moving_mount_;
+  if (reason.empty() && pan && st.joint_readings == 0 && st.images_pushed > 0)
+    reason = "no readings of the pan joint " + settings_.joint + " yet: check the joint states topic and joint";
+  const double ahead = st.image_ahead_of_poses, max_age = settings_.online.max_image_age;
+  if (reason.empty() && dropping && std::isfinite(ahead) && std::abs(ahead) > max_age)
+    reason = "images dropped: their stamps are " + nodeNumber(std::abs(ahead)) + " s " +
+             (ahead > 0 ? "ahead of" : "behind") + " the motion's: check camera_latency and the clocks";
+  d.warn = dropping || bad > 0 || !reason.empty();
+  d.message = !reason.empty() ? reason : dropping ? "images dropped" : bad > 0 ? "bad messages" : "measuring";
   add("images pushed", std::to_string(st.images_pushed));
   add("images measured", std::to_string(st.images_measured));
   add("measured rate (Hz)", nodeNumber(double(frames_) / std::max(period, 1e-9)));
@@ -247,13 +274,13 @@ NodeDiagnostics MeasuringNode::diagnostics()
     add("latency median (ms)", nodeNumber(l[l.size() / 2]));
     add("latency max (ms)", nodeNumber(l.back()));
   }
-  std::size_t ok = 0;
-  for (const auto &[status, n] : last_counts_)
-    ok += status == Status::Ok ? n : 0;
-  add("points published (last image)", std::to_string(ok));
+  add("joint readings", std::to_string(st.joint_readings));
+  if (std::isfinite(ahead))
+    add("image stamps ahead of the motion (s)", nodeNumber(ahead));
+  add("points published (last image)", std::to_string(last_cloud_));
   for (const auto &[status, n] : last_counts_)
     add(std::string("points ") + toString(status) + " (last image)", std::to_string(n));
-  add("bad messages", std::to_string(bad));
+  add("bad messages", std::to_string(bad_total));
   frames_ = 0;
   latencies_ms_.clear();
   return d;
@@ -267,13 +294,18 @@ ServoDepthAnswer MeasuringNode::depths(const ServoDepthRequest &r)
       throw Error("not measuring yet (waiting for camera_info, the camera mount or the motion)");
     if (r.u.size() != r.ids.size() || r.v.size() != r.ids.size())
       throw Error("ids, u and v must have the same length");
-    const double t_motion = r.t - settings_.camera_latency;
+    const double t_motion = r.t + measurer_->options().time_offset;
     MotionSample pose;
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(settings_.service_wait);
-    while (!measurer_->poseAt(t_motion, pose)) {
+    for (;;) {
+      const OnlineMeasurer::Coverage c = measurer_->poseAt(t_motion, pose);
+      if (c == OnlineMeasurer::Coverage::Covered)
+        break;
+      if (c == OnlineMeasurer::Coverage::Never)
+        throw Error("no motion at t = " + nodeNumber(r.t) + " s: older than the motion kept (max_image_age), or in a gap");
       if (std::chrono::steady_clock::now() >= until)
         throw Error("no motion around t = " + nodeNumber(r.t) +
-                    " s (the pose or joint streams do not cover it, within service_wait)");
+                    " s yet (the pose or joint streams do not cover it, within service_wait)");
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
     std::vector<std::pair<long, vpImagePoint>> points;

@@ -130,6 +130,8 @@ void OnlineMeasurer::pushImage(double t, const cv::Mat &gray)
   }
   last_image_t_ = t;
   noteTime(t + options_.time_offset);
+  if (!poses_.empty())
+    stats_.image_ahead_of_poses = t + options_.time_offset - last_pose_t_;
   if (images_.size() >= static_cast<std::size_t>(options_.max_queued_images)) {
     images_.pop_front();
     ++stats_.dropped_overflow;
@@ -198,8 +200,7 @@ void OnlineMeasurer::appendPoseLocked(double t, const MotionSample &row)
   six_dof_ = row.six_dof;
   last_pose_t_ = t;
   noteTime(t);
-  if (!poses_.empty())
-    turn_.add(poses_.back().second.rotation(), row.rotation());
+  turn_.add(row.rotation());
   poses_.emplace_back(t, row);
   trimBuffers();
 }
@@ -216,6 +217,7 @@ void OnlineMeasurer::pushJoint(double t, double yaw)
     return;
   }
   joints_pushed_ = true;
+  ++stats_.joint_readings;
   last_joint_t_ = t;
   noteTime(t);
   joints_.emplace_back(t, yaw);
@@ -240,7 +242,7 @@ int OnlineMeasurer::motionAtLocked(double tm, MotionSample &pose) const
   if (pose_at != 0)
     return pose_at;
   pose = lo == hi ? poses_[lo].second : interpolateMotion(poses_[lo].second, poses_[hi].second, s);
-  if (!joints_pushed_)
+  if (!joints_pushed_ && !options_.wait_for_joints)
     return 0;
   std::size_t jlo = 0, jhi = 0;
   double js = 0;
@@ -258,16 +260,17 @@ int OnlineMeasurer::motionAtLocked(double tm, MotionSample &pose) const
   return 0;
 }
 
-bool OnlineMeasurer::poseAt(double t_motion, MotionSample &pose) const
+OnlineMeasurer::Coverage OnlineMeasurer::poseAt(double t_motion, MotionSample &pose) const
 {
   if (!std::isfinite(t_motion))
     throw Error("online measurer: poseAt: the time is not finite");
   std::lock_guard<std::mutex> lock(queue_mutex_);
   MotionSample p;
-  if (motionAtLocked(t_motion, p) != 0)
-    return false;
+  const int at = motionAtLocked(t_motion, p);
+  if (at != 0)
+    return at > 0 ? Coverage::NotYet : Coverage::Never;
   pose = p;
-  return true;
+  return Coverage::Covered;
 }
 
 // Under queue_mutex_: the oldest image that can be measured now, its pose interpolated; drops the stale
@@ -403,7 +406,7 @@ OnlineStats OnlineMeasurer::stats() const
   s.buffered_joints = joints_.size();
   s.turned = turn_.turned();
   s.turn_axis = turn_.sum();
-  s.turns_off_pan_axis = joints_pushed_ && turn_.offPanAxis();
+  s.turns_off_pan_axis = (joints_pushed_ || options_.wait_for_joints) && turn_.offPanAxis();
   return s;
 }
 

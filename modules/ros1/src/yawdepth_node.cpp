@@ -7,8 +7,9 @@
   library's, tested without ROS (test_live, test_online). A ROS 2 node is this file against rclcpp
   (docs/ros.md, "ROS 2").
 
-  Threads: the callbacks run on an AsyncSpinner and only push (non-blocking); the main thread waits
-  for pushes, calls process() and publishes.
+  Threads: the callbacks run on an AsyncSpinner and only push (non-blocking); ~depths has its own
+  queue and thread (a request waits up to ~service_wait for the motion around it); the main thread
+  waits for pushes, calls process() and publishes.
 */
 #include <algorithm>
 #include <atomic>
@@ -31,6 +32,7 @@
 #include <image_transport/image_transport.h>
 #include <nav_msgs/Odometry.h>
 #include <opencv2/imgcodecs.hpp>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
@@ -202,12 +204,19 @@ public:
       markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 5);
     tracks_pub_ = it_.advertise(pnh_.resolveName("tracks"), 2);
     diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 5);
-    depths_srv_ = pnh_.advertiseService("depths", &YawdepthNode::onDepths, this);
+    // ~depths on its own queue and thread: a request waiting for the motion around its stamp never
+    // holds up the callbacks that push that motion.
+    ros::NodeHandle service_nh("~");
+    service_nh.setCallbackQueue(&service_queue_);
+    depths_srv_ = service_nh.advertiseService("depths", &YawdepthNode::onDepths, this);
     ROS_INFO("yawdepth_node: images %s (%s), %s, motion from %s%s", image_topic.c_str(), ros_.image_transport.c_str(),
              camera_info_topic_.c_str(),
              s.motion == "tf" ? ("TF " + s.world_frame + " -> " + s.body_frame).c_str() : nh_.resolveName("odom").c_str(),
              s.joint.empty() ? "" : (", pan joint " + s.joint + " from " + nh_.resolveName("joint_states")).c_str());
   }
+
+  /* The queue of ~depths (its own spinner, started by main). */
+  ros::CallbackQueue &serviceQueue() { return service_queue_; }
 
   /* The consumer: process() whenever a push wakes it, publish what it measured, diagnostics. */
   void run()
@@ -219,8 +228,10 @@ public:
         wake_.wait_for(lock, std::chrono::milliseconds(50), [this] { return woken_; });
         woken_ = false;
       }
-      for (const yawdepth::OnlineFrame &f : node_.process())
-        publish(f);
+      guarded("measuring", [&] {
+        for (const yawdepth::OnlineFrame &f : node_.process())
+          guarded("publishing", [&] { publish(f); });
+      });
       if (ros::WallTime::now() >= next_diagnostics) {
         publishDiagnostics();
         next_diagnostics = ros::WallTime::now() + ros::WallDuration(node_.settings().diagnostics_period);
@@ -285,7 +296,10 @@ private:
   void onImage(const sensor_msgs::ImageConstPtr &msg)
   {
     guarded("image", [&] {
-      cv_bridge::CvImageConstPtr gray = cv_bridge::toCvShare(msg, sensor_msgs::image_encodings::MONO8);
+      // 8UC1 is gray already (cv_bridge converts only named colour encodings); the others to mono8.
+      cv_bridge::CvImageConstPtr gray = msg->encoding == sensor_msgs::image_encodings::TYPE_8UC1
+                                            ? cv_bridge::toCvShare(msg)
+                                            : cv_bridge::toCvShare(msg, sensor_msgs::image_encodings::MONO8);
       pushImage(msg->header.stamp, msg->header.frame_id, gray->image);
     });
   }
@@ -344,15 +358,12 @@ private:
   {
     guarded("odom", [&] {
       node_.setOdometryFrames(msg->header.frame_id, msg->child_frame_id, odom_sub_.getTopic());
-      geometry_msgs::TransformStamped wTb; // into the buffer too: a moving mount is chained onto it
-      wTb.header = msg->header;
-      wTb.child_frame_id = msg->child_frame_id;
-      wTb.transform.translation.x = msg->pose.pose.position.x;
-      wTb.transform.translation.y = msg->pose.pose.position.y;
-      wTb.transform.translation.z = msg->pose.pose.position.z;
-      wTb.transform.rotation = msg->pose.pose.orientation;
-      const vpHomogeneousMatrix wMb = toVisp(wTb.transform);
-      tf_.setTransform(wTb, "odom", false);
+      geometry_msgs::Transform wTb;
+      wTb.translation.x = msg->pose.pose.position.x;
+      wTb.translation.y = msg->pose.pose.position.y;
+      wTb.translation.z = msg->pose.pose.position.z;
+      wTb.rotation = msg->pose.pose.orientation;
+      const vpHomogeneousMatrix wMb = toVisp(wTb);
       if (!node_.started())
         return;
       vpHomogeneousMatrix bMc;
@@ -510,6 +521,7 @@ private:
   image_transport::Publisher tracks_pub_;
   ros::Subscriber compressed_sub_, info_sub_, tf_sub_, tf_static_sub_, odom_sub_, joint_sub_;
   ros::Publisher points_pub_, points_camera_pub_, markers_pub_, diagnostics_pub_;
+  ros::CallbackQueue service_queue_;
   ros::ServiceServer depths_srv_;
   std::string camera_info_topic_;
   tf2_ros::Buffer tf_{ros::Duration(30.0)};        // /tf, /tf_static (and the odometry): the motion
@@ -532,8 +544,11 @@ int main(int argc, char **argv)
     cv::setNumThreads(1);
     YawdepthNode node;
     ros::AsyncSpinner spinner(3);
+    ros::AsyncSpinner service_spinner(1, &node.serviceQueue());
     spinner.start();
+    service_spinner.start();
     node.run();
+    service_spinner.stop();
     spinner.stop();
   } catch (const std::exception &e) {
     std::fprintf(stderr, "yawdepth_node: %s\n", e.what()); // one line, whether or not rosconsole is up

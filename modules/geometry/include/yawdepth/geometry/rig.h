@@ -210,16 +210,19 @@ private:
 vpHomogeneousMatrix panJointFrame(const Eigen::Vector3d &axis, const Eigen::Vector3d &origin);
 
 /*!
-  \brief The axis a moving frame turns about, accumulated over its poses in order: each step's rotation
-  vector \f$ \log(R_{prev}^T R_{cur}) \f$ (in the frame before the step), its sign aligned with the
-  running sum, summed; and the total angle turned. A pan rig's vision frame on a robot driving on a
-  floor turns about its own +Y (the pan axis is vertical); offPanAxis() says when it clearly does not,
-  the sign of a wrong pan axis (import-bag's and the online measurer's warning).
+  \brief The axis a moving frame turns about, accumulated over its orientations in order: a step is
+  taken each time the frame has turned more than kKeyStep (0.01 rad) since the last step's
+  orientation (so that jitter of a frame at rest adds nothing), its rotation vector
+  \f$ \log(R_{key}^T R) \f$ (in the frame before the step), its sign aligned with the running sum,
+  summed; and the total angle of the steps. A pan rig's vision frame on a robot driving on a floor
+  turns about its own +Y (the pan axis is vertical); offPanAxis() says when it clearly does not, the
+  sign of a wrong pan axis (import-bag's and the online measurer's warning).
 */
 class TurnAxis {
 public:
-  /*! \brief One step, from the orientation \p R_prev to \p R_cur (in the world). */
-  void add(const Eigen::Matrix3d &R_prev, const Eigen::Matrix3d &R_cur);
+  static constexpr double kKeyStep = 0.01; //!< rad: the least turn of a step.
+  /*! \brief The next orientation of the frame (in the world). */
+  void add(const Eigen::Matrix3d &R);
   /*! \brief The summed rotation vector (rad; its direction the axis, in the moving frame). */
   const Eigen::Vector3d &sum() const { return sum_; }
   /*! \brief The total angle turned (rad). */
@@ -233,6 +236,8 @@ public:
 private:
   Eigen::Vector3d sum_ = Eigen::Vector3d::Zero();
   double turned_ = 0;
+  bool have_key_ = false;
+  Eigen::Matrix3d R_key_ = Eigen::Matrix3d::Identity();
 };
 
 /*! \brief Pose of the vision frame in the world: \f$ {}^wT_v = [R_y(h) \;|\; (x, y, z)] \f$, or the 6-DoF pose. */

@@ -53,8 +53,12 @@ struct MeasuringNodeSettings {
   OnlineOptions online;                   //!< The measurer's options; its time_offset is -camera_latency (onlineOptions()).
   /*! \brief Throws yawdepth::Error "<parameter>: <why>" for an invalid setting. */
   void validate() const;
-  /*! \brief `online` with `time_offset = -camera_latency`: what the measurer runs with. */
+  /*! \brief `online` with `time_offset = -camera_latency`: what the measurer runs with (with a fixed
+      pan mount, MeasuringNode also sets wait_for_joints). */
   OnlineOptions onlineOptions() const;
+  /*! \brief The servo requests' DepthProvider: its own defaults (the noise model of control periods,
+      the convergence rules) with the measurer's method, window and prior depth. */
+  DepthProviderOptions providerOptions() const;
 };
 
 /*! \brief The transforms' answer about the camera's mount, body -> camera (see MeasuringNode::start()). */
@@ -159,8 +163,8 @@ public:
   ///@{
   /*! \brief OnlineMeasurer::process() (none before start()); each frame counted for the diagnostics. */
   std::vector<OnlineFrame> process();
-  /*! \brief frameCloud() of a frame with the settings' interval. */
-  std::vector<CloudPoint> cloud(const OnlineFrame &frame) const;
+  /*! \brief frameCloud() of a frame with the settings' interval (its size is the diagnostics' points published). */
+  std::vector<CloudPoint> cloud(const OnlineFrame &frame);
   /*! \brief The diagnostics since the previous call (see docs/ros.md's keys). */
   NodeDiagnostics diagnostics();
   /*!
@@ -175,6 +179,7 @@ private:
   mutable std::mutex mutex_; // the start's state (before started_), the odometry frames, the diagnostics' counters
   std::optional<CameraInfoMessage> info_;
   std::string info_topic_, odom_world_, odom_body_;
+  std::string waiting_; // what start() waits for
   std::atomic<bool> started_{false};
   // Set once by start(), before started_; read-only after.
   std::string camera_frame_, body_frame_, world_frame_;
@@ -186,7 +191,7 @@ private:
   std::unique_ptr<DepthProvider> provider_;
   // Diagnostics (under mutex_).
   std::atomic<std::size_t> bad_messages_{0};
-  std::size_t frames_ = 0, last_dropped_ = 0, last_cloud_ = 0;
+  std::size_t frames_ = 0, last_dropped_ = 0, last_cloud_ = 0, last_bad_ = 0;
   std::vector<double> latencies_ms_;
   std::vector<std::pair<Status, std::size_t>> last_counts_;
   std::chrono::steady_clock::time_point last_diagnostics_{};

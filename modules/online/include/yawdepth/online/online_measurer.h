@@ -34,6 +34,7 @@
 #include <chrono>
 #include <cstddef>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <utility>
@@ -58,6 +59,9 @@ struct OnlineOptions {
   double max_pose_gap = 0.2;  //!< An image between two poses (or joint readings) further apart is dropped (s, > 0).
   double max_image_age = 0.5; //!< An image this far behind the newest time of any stream is dropped (s, > 0).
   int max_queued_images = 16; //!< Most images queued; a push beyond drops the oldest (>= 1).
+  /*! A pan rig whose joint readings will come: every image waits for joint readings around it from
+      the start (else, before the first reading, the poses' own yaw is used: never for a pan rig). */
+  bool wait_for_joints = false;
   /*! \brief Throws yawdepth::Error (one line naming the field) for an invalid option. */
   void validate() const;
 };
@@ -98,6 +102,11 @@ struct OnlineStats {
   std::size_t buffered_poses = 0;     //!< Poses kept now.
   std::size_t buffered_joints = 0;    //!< Joint readings kept now.
   double last_latency_ms = 0;         //!< The last measured image's OnlineFrame::latency_ms.
+  /*! The last image's motion time minus the newest pose's time when it was pushed (s; NaN before an
+      image and a pose): about the pose period when the clocks agree; far positive when the image
+      stamps run ahead of the motion, far negative when behind (a wrong time_offset, another clock). */
+  double image_ahead_of_poses = std::numeric_limits<double>::quiet_NaN();
+  std::size_t joint_readings = 0;     //!< Joint readings accepted.
   /*! With joint readings (a pan rig): the vision frame's turn so far (geometry/rig.h's TurnAxis over
       the poses pushed). `turns_off_pan_axis` when it clearly turns about another axis than its +Y,
       the pan axis: on a robot driving on a floor, the sign of a wrong pan axis (or mount). */
@@ -167,15 +176,19 @@ public:
     Waits for a process() call under way.
   */
   std::vector<PointEstimate> depths(const std::vector<long> &ids) const;
+  /*! \brief Whether the motion at a time is known (poseAt()). */
+  enum class Coverage {
+    Covered, //!< Known: interpolated.
+    NotYet,  //!< After the newest pose (or joint reading): it may come.
+    Never    //!< Before the buffers' start (max_image_age behind the newest time), or in a gap over max_pose_gap.
+  };
   /*!
     \brief The motion-log row at motion time `t_motion`, interpolated as an image's is (the poses and,
-    once pushed, the joint readings around it; never extrapolated), e.g. for a servo client's image
-    at camera time t: poseAt(t + time_offset). False when not covered: after the newest pose (or
-    reading), in a gap over max_pose_gap, or more than max_image_age behind the newest time of any
-    stream (the buffers keep no more). Throws yawdepth::Error for
-    a non-finite time.
+    once pushed or with wait_for_joints, the joint readings around it; never extrapolated), e.g. for
+    a servo client's image at camera time t: poseAt(t + time_offset). `pose` is set when Covered.
+    Throws yawdepth::Error for a non-finite time.
   */
-  bool poseAt(double t_motion, MotionSample &pose) const;
+  Coverage poseAt(double t_motion, MotionSample &pose) const;
   /*! \brief The newest pose pushed, its yaw the newest joint reading when joint readings are pushed;
       false before any pose. */
   bool currentPose(MotionSample &pose) const;
