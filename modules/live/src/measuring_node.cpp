@@ -147,10 +147,11 @@ std::string MeasuringNode::start(const std::string &image_frame,
   bMv_ = pan ? panJointFrame(settings_.joint_axis, settings_.joint_origin) : vpHomogeneousMatrix();
   rig_ = std::make_unique<YawRig>(moving ? YawRig() : YawRig(bMv_.inverse() * bMc));
   const CameraModel camera_model = cameraFromCameraInfo(*info_, info_topic_);
-  OnlineOptions o = settings_.onlineOptions();
-  o.wait_for_joints = pan; // never measured at the poses' yaw while the joint readings have not come
-  measurer_ = std::make_unique<OnlineMeasurer>(camera_model, *rig_, o);
-  provider_ = std::make_unique<DepthProvider>(camera_model, *rig_, settings_.providerOptions());
+  online_ = settings_.onlineOptions();
+  online_.wait_for_joints = pan; // never measured at the poses' yaw while the joint readings have not come
+  camera_ = std::make_unique<CameraModel>(camera_model);
+  std::atomic_store(&measurer_, std::make_shared<OnlineMeasurer>(*camera_, *rig_, online_));
+  provider_ = std::make_unique<DepthProvider>(*camera_, *rig_, settings_.providerOptions());
   camera_frame_ = camera;
   body_frame_ = body;
   world_frame_ = world;
@@ -163,13 +164,13 @@ std::string MeasuringNode::start(const std::string &image_frame,
 void MeasuringNode::pushImage(double t, const cv::Mat &gray)
 {
   if (started_)
-    measurer_->pushImage(t, gray);
+    measurer()->pushImage(t, gray);
 }
 
 void MeasuringNode::pushMotion(double t, const vpHomogeneousMatrix &wMb, const vpHomogeneousMatrix &bMc_t)
 {
   if (started_)
-    measurer_->pushPose(t, MotionSample::fromPose(0, wMb * bMv_ * bMc_t));
+    measurer()->pushPose(t, MotionSample::fromPose(0, wMb * bMv_ * bMc_t));
 }
 
 bool MeasuringNode::pushJointState(double t, const std::vector<std::string> &names, const std::vector<double> &positions,
@@ -182,17 +183,33 @@ bool MeasuringNode::pushJointState(double t, const std::vector<std::string> &nam
       throw Error(topic + ": joint " + settings_.joint + " has no position (" + std::to_string(positions.size()) +
                   " positions for " + std::to_string(names.size()) + " names)");
     if (started_ && !moving_mount_) // with a moving mount, the pan is in the camera's pose already
-      measurer_->pushJoint(t, positions[i]);
+      measurer()->pushJoint(t, positions[i]);
     return true;
   }
   return false;
+}
+
+void MeasuringNode::restart()
+{
+  if (!started_)
+    return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::atomic_store(&measurer_, std::make_shared<OnlineMeasurer>(*camera_, *rig_, online_));
+  {
+    std::lock_guard<std::mutex> provider_lock(provider_mutex_);
+    provider_ = std::make_unique<DepthProvider>(*camera_, *rig_, settings_.providerOptions());
+  }
+  last_dropped_ = 0;
+  frames_ = 0;
+  latencies_ms_.clear();
+  ++restarts_;
 }
 
 std::vector<OnlineFrame> MeasuringNode::process()
 {
   if (!started_)
     return {};
-  std::vector<OnlineFrame> frames = measurer_->process();
+  std::vector<OnlineFrame> frames = measurer()->process();
   std::lock_guard<std::mutex> lock(mutex_);
   for (const OnlineFrame &f : frames) {
     ++frames_;
@@ -224,7 +241,7 @@ NodeDiagnostics MeasuringNode::diagnostics()
     add("bad messages", std::to_string(bad_total));
     return d;
   }
-  const OnlineStats st = measurer_->stats();
+  const OnlineStats st = measurer()->stats();
   const auto now = std::chrono::steady_clock::now();
   const double period = std::chrono::duration<double>(now - last_diagnostics_).count();
   last_diagnostics_ = now;
@@ -281,6 +298,7 @@ NodeDiagnostics MeasuringNode::diagnostics()
   for (const auto &[status, n] : last_counts_)
     add(std::string("points ") + toString(status) + " (last image)", std::to_string(n));
   add("bad messages", std::to_string(bad_total));
+  add("restarts (time jumped back)", std::to_string(restarts_));
   frames_ = 0;
   latencies_ms_.clear();
   return d;
@@ -294,11 +312,12 @@ ServoDepthAnswer MeasuringNode::depths(const ServoDepthRequest &r)
       throw Error("not measuring yet (waiting for camera_info, the camera mount or the motion)");
     if (r.u.size() != r.ids.size() || r.v.size() != r.ids.size())
       throw Error("ids, u and v must have the same length");
-    const double t_motion = r.t + measurer_->options().time_offset;
+    const std::shared_ptr<OnlineMeasurer> m = measurer();
+    const double t_motion = r.t + m->options().time_offset;
     MotionSample pose;
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(settings_.service_wait);
     for (;;) {
-      const OnlineMeasurer::Coverage c = measurer_->poseAt(t_motion, pose);
+      const OnlineMeasurer::Coverage c = m->poseAt(t_motion, pose);
       if (c == OnlineMeasurer::Coverage::Covered)
         break;
       if (c == OnlineMeasurer::Coverage::Never)

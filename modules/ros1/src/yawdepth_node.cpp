@@ -228,6 +228,16 @@ public:
         wake_.wait_for(lock, std::chrono::milliseconds(50), [this] { return woken_; });
         woken_ = false;
       }
+      // The clock jumped back (a bag played again, `rosbag play` restarted): every stamp would be
+      // out of order from now on; measure afresh.
+      const ros::Time now = ros::Time::now();
+      if (!last_now_.isZero() && now + ros::Duration(1.0) < last_now_) {
+        ROS_WARN("yawdepth_node: the clock jumped back %.1f s (a bag played again?): measuring afresh",
+                 (last_now_ - now).toSec());
+        tf_.clear();
+        node_.restart();
+      }
+      last_now_ = now;
       guarded("measuring", [&] {
         for (const yawdepth::OnlineFrame &f : node_.process())
           guarded("publishing", [&] { publish(f); });
@@ -533,6 +543,7 @@ private:
   std::mutex wake_mutex_;
   std::condition_variable wake_;
   bool woken_ = false;
+  ros::Time last_now_; // the consumer's last look at the (possibly simulated) clock
 };
 
 } // namespace

@@ -157,6 +157,13 @@ public:
                       const std::string &topic);
   /*! \brief A bad message was dropped (counted in the diagnostics). */
   void noteBadMessage() { ++bad_messages_; }
+  /*!
+    \brief After the clock jumped back (a bag played again): a new measurer and servo provider with
+    the same camera, mount and settings, every stream starting afresh (the old estimates, tracks and
+    buffered motion dropped). No-op before start(). Frames of the old measurer still being published
+    keep their clouds.
+  */
+  void restart();
   ///@}
 
   /*! @name Outputs */
@@ -186,12 +193,16 @@ private:
   bool moving_mount_ = false;
   vpHomogeneousMatrix bMv_;
   std::unique_ptr<YawRig> rig_;
-  std::unique_ptr<OnlineMeasurer> measurer_;
+  std::unique_ptr<CameraModel> camera_;
+  OnlineOptions online_;
+  // Replaced by restart(): read through measurer() (an atomic load of the shared pointer).
+  std::shared_ptr<OnlineMeasurer> measurer_;
+  std::shared_ptr<OnlineMeasurer> measurer() const { return std::atomic_load(&measurer_); }
   std::mutex provider_mutex_;
   std::unique_ptr<DepthProvider> provider_;
   // Diagnostics (under mutex_).
   std::atomic<std::size_t> bad_messages_{0};
-  std::size_t frames_ = 0, last_dropped_ = 0, last_cloud_ = 0, last_bad_ = 0;
+  std::size_t frames_ = 0, last_dropped_ = 0, last_cloud_ = 0, last_bad_ = 0, restarts_ = 0;
   std::vector<double> latencies_ms_;
   std::vector<std::pair<Status, std::size_t>> last_counts_;
   std::chrono::steady_clock::time_point last_diagnostics_{};
