@@ -84,6 +84,18 @@ void onlinePush(OnlineMeasurer &m, const OnlineDrive &d, const OnlineEvent &e)
     m.pushImage(d.image_times[e.index], d.images[e.index]);
 }
 
+/* Every stream pushed in time order, process() after each push: the frames measured. */
+std::vector<OnlineFrame> onlineRunInOrder(OnlineMeasurer &m, const OnlineDrive &d)
+{
+  std::vector<OnlineFrame> frames;
+  for (const OnlineEvent &e : onlineEvents(d)) {
+    onlinePush(m, d, e);
+    for (OnlineFrame &f : m.process())
+      frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
 /* Checks each frame's pose against interpolateMotion of the pushed truth, and counts the ok points
    within 3 sigma of the wall. */
 struct OnlineCheck {
@@ -126,12 +138,7 @@ TEST_CASE("OnlineMeasurer: streams in time order, every image measured at its in
 {
   const OnlineDrive &d = onlineDrive();
   OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
-  std::vector<OnlineFrame> frames;
-  for (const OnlineEvent &e : onlineEvents(d)) {
-    onlinePush(m, d, e);
-    for (OnlineFrame &f : m.process())
-      frames.push_back(std::move(f));
-  }
+  const std::vector<OnlineFrame> frames = onlineRunInOrder(m, d);
   const OnlineStats s = m.stats();
   REQUIRE(frames.size() == d.images.size());
   CHECK(s.images_measured == d.images.size());
@@ -511,12 +518,7 @@ TEST_CASE("frame outputs: the cloud lies on the wall in the world, its intervals
 {
   const OnlineDrive &d = onlineDrive();
   OnlineMeasurer m(onlineCamera(), d.rig, onlineTestOptions());
-  std::vector<OnlineFrame> frames;
-  for (const OnlineEvent &e : onlineEvents(d)) {
-    onlinePush(m, d, e);
-    for (OnlineFrame &f : m.process())
-      frames.push_back(std::move(f));
-  }
+  const std::vector<OnlineFrame> frames = onlineRunInOrder(m, d);
   REQUIRE(frames.size() == d.images.size());
   // The wall in the world: Z = kWallDepth in the first image's camera.
   const vpHomogeneousMatrix c0Mw = wMc(d.rig, d.image_poses.front()).inverse();
