@@ -904,6 +904,66 @@ TEST_CASE("klt guided: a wide sideways step plain LK loses is tracked along the 
   }
 }
 
+TEST_CASE("klt: prepare() ahead of track() changes no track; another image's preparation is discarded",
+          "[features][klt]")
+{
+  // A sequence along a wall: small sideways steps (plain LK), then a wide one (the guided search), a
+  // turn, and a step back; tracked three ways: track() alone, prepare() then track() with the same
+  // image, and prepare() of another image (discarded) then track().
+  constexpr std::size_t kMinTracked = 50; // per image: the comparison is over real tracks
+  const PlaneScene scene;
+  const cv::Mat im0 = scene.texture(5);
+  const std::vector<vpHomogeneousMatrix> ciMc0 = {
+      vpHomogeneousMatrix(),
+      vpHomogeneousMatrix(-0.02, 0.0, 0.0, 0.0, 0.0, 0.0),
+      vpHomogeneousMatrix(-0.04, 0.0, 0.0, 0.0, 0.0, 0.0),
+      vpHomogeneousMatrix(-0.22, 0.0, 0.0, 0.0, 0.0, 0.0), // 60 px: beyond plain LK's reach
+      vpHomogeneousMatrix(-0.23, 0.0, 0.01, 0.0, 0.02, 0.0),
+      vpHomogeneousMatrix(-0.21, 0.01, 0.0, 0.0, 0.02, 0.01)};
+  std::vector<cv::Mat> images;
+  for (const vpHomogeneousMatrix &M : ciMc0)
+    images.push_back(scene.warp(im0, M));
+  KltOptions o;
+  o.max_features = 200;
+  KltTracker alone(scene.camera, o), ahead(scene.camera, o), other(scene.camera, o);
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    CAPTURE(i);
+    KltMotion m;
+    m.cMp = ciMc0[i] * (i > 0 ? ciMc0[i - 1] : ciMc0[i]).inverse();
+    m.sigma_rot = 1e-4;
+    m.sigma_trans = 1e-4;
+    const KltMotion *motion = i > 0 ? &m : nullptr;
+    const std::vector<FeatureObservation> a = alone.track(images[i], motion);
+    ahead.prepare(images[i]);
+    CHECK(ahead.prepared(images[i]));
+    CHECK_FALSE(ahead.prepared(images[i].clone())); // another buffer, even with the same pixels
+    ahead.prepare(images[i]);                       // again: kept, not redone
+    const std::vector<FeatureObservation> b = ahead.track(images[i], motion);
+    CHECK_FALSE(ahead.prepared(images[i]));
+    other.prepare(images[(i + 1) % images.size()]);
+    const std::vector<FeatureObservation> c = other.track(images[i].clone(), motion);
+    REQUIRE(a.size() >= kMinTracked);
+    REQUIRE(b.size() == a.size());
+    REQUIRE(c.size() == a.size());
+    for (std::size_t k = 0; k < a.size(); ++k) { // bit for bit
+      CHECK((b[k].id == a[k].id && b[k].u == a[k].u && b[k].v == a[k].v));
+      CHECK((c[k].id == a[k].id && c[k].u == a[k].u && c[k].v == a[k].v));
+    }
+    for (const KltTracker *t : {&ahead, &other}) {
+      CHECK(t->lastStats().tracked == alone.lastStats().tracked);
+      CHECK(t->lastStats().guided == alone.lastStats().guided);
+      CHECK(t->lastStats().detected == alone.lastStats().detected);
+      CHECK(t->lastStats().lost_fb == alone.lastStats().lost_fb);
+      CHECK(t->lastStats().lost_epipolar == alone.lastStats().lost_epipolar);
+    }
+    if (i == 3)
+      CHECK(alone.lastStats().guided >= static_cast<int>(kMinTracked)); // the wide step went through the search
+  }
+  CHECK_THROWS_WITH(ahead.prepare(cv::Mat(480, 640, CV_32FC1, cv::Scalar(0))), "klt: the image must be 8-bit gray");
+  CHECK_THROWS_WITH(ahead.prepare(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0))),
+                    Catch::Matchers::StartsWith("klt: the image is 320x240"));
+}
+
 TEST_CASE("klt guided: a texture repeated along the epipolar line is refused, never mismatched", "[features][klt]")
 {
   constexpr double kRefusedAtLeast = 0.8; // on: of the features whose truth is in view; auto: of plain LK's tracks

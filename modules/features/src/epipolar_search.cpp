@@ -144,7 +144,9 @@ SegmentPeak searchSegment(const cv::Mat &prev, const cv::Mat &next, const cv::Po
 
 std::vector<std::pair<GuidedOutcome, cv::Point2f>> guidedMatches(const cv::Mat &prev, const cv::Mat &next,
                                                                  const std::vector<GuidedRequest> &requests,
-                                                                 const GuidedSettings &settings)
+                                                                 const GuidedSettings &settings,
+                                                                 const std::vector<cv::Mat> &prev_pyramid,
+                                                                 const std::vector<cv::Mat> &next_pyramid)
 {
   std::vector<std::pair<GuidedOutcome, cv::Point2f>> out(requests.size());
   std::vector<cv::Point2f> from, guess;
@@ -172,8 +174,9 @@ std::vector<std::pair<GuidedOutcome, cv::Point2f>> guidedMatches(const cv::Mat &
   std::vector<cv::Point2f> fwd = guess, back = from;
   std::vector<unsigned char> st, st_back;
   std::vector<float> err, err_back;
-  cv::calcOpticalFlowPyrLK(prev, next, from, fwd, st, err, win, settings.levels, term, cv::OPTFLOW_USE_INITIAL_FLOW);
-  cv::calcOpticalFlowPyrLK(next, prev, fwd, back, st_back, err_back, win, settings.levels, term,
+  cv::calcOpticalFlowPyrLK(prev_pyramid, next_pyramid, from, fwd, st, err, win, settings.levels, term,
+                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  cv::calcOpticalFlowPyrLK(next_pyramid, prev_pyramid, fwd, back, st_back, err_back, win, settings.levels, term,
                            cv::OPTFLOW_USE_INITIAL_FLOW);
   for (std::size_t k = 0; k < index.size(); ++k) {
     std::pair<GuidedOutcome, cv::Point2f> &o = out[index[k]];
@@ -197,7 +200,9 @@ double lkReachPx(const KltOptions &options)
 }
 
 GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
-                          const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
+                          const std::vector<cv::Mat> &previous_pyramid, const cv::Mat &image,
+                          const std::vector<cv::Mat> &pyramid, const std::vector<cv::Point2f> &points,
+                          const std::vector<long> &ids,
                           const KltMotion &motion, const std::map<long, std::pair<double, double>> &hints,
                           double lo, double hi_u, double hi_v, const std::vector<char> &search)
 {
@@ -232,7 +237,7 @@ GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, 
   gs.ambiguity_margin = options.ambiguity_margin;
   gs.levels = options.guided_levels;
   gs.forward_backward_px = options.forward_backward_px;
-  const auto found = guidedMatches(previous, image, requests, gs);
+  const auto found = guidedMatches(previous, image, requests, gs, previous_pyramid, pyramid);
   for (std::size_t k = 0; k < index.size(); ++k) {
     out.outcome[index[k]] = found[k].first;
     out.position[index[k]] = found[k].second;

@@ -63,10 +63,14 @@ SegmentPeak searchSegment(const cv::Mat &prev, const cv::Mat &next, const cv::Po
                           const GuidedSettings &settings);
 
 /*! \brief Every request searched, then refined by LK (forward and backward) in two batched calls; the
-    outcome of each and its refined pixel (meaningful when Found). */
+    outcome of each and its refined pixel (meaningful when Found). The pyramids are the images' LK
+    pyramids (cv::buildOpticalFlowPyramid with derivatives, window `settings.window`, at least
+    `settings.levels` levels). */
 std::vector<std::pair<GuidedOutcome, cv::Point2f>> guidedMatches(const cv::Mat &prev, const cv::Mat &next,
                                                                  const std::vector<GuidedRequest> &requests,
-                                                                 const GuidedSettings &settings);
+                                                                 const GuidedSettings &settings,
+                                                                 const std::vector<cv::Mat> &prev_pyramid,
+                                                                 const std::vector<cv::Mat> &next_pyramid);
 
 /*! \brief The displacement (px) pyramidal LK follows reliably: a quarter of window x 2^levels (42 px by
     default). Beyond it plain LK loses its way (bench_wide_baseline); below it plain LK is as good as
@@ -85,7 +89,9 @@ struct GuidedSearch {
   cut to the image's interior [lo, hi_u] x [lo, hi_v], searched and refined (guidedMatches()).
 */
 GuidedSearch guidedSearch(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
-                          const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
+                          const std::vector<cv::Mat> &previous_pyramid, const cv::Mat &image,
+                          const std::vector<cv::Mat> &pyramid, const std::vector<cv::Point2f> &points,
+                          const std::vector<long> &ids,
                           const KltMotion &motion, const std::map<long, std::pair<double, double>> &hints,
                           double lo, double hi_u, double hi_v, const std::vector<char> &search);
 

@@ -188,22 +188,22 @@ struct LiveFeatures {
 };
 
 /*!
-  \brief The features at `points` (ids `ids`) of `previous` followed into `image` by pyramidal
-  Lucas-Kanade, forward and backward; those lost (no flow, forward-backward error, border, outside
-  the epipolar band when `motion` is given) are counted in `stats` and left out.
+  \brief The features at `points` (ids `ids`) of `previous` followed into `image`: plain LK's
+  forward and backward pass (`flow`: next, back and their status, from plainFlow()) and, with a
+  `motion`, the guided search; those lost (no flow, forward-backward error, border, outside the
+  epipolar band when `motion` is given) are counted in `stats` and left out. The pyramids are the
+  images' lkPyramid().
 */
 LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
-                            const cv::Mat &image, const std::vector<cv::Point2f> &points, const std::vector<long> &ids,
-                            const KltMotion *motion, const std::map<long, std::pair<double, double>> &hints,
-                            const ImageInterior &interior, KltStats &stats)
+                            const std::vector<cv::Mat> &previous_pyramid, const cv::Mat &image,
+                            const std::vector<cv::Mat> &pyramid, const std::vector<cv::Point2f> &points,
+                            const std::vector<long> &ids, const KltMotion *motion,
+                            const std::map<long, std::pair<double, double>> &hints, const ImageInterior &interior,
+                            const std::vector<cv::Point2f> &next_in, const std::vector<cv::Point2f> &back,
+                            const std::vector<unsigned char> &status, const std::vector<unsigned char> &status_back,
+                            KltStats &stats)
 {
-  const cv::Size win(options.window, options.window);
-  const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
-  std::vector<cv::Point2f> next, back;
-  std::vector<unsigned char> status, status_back;
-  std::vector<float> err, err_back;
-  cv::calcOpticalFlowPyrLK(previous, image, points, next, status, err, win, options.pyramid_levels, term);
-  cv::calcOpticalFlowPyrLK(image, previous, next, back, status_back, err_back, win, options.pyramid_levels, term);
+  std::vector<cv::Point2f> next = next_in;
   const double band = motion ? tracker.bandHalfWidth(*motion) : 0.0;
   const auto in_band = [&](std::size_t i, const cv::Point2f &p) {
     const double d = tracker.epipolarDistance(Eigen::Vector2d(points[i].x, points[i].y), Eigen::Vector2d(p.x, p.y),
@@ -233,8 +233,8 @@ LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options
     for (std::size_t i = 0; i < points.size(); ++i)
       search[i] = options.guided == KltGuided::On || wide_step || !plain_ok[i] || moved(i) > reach;
   const detail::GuidedSearch guided =
-      motion ? detail::guidedSearch(tracker, options, previous, image, points, ids, *motion, hints, interior.lo,
-                                    interior.hi_u, interior.hi_v, search)
+      motion ? detail::guidedSearch(tracker, options, previous, previous_pyramid, image, pyramid, points, ids, *motion,
+                                    hints, interior.lo, interior.hi_u, interior.hi_v, search)
              : detail::GuidedSearch{std::vector<detail::GuidedOutcome>(points.size()), {}};
   LiveFeatures kept;
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -316,19 +316,60 @@ std::vector<cv::Point2f> detectCorners(const cv::Mat &image, const KltOptions &o
 
 } // namespace
 
-std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const KltMotion *motion)
+void KltTracker::checkImage(const cv::Mat &image) const
 {
   if (image.empty() || image.type() != CV_8UC1)
     throw Error("klt: the image must be 8-bit gray");
   if (image.cols != static_cast<int>(camera_.width()) || image.rows != static_cast<int>(camera_.height()))
     throw Error("klt: the image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
                 " but the camera is " + std::to_string(camera_.width()) + "x" + std::to_string(camera_.height()));
+}
+
+// The motion-free work of track(image): the pyramid, and plain LK of the live features forward and
+// back. calcOpticalFlowPyrLK given the pyramids computes what it computes from the images (it builds
+// the same pyramids itself), each built once instead of once per pass.
+KltTracker::Ahead KltTracker::ahead(const cv::Mat &image) const
+{
+  Ahead a;
+  a.image = image;
+  const cv::Size win(options_.window, options_.window);
+  cv::buildOpticalFlowPyramid(image, a.pyramid, win, std::max(options_.pyramid_levels, options_.guided_levels), true);
+  if (points_.empty() || previous_.empty())
+    return a;
+  const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
+  std::vector<float> err, err_back;
+  cv::calcOpticalFlowPyrLK(previous_pyramid_, a.pyramid, points_, a.next, a.status, err, win, options_.pyramid_levels,
+                           term);
+  cv::calcOpticalFlowPyrLK(a.pyramid, previous_pyramid_, a.next, a.back, a.status_back, err_back, win,
+                           options_.pyramid_levels, term);
+  return a;
+}
+
+bool KltTracker::prepared(const cv::Mat &image) const
+{
+  return !ahead_.image.empty() && ahead_.image.data == image.data && ahead_.image.size == image.size &&
+         ahead_.image.step == image.step && ahead_.image.type() == image.type();
+}
+
+void KltTracker::prepare(const cv::Mat &image)
+{
+  checkImage(image);
+  if (!prepared(image))
+    ahead_ = ahead(image);
+}
+
+std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const KltMotion *motion)
+{
+  checkImage(image);
+  Ahead work = prepared(image) ? std::move(ahead_) : ahead(image);
+  ahead_ = Ahead();
   stats_ = KltStats();
   const ImageInterior interior(image, options_.border_px);
 
   LiveFeatures kept;
   if (!points_.empty() && !previous_.empty())
-    kept = followFeatures(*this, options_, previous_, image, points_, ids_, motion, hints_, interior, stats_);
+    kept = followFeatures(*this, options_, previous_, previous_pyramid_, image, work.pyramid, points_, ids_, motion,
+                          hints_, interior, work.next, work.back, work.status, work.status_back, stats_);
   // Still one static point? Appearance and jumps (track_checks.h).
   appearance_cuts_.clear();
   {
@@ -374,6 +415,7 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
       it = std::binary_search(live.begin(), live.end(), it->first) ? std::next(it) : state_.erase(it);
   }
   previous_ = image.clone();
+  previous_pyramid_ = std::move(work.pyramid);
   std::vector<FeatureObservation> out;
   out.reserve(points_.size());
   for (std::size_t i = 0; i < points_.size(); ++i)

@@ -321,6 +321,7 @@ std::vector<OnlineFrame> OnlineMeasurer::process()
     f.frame = job.pose.frame;
     f.pose = job.pose;
     f.image = job.image.gray;
+    f.ahead_ms = tracker_.prepared(job.image.gray) ? ahead_ms_ : 0.0;
     const Clock::time_point t0 = Clock::now();
     std::vector<FeatureObservation> observations;
     if (have_previous_) {
@@ -370,6 +371,18 @@ std::vector<OnlineFrame> OnlineMeasurer::process()
       stats_.last_latency_ms = f.latency_ms;
     }
     out.push_back(std::move(f));
+  }
+  // The oldest image waits for its motion: the tracking that needs none now, not after it comes.
+  cv::Mat waiting;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (!images_.empty())
+      waiting = images_.front().gray;
+  }
+  if (!waiting.empty() && !tracker_.prepared(waiting)) {
+    const Clock::time_point a0 = Clock::now();
+    tracker_.prepare(waiting);
+    ahead_ms_ = onlineMs(Clock::now() - a0);
   }
   return out;
 }

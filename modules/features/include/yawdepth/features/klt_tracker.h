@@ -183,6 +183,16 @@ public:
     \return The features in this image: id and observed (distorted) pixel.
   */
   std::vector<FeatureObservation> track(const cv::Mat &image, const KltMotion *motion = nullptr);
+  /*!
+    \brief The part of track() that needs no motion, done ahead of it: `image`'s LK pyramid and plain
+    Lucas-Kanade of the live features into it, forward and backward. For a caller whose image waits
+    for its motion (OnlineMeasurer): the next track() call with this image (the same cv::Mat, or one
+    sharing its data, unchanged meanwhile) takes this work and returns exactly what it returns
+    without it; a track() call with another image discards it. The same checks of `image` as track().
+  */
+  void prepare(const cv::Mat &image);
+  /*! \brief Whether prepare() was called for `image` (its data) since the last track(). */
+  bool prepared(const cv::Mat &image) const;
   /*! \brief What the last track() call did. */
   const KltStats &lastStats() const { return stats_; }
   /*! \brief The features the last track() call cut for their appearance (KltOptions::min_ncc): their
@@ -213,9 +223,21 @@ public:
   void setDepthHint(long id, double depth, double sigma);
 
 private:
+  // prepare()'s work for one image, taken by the next track() call with that image.
+  struct Ahead {
+    cv::Mat image;                                  // its header: holds the data (and so its address)
+    std::vector<cv::Mat> pyramid;                   // the LK pyramid, with derivatives
+    std::vector<cv::Point2f> next, back;            // plain LK of points_: forward, and back from next
+    std::vector<unsigned char> status, status_back; // their LK status
+  };
+  void checkImage(const cv::Mat &image) const;
+  Ahead ahead(const cv::Mat &image) const;
+
   CameraModel camera_;
   KltOptions options_;
   cv::Mat previous_;
+  std::vector<cv::Mat> previous_pyramid_; // previous_'s LK pyramid (built once, used by both passes)
+  Ahead ahead_;                           // prepare()'s, until the next track()
   std::vector<cv::Point2f> points_;
   std::vector<long> ids_;
   long next_id_ = 0;

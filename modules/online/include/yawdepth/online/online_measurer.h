@@ -16,7 +16,10 @@
   yaw when no joint reading was pushed. Then KltTracker tracks the image's natural features, gated by
   the known motion since the previous measured image (kltMotion(), as trackSequence()), and a
   StreamEstimator (window by default, or fused) takes the frame; each measured image gives an
-  OnlineFrame with its points' estimates.
+  OnlineFrame with its points' estimates. While the oldest queued image waits for its motion,
+  process() does the part of its tracking that needs none (KltTracker::prepare(): the pyramid and
+  plain Lucas-Kanade, the same numbers as without), so that only the gated rest is left when the
+  motion comes.
 
   Bounded memory and latency. An image whose motion time is more than `max_image_age` behind the
   newest time any stream has pushed (on the motion clock: poses and joints as they are, images plus
@@ -84,7 +87,10 @@ struct OnlineFrame {
   std::vector<OnlinePoint> points; //!< The features tracked in this image.
   double latency_ms = 0;   //!< Wall time from pushImage() to this frame's result (ms).
   double wait_ms = 0;      //!< Of it: from pushImage() until process() took the image (waiting for its motion) (ms).
-  double track_ms = 0;     //!< Of it: KltTracker::track (ms).
+  /*! Of the wait: the tracking done while the image waited for its motion (KltTracker::prepare(): its
+      pyramid and plain LK; 0 when the motion was there first) (ms). */
+  double ahead_ms = 0;
+  double track_ms = 0;     //!< Of it: KltTracker::track, the rest of the tracking once the motion is known (ms).
   double estimate_ms = 0;  //!< Of it: StreamEstimator::addFrame and the estimates (ms).
 };
 
@@ -237,6 +243,7 @@ private:
   bool have_previous_ = false;
   MotionSample previous_;
   std::vector<std::pair<long, long>> last_seen_; // (id, frame) of the features the estimator may hold
+  double ahead_ms_ = 0; // the last KltTracker::prepare() call's time (for the image it prepared)
 };
 
 } // namespace yawdepth
