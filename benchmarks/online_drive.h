@@ -116,14 +116,19 @@ inline Drive renderDrive(double seconds, unsigned seed)
 }
 
 /* The wall in the world (the motion log's frame): Z = kWallDepth in the first image's camera. Returns
-   the depth (camera Z at `pose`) where the ray of pixel (u, v) meets it, NaN when behind. */
-inline double wallDepth(const Drive &d, const MotionSample &pose, double u, double v)
+   the depth (camera Z, the camera at wMcam) where the ray of pixel (u, v) meets it, NaN when behind. */
+inline double wallDepth(const Drive &d, const vpHomogeneousMatrix &wMcam, double u, double v)
 {
-  const vpHomogeneousMatrix c0Mc = wMc(d.rig, d.image_poses.front()).inverse() * wMc(d.rig, pose);
+  const vpHomogeneousMatrix c0Mc = wMc(d.rig, d.image_poses.front()).inverse() * wMcam;
   const double x = (u - kU0) / kFocal, y = (v - kV0) / kFocal;
   const double dz = c0Mc[2][0] * x + c0Mc[2][1] * y + c0Mc[2][2];
   const double t = (kWallDepth - c0Mc[2][3]) / dz;
   return t > 0 ? t : std::nan("");
+}
+/* The same, the camera at a motion-log row of the drive's rig. */
+inline double wallDepth(const Drive &d, const MotionSample &pose, double u, double v)
+{
+  return wallDepth(d, wMc(d.rig, pose), u, v);
 }
 
 /* One push of the drive: its motion-clock time, its stream and its index in that stream. */

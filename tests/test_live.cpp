@@ -4,7 +4,10 @@
 // servo depth requests.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 #include <yawdepth/error.h>
@@ -369,4 +372,109 @@ TEST_CASE("MeasuringNode: restart after the clock jumped back measures the repla
   for (const auto &[k, v] : diag.values)
     reported = reported || (k == "restarts (time jumped back)" && v == "1");
   CHECK(reported);
+}
+
+TEST_CASE("MeasuringNode: motion waiting for its transforms is pushed in order once they come, or dropped and counted",
+          "[live]")
+{
+  const auto dropped = [](MeasuringNode &node) {
+    for (const auto &[k, v] : node.diagnostics().values)
+      if (k == "motion dropped (no transform)")
+        return std::stoul(v);
+    FAIL("no \"motion dropped (no transform)\" in the diagnostics");
+    return 0UL;
+  };
+  SECTION("the queue's rules")
+  {
+    MeasuringNode node(liveSettings());
+    REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+    node.setOdometryFrames("odom", "base_link", "/odom");
+    node.queueMotion(0.05, 1); // before the start: ignored
+    REQUIRE(node.start("camera_optical", fixedMount).empty());
+    double covered_from = 0.15, covered_to = 0.35; // the transforms' span (a link's first and newest reading)
+    std::vector<std::uint64_t> asked;
+    const MeasuringNode::TransformAt at = [&](double t, std::uint64_t tag) -> std::optional<vpHomogeneousMatrix> {
+      asked.push_back(tag);
+      if (t < covered_from || t > covered_to)
+        return std::nullopt;
+      return vpHomogeneousMatrix(t, 0, 0, 0, 0, 0);
+    };
+    for (int k = 1; k <= 4; ++k)
+      node.queueMotion(0.1 * k, static_cast<std::uint64_t>(100 + k));
+    node.queueMotion(0.35, 7); // not after the last queued (0.4): ignored
+    CHECK(node.resolveMotion(at) == 2); // 0.2 and 0.3; 0.1 is before the link's first reading: dropped
+    CHECK(std::find(asked.begin(), asked.end(), 103u) != asked.end()); // the tag given back
+    CHECK(std::find(asked.begin(), asked.end(), 7u) == asked.end());
+    CHECK(dropped(node) == 1);
+    CHECK(node.resolveMotion(at) == 0); // 0.4 waits
+    covered_to = 0.41;
+    CHECK(node.resolveMotion(at) == 1);
+    node.queueMotion(0.45, 9);
+    node.queueMotion(1.0, 10); // 0.45 is more than max_image_age (0.5 s) behind: dropped
+    CHECK(dropped(node) == 2);
+    covered_to = 1.0;
+    CHECK(node.resolveMotion(at) == 1);
+    CHECK(dropped(node) == 2);
+  }
+  SECTION("the drive with a moving mount whose link comes after the odometry: every image measured, on the wall")
+  {
+    // The pan in the transforms (a pan link published from the joint states, 50 Hz, another phase
+    // than the 100 Hz odometry): each odometry pose waits for the mount at its time.
+    MeasuringNode node(liveSettings());
+    REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+    const drive::Drive &d = liveDrive();
+    std::size_t links = 0; // the pan link's readings so far: d.joints[0, links)
+    const MeasuringNode::TransformAt mount_at = [&](double t, std::uint64_t) -> std::optional<vpHomogeneousMatrix> {
+      if (links < 2 || t < d.joints.front().first || t > d.joints[links - 1].first)
+        return std::nullopt;
+      std::size_t k = 1;
+      while (d.joints[k].first < t)
+        ++k;
+      MotionSample a, b;
+      a.yaw = d.joints[k - 1].second;
+      b.yaw = d.joints[k].second;
+      const double s = (t - d.joints[k - 1].first) / (d.joints[k].first - d.joints[k - 1].first);
+      return d.rig.vMc(interpolateMotion(a, b, s).yaw);
+    };
+    const auto moving = [](const std::string &, const std::string &) {
+      MountLookup m;
+      m.moving = true;
+      return m;
+    };
+    std::vector<OnlineFrame> frames;
+    std::size_t queued = 0, never = 0, pushed = 0;
+    for (const drive::Event &e : drive::events(d)) {
+      if (e.stream == drive::Event::Pose) {
+        node.setOdometryFrames("odom", "base_link", "/odom");
+        const double t = d.poses[e.index].first;
+        if (node.started()) {
+          ++queued;
+          never += t < d.joints.front().first ? 1 : 0;
+        }
+        node.queueMotion(t, e.index, wMv(d.poses[e.index].second));
+      } else if (e.stream == drive::Event::Joint) {
+        links = e.index + 1; // the link's transform at this reading arrives
+      } else {
+        CHECK(node.start("camera_optical", moving).empty());
+        node.pushImage(d.image_times[e.index], d.images[e.index]);
+      }
+      pushed += node.resolveMotion(mount_at);
+      for (OnlineFrame &f : node.process())
+        frames.push_back(std::move(f));
+    }
+    REQUIRE(node.movingMount());
+    CHECK(dropped(node) == never);
+    CHECK(pushed + never + 2 >= queued); // at most the last two wait for a link reading after the drive's end
+    CHECK(frames.size() + 1 >= d.images.size()); // all but, at most, the one before the first pose
+    std::size_t ok = 0, within = 0;
+    for (const OnlineFrame &f : frames)
+      for (const CloudPoint &c : node.cloud(f)) {
+        ++ok;
+        const double z = drive::wallDepth(d, wMv(f.pose), c.u, c.v); // the camera's own pose is the motion
+        within += std::abs(c.c_P.z() - z) <= 3 * c.sigma_z ? 1 : 0;
+      }
+    INFO("ok points " << ok << ", within 3 sigma " << within);
+    REQUIRE(ok > 1000);
+    CHECK(static_cast<double>(within) >= kWithin3SigmaFraction * static_cast<double>(ok));
+  }
 }

@@ -173,6 +173,47 @@ void MeasuringNode::pushMotion(double t, const vpHomogeneousMatrix &wMb, const v
     measurer()->pushPose(t, MotionSample::fromPose(0, wMb * bMv_ * bMc_t));
 }
 
+void MeasuringNode::queueMotion(double t, std::uint64_t tag, const std::optional<vpHomogeneousMatrix> &wMb)
+{
+  if (!started_ || !std::isfinite(t))
+    return;
+  std::lock_guard<std::mutex> lock(motion_mutex_);
+  if (!(t > last_queued_t_))
+    return; // the sample queued at this time stands for it (its lookup sees every transform by then)
+  last_queued_t_ = t;
+  pending_motion_.push_back({t, tag, wMb});
+  const double keep_from = t - online_.max_image_age; // older: no image would wait for it
+  while (pending_motion_.front().t < keep_from) {
+    pending_motion_.pop_front();
+    ++unresolved_motion_;
+  }
+}
+
+std::size_t MeasuringNode::resolveMotion(const TransformAt &transform_at)
+{
+  if (!started_)
+    return 0;
+  std::lock_guard<std::mutex> lock(motion_mutex_);
+  std::size_t pushed = 0;
+  for (std::size_t i = 0; i < pending_motion_.size();) {
+    const PendingMotion &p = pending_motion_[i];
+    const std::optional<vpHomogeneousMatrix> X = transform_at(p.t, p.tag);
+    if (!X) {
+      ++i;
+      continue;
+    }
+    if (p.wMb)
+      pushMotion(p.t, *p.wMb, *X);
+    else
+      pushMotion(p.t, *X);
+    ++pushed;
+    unresolved_motion_ += i; // the earlier ones never will be: the transforms cover a later time, not theirs
+    pending_motion_.erase(pending_motion_.begin(), pending_motion_.begin() + static_cast<std::ptrdiff_t>(i) + 1);
+    i = 0;
+  }
+  return pushed;
+}
+
 bool MeasuringNode::pushJointState(double t, const std::vector<std::string> &names, const std::vector<double> &positions,
                                    const std::string &topic)
 {
@@ -203,6 +244,9 @@ void MeasuringNode::restart()
   frames_ = 0;
   latencies_ms_.clear();
   ++restarts_;
+  std::lock_guard<std::mutex> motion_lock(motion_mutex_);
+  pending_motion_.clear();
+  last_queued_t_ = -std::numeric_limits<double>::infinity();
 }
 
 std::vector<OnlineFrame> MeasuringNode::process()
@@ -285,6 +329,7 @@ NodeDiagnostics MeasuringNode::diagnostics()
                                                   std::to_string(st.out_of_order_poses) + ", " +
                                                   std::to_string(st.out_of_order_joints));
   add("queued images", std::to_string(st.queued_images));
+  add("motion dropped (no transform)", std::to_string(unresolved_motion_.load()));
   std::vector<double> l = latencies_ms_;
   std::sort(l.begin(), l.end());
   if (!l.empty()) { // none without an image measured in the period

@@ -340,8 +340,27 @@ private:
     }
   }
 
-  /* /tf into the buffer; with `motion: tf`, the chain world -> motion frame at each new stamp of this
-     message where it resolves, pushed. */
+  /* The transform the node's queued motion waits for (MeasuringNode::queueMotion): the chain world ->
+     motion frame (motion: tf) or the moving mount body -> camera (odometry), at the sample's exact
+     stamp (its tag, in ns), when the buffer has it. */
+  std::optional<vpHomogeneousMatrix> transformAt(std::uint64_t stamp_ns)
+  {
+    ros::Time stamp;
+    stamp.fromNSec(stamp_ns);
+    const bool tf_motion = node_.settings().motion == "tf";
+    const std::string &target = tf_motion ? node_.settings().world_frame : node_.bodyFrame();
+    const std::string &source = tf_motion ? node_.motionFrame() : node_.cameraFrame();
+    if (!tf_.canTransform(target, source, stamp))
+      return std::nullopt; // not every link has a reading around it (yet)
+    return toVisp(tf_.lookupTransform(target, source, stamp).transform);
+  }
+  std::size_t resolveMotion()
+  {
+    return node_.resolveMotion([this](double, std::uint64_t tag) { return transformAt(tag); });
+  }
+
+  /* /tf into the buffer; with `motion: tf`, each new stamp of this message queued for the chain
+     world -> motion frame at it; the queued motion whose transforms are now known, pushed. */
   void onTf(const tf2_msgs::TFMessageConstPtr &msg)
   {
     guarded("/tf", [&] {
@@ -350,17 +369,16 @@ private:
         tf_.setTransform(t, "tf", false);
         stamps.push_back(t.header.stamp);
       }
-      if (!node_.started() || node_.settings().motion != "tf")
+      if (!node_.started())
         return;
-      std::sort(stamps.begin(), stamps.end());
-      stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
-      const std::string &world = node_.settings().world_frame, &target = node_.motionFrame();
-      for (const ros::Time &s : stamps) {
-        if (!tf_.canTransform(world, target, s))
-          continue; // not every link of the chain has a reading around it (yet)
-        node_.pushMotion(s.toSec(), toVisp(tf_.lookupTransform(world, target, s).transform));
+      if (node_.settings().motion == "tf") {
+        std::sort(stamps.begin(), stamps.end());
+        stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
+        for (const ros::Time &s : stamps)
+          node_.queueMotion(s.toSec(), s.toNSec());
       }
-      wake();
+      if (resolveMotion() > 0)
+        wake();
     });
   }
 
@@ -376,13 +394,13 @@ private:
       const vpHomogeneousMatrix wMb = toVisp(wTb);
       if (!node_.started())
         return;
-      vpHomogeneousMatrix bMc;
-      if (node_.movingMount()) { // the mount at this pose's time, or no pose yet (its readings come later)
-        if (!tf_.canTransform(msg->child_frame_id, node_.cameraFrame(), msg->header.stamp))
-          return;
-        bMc = toVisp(tf_.lookupTransform(msg->child_frame_id, node_.cameraFrame(), msg->header.stamp).transform);
+      if (node_.movingMount()) { // the pose waits for the mount at its time (its link may come later)
+        node_.queueMotion(msg->header.stamp.toSec(), msg->header.stamp.toNSec(), wMb);
+        if (resolveMotion() > 0)
+          wake();
+        return;
       }
-      node_.pushMotion(msg->header.stamp.toSec(), wMb, bMc);
+      node_.pushMotion(msg->header.stamp.toSec(), wMb);
       wake();
     });
   }

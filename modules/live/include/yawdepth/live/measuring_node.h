@@ -20,7 +20,10 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
+#include <deque>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -149,6 +152,29 @@ public:
   */
   void pushMotion(double t, const vpHomogeneousMatrix &wMb, const vpHomogeneousMatrix &bMc_t = vpHomogeneousMatrix());
   /*!
+    \brief The transform a queued motion sample waits for (queueMotion()), at its time `t` (s) and
+    with the `tag` it was queued with (the middleware's exact stamp, e.g. in ns); none when the
+    transforms do not give it yet.
+  */
+  using TransformAt = std::function<std::optional<vpHomogeneousMatrix>(double t, std::uint64_t tag)>;
+  /*!
+    \brief A motion sample whose transform may come later: with motion `tf`, a stamp of the
+    transforms (`wMb` empty; the transform is the chain world -> motionFrame() at it); with an
+    odometry and a moving mount, the odometry's pose `wMb` (the transform is the mount body -> camera
+    at its time). Queued in time order, pushed by resolveMotion() once its transform is known: a
+    chain with a slower link, or a moving mount's link published after the odometry, loses no pose.
+    A time not after the last one queued is ignored; samples more than max_image_age behind the
+    newest are dropped (counted: "motion dropped (no transform)" in the diagnostics).
+  */
+  void queueMotion(double t, std::uint64_t tag, const std::optional<vpHomogeneousMatrix> &wMb = std::nullopt);
+  /*!
+    \brief Push the queued samples whose transform `transform_at` gives, in time order (pushMotion());
+    one it does not give while a later one it does is dropped and counted (before a link's first
+    reading: never given).
+    \return How many were pushed.
+  */
+  std::size_t resolveMotion(const TransformAt &transform_at);
+  /*!
     \brief A joint state: the pan joint's position, when `names` has it (not used with a moving mount).
     \return false when `names` has no pan joint. Throws yawdepth::Error naming `topic` when it has no
     position for it.
@@ -198,6 +224,16 @@ private:
   // Replaced by restart(): read through measurer() (an atomic load of the shared pointer).
   std::shared_ptr<OnlineMeasurer> measurer_;
   std::shared_ptr<OnlineMeasurer> measurer() const { return std::atomic_load(&measurer_); }
+  // The motion waiting for its transforms (queueMotion()), in time order.
+  struct PendingMotion {
+    double t = 0;
+    std::uint64_t tag = 0;
+    std::optional<vpHomogeneousMatrix> wMb;
+  };
+  std::mutex motion_mutex_; // the queue, and the order of its pushes
+  std::deque<PendingMotion> pending_motion_;
+  double last_queued_t_ = -std::numeric_limits<double>::infinity();
+  std::atomic<std::size_t> unresolved_motion_{0};
   std::mutex provider_mutex_;
   std::unique_ptr<DepthProvider> provider_;
   // Diagnostics (under mutex_).
