@@ -38,7 +38,7 @@ import rosgraph
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs import point_cloud2
-from sensor_msgs.msg import CompressedImage, PointCloud2
+from sensor_msgs.msg import CompressedImage, Image, PointCloud2
 
 import drive_truth
 
@@ -160,7 +160,8 @@ def main():
     ap.add_argument("--ready", required=True, help="written when connected")
     ap.add_argument("--done", required=True, help="the test touches it when the bag has played")
     ap.add_argument("--node", default="/yawdepth_node")
-    ap.add_argument("--image-topic", default="/camera/image_raw/compressed")
+    ap.add_argument("--image-topic", default="/camera/image_raw/compressed",
+                    help="sensor_msgs/CompressedImage when it ends with /compressed, else sensor_msgs/Image")
     ap.add_argument("--inputs", nargs="*", default=["/camera/image_raw/compressed", "/camera/camera_info", "/tf",
                                                    "/tf_static", "/joint_states"],
                     help="topics the node must be subscribed to before the bag plays")
@@ -182,7 +183,8 @@ def main():
     rec = Recorder()
     subs = [rospy.Subscriber(a.node + "/points", PointCloud2, rec.cloud("world"), queue_size=1000),
             rospy.Subscriber(a.node + "/points_camera", PointCloud2, rec.cloud("camera"), queue_size=1000)]
-    rospy.Subscriber(a.image_topic, CompressedImage, rec.image, queue_size=1000, buff_size=1 << 22)
+    image_type = CompressedImage if a.image_topic.endswith("/compressed") else Image  # image_transport's names
+    rospy.Subscriber(a.image_topic, image_type, rec.image, queue_size=1000, buff_size=1 << 24)
     rospy.Subscriber("/diagnostics", DiagnosticArray, rec.diagnostic, queue_size=1000)
     start = time.monotonic()
     err = wait_ready(a, subs)
@@ -354,6 +356,8 @@ def main():
         # stamps far from the motion's, no joint readings) in any report.
         bad = [kv.value for _, st in node_status for kv in st.values if kv.key == "bad messages"]
         check("node's bad messages", bad[-1] if bad else "none reported", "0", bool(bad) and bad[-1] == "0")
+        unresolved = [kv.value for _, st in node_status for kv in st.values if kv.key == "motion dropped (no transform)"]
+        info("node's motion dropped (no transform)", unresolved[-1] if unresolved else "not reported")
         mistakes = sorted({st.message for _, st in node_status
                            if st.message.startswith(("the body turns", "images dropped: their stamps", "no readings"))})
         check("node's warnings of a mistake", "; ".join(mistakes) or "none", "none", not mistakes)

@@ -4,7 +4,8 @@
   JSON. Build tree only (not installed): the ROS node's test bag, and tests/ros/drive_bag_measure.sh
   measures it with `yawdepth measure --bag`.
 
-    make_drive_bag --out drive.bag --truth truth.json [--seconds 6] [--latency 0.030]
+    make_drive_bag --out drive.bag --truth truth.json [--seconds 6] [--latency 0.030] [--pan-in-tf]
+                   [--raw-images]
 
   Frames (names carry frames: odomMb is base_link's pose in odom, ...):
   - w'  the drive's world (its motion rows): yawdepth's vision frame at t = 0, x right, y DOWN, z forward.
@@ -29,6 +30,9 @@
     /camera/image_raw/compressed  sensor_msgs/CompressedImage JPEG (quality 90) mono8, 30 Hz, stamped
                                   at the capture (motion) time + --latency (a driver stamping on arrival)
     /camera/camera_info           sensor_msgs/CameraInfo with each image (plumb_bob, zero distortion)
+  --pan-in-tf: the pan as robot_state_publisher gives it: /tf_static holds pan_link -> camera_optical,
+  /tf base_link -> pan_link at each joint state (50 Hz, its stamp); /joint_states is still written.
+  --raw-images: /camera/image_raw sensor_msgs/Image mono8 instead of the compressed topic.
 */
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -50,6 +54,7 @@
 #include <rosbag/bag.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/JointState.h>
 #include <tf2_msgs/TFMessage.h>
 
@@ -68,6 +73,7 @@ const Vector3d kJointOrigin(0.10, 0.0, 0.30);   // m: a point on the pan axis, i
 const Vector3d kJointAxis(0, 0, 1);             // the pan axis in base_link
 constexpr double kWheelRadius = 0.05, kWheelTrack = 0.30; // m: the wheels' plausible readings
 const char *const kOdom = "odom", *const kBase = "base_link", *const kCamera = "camera_optical";
+const char *const kPan = "pan_link"; // --pan-in-tf's joint child
 
 /* Rotation about +z by a (right-handed, REP 103: positive turns x toward y, i.e. LEFT). */
 Matrix3d rotZ(double a)
@@ -187,7 +193,8 @@ std::string vec(const Vector3d &v) { return "[" + num(v.x()) + ", " + num(v.y())
 int usage(const std::string &msg)
 {
   std::cerr << "make_drive_bag: " << msg
-            << " (usage: make_drive_bag --out BAG --truth JSON [--seconds 6] [--latency 0.030])\n";
+            << " (usage: make_drive_bag --out BAG --truth JSON [--seconds 6] [--latency 0.030] [--pan-in-tf] "
+               "[--raw-images])\n";
   return 2;
 }
 
@@ -195,11 +202,17 @@ int main(int argc, char **argv)
 {
   std::string out, truth;
   double seconds = 6, latency = 0.030;
+  bool pan_in_tf = false, raw_images = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") {
-      std::cout << "make_drive_bag --out BAG --truth JSON [--seconds 6] [--latency 0.030]\n";
+      std::cout << "make_drive_bag --out BAG --truth JSON [--seconds 6] [--latency 0.030] [--pan-in-tf] "
+                   "[--raw-images]\n";
       return 0;
+    }
+    if (a == "--pan-in-tf" || a == "--raw-images") {
+      (a == "--pan-in-tf" ? pan_in_tf : raw_images) = true;
+      continue;
     }
     if (i + 1 >= argc)
       return usage(a + ": needs a value");
@@ -255,14 +268,15 @@ int main(int argc, char **argv)
       records.push_back({log_time, int(records.size()), std::move(w)});
     };
 
-    // /tf_static: the camera's mount at q = 0, bMc0 = bMpan(0) panMc, latched, logged at T0.
+    // /tf_static: the camera's mount at q = 0, bMc0 = bMpan(0) panMc, latched, logged at T0; with
+    // --pan-in-tf, the camera on the pan link, panMc.
     {
       tf2_msgs::TFMessage m;
       geometry_msgs::TransformStamped x;
       x.header.stamp = rosTime(kT0);
-      x.header.frame_id = kBase;
+      x.header.frame_id = pan_in_tf ? kPan : kBase;
       x.child_frame_id = kCamera;
-      x.transform = toTransform(bMpan(0) * panMc_);
+      x.transform = toTransform(pan_in_tf ? panMc_ : bMpan(0) * panMc_);
       m.transforms.push_back(x);
       auto h = header<tf2_msgs::TFMessage>("/tf_static", "/robot_state_publisher", true);
       add(kT0, [m, h](rosbag::Bag &b) { b.write("/tf_static", rosTime(kT0), m, h); });
@@ -313,6 +327,7 @@ int main(int argc, char **argv)
     // /joint_states at 50 Hz: the pan's q = -yaw; the wheels of a differential drive of radius 5 cm
     // and track 30 cm (their angles from the distance driven and the robot's yaw psi).
     const auto h_js = header<sensor_msgs::JointState>("/joint_states", "/joint_state_publisher", false);
+    const auto h_pan = header<tf2_msgs::TFMessage>("/tf", "/robot_state_publisher", false); // --pan-in-tf
     for (std::size_t i = 0; i < d.joints.size(); ++i) {
       const double t = d.joints[i].first, q = -d.joints[i].second;
       constexpr double e = 1e-5;
@@ -330,11 +345,24 @@ int main(int argc, char **argv)
       js.effort = {0.0, 0.0, 0.0};
       const ros::Time logged = rosTime(kT0 + t + kSmallDelay);
       add(kT0 + t + kSmallDelay, [js, logged, h_js](rosbag::Bag &b) { b.write("/joint_states", logged, js, h_js); });
+      if (pan_in_tf) { // robot_state_publisher: the joint's transform at the joint state's stamp, on /tf
+        geometry_msgs::TransformStamped x;
+        x.header.stamp = js.header.stamp;
+        x.header.frame_id = kBase;
+        x.child_frame_id = kPan;
+        x.transform = toTransform(bMpan(q));
+        tf2_msgs::TFMessage tf;
+        tf.transforms.push_back(x);
+        const ros::Time tf_logged = rosTime(kT0 + t + 2 * kSmallDelay); // after the joint state it comes from
+        add(kT0 + t + 2 * kSmallDelay,
+            [tf, tf_logged, h_pan](rosbag::Bag &b) { b.write("/tf", tf_logged, tf, h_pan); });
+      }
     }
 
     // The images (JPEG 90, image_transport's compressed format string) and camera_info, stamped at
     // the capture's motion time (camera time + drive::kTimeOffset) + latency.
     const auto h_img = header<sensor_msgs::CompressedImage>("/camera/image_raw/compressed", "/camera/camera_driver", false);
+    const auto h_raw = header<sensor_msgs::Image>("/camera/image_raw", "/camera/camera_driver", false); // --raw-images
     const auto h_info = header<sensor_msgs::CameraInfo>("/camera/camera_info", "/camera/camera_driver", false);
     std::vector<double> image_stamps;
     for (std::size_t k = 0; k < d.images.size(); ++k) {
@@ -348,9 +376,25 @@ int main(int argc, char **argv)
       if (!cv::imencode(".jpg", d.images[k], im.data, {cv::IMWRITE_JPEG_QUALITY, 90}))
         throw std::runtime_error("JPEG encoding failed");
       const ros::Time im_logged = rosTime(stamp + kImageDelay);
-      add(stamp + kImageDelay, [im, im_logged, h_img](rosbag::Bag &b) {
-        b.write("/camera/image_raw/compressed", im_logged, im, h_img);
-      });
+      if (raw_images) {
+        sensor_msgs::Image raw;
+        raw.header = im.header;
+        raw.height = std::uint32_t(d.images[k].rows);
+        raw.width = std::uint32_t(d.images[k].cols);
+        raw.encoding = "mono8";
+        raw.is_bigendian = 0;
+        raw.step = std::uint32_t(d.images[k].cols);
+        for (int r = 0; r < d.images[k].rows; ++r)
+          raw.data.insert(raw.data.end(), d.images[k].ptr<unsigned char>(r),
+                          d.images[k].ptr<unsigned char>(r) + d.images[k].cols);
+        add(stamp + kImageDelay, [raw, im_logged, h_raw](rosbag::Bag &b) {
+          b.write("/camera/image_raw", im_logged, raw, h_raw);
+        });
+      } else {
+        add(stamp + kImageDelay, [im, im_logged, h_img](rosbag::Bag &b) {
+          b.write("/camera/image_raw/compressed", im_logged, im, h_img);
+        });
+      }
       sensor_msgs::CameraInfo info;
       info.header = im.header;
       info.width = drive::kWidth;

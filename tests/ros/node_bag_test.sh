@@ -6,6 +6,12 @@
 # latency per message, /diagnostics) and `rosbag play --clock` of the bag. The node's logic is the
 # library's and tested without ROS; this checks only the wiring.
 #
+# Two rounds on one master: (A) the motion from /tf, the pan from /joint_states, compressed images,
+# the node started by the package's launch file; (B) the same drive recorded as a robot with
+# robot_state_publisher records it (make_drive_bag --pan-in-tf --raw-images): the motion from
+# /odom, the pan link in /tf (a moving mount, published after the odometry), raw images, the node
+# started as rosrun starts it.
+#
 #   YAWDEPTH=.../yawdepth MAKE_DRIVE_BAG=.../make_drive_bag YAWDEPTH_NODE=.../yawdepth_node \
 #     [SERVO_CLIENT=.../servo_depths_client] bash tests/ros/node_bag_test.sh
 #
@@ -46,22 +52,26 @@ W=$(mktemp -d "${TMPDIR:-/tmp}/yawdepth_node_bag.XXXXXX") || exit 1
 declare -A pid_of=()
 started=()   # names, in start order; each pid is its process group's id (setsid)
 
-stop_all() {
-  local pg i sig grace
-  for ((i = ${#started[@]} - 1; i >= 0; --i)); do  # the last started first: roscore last
-    pg=${pid_of[${started[i]}]}
-    # INT as roslaunch stops nodes (roscpp shuts down cleanly on it), TERM, then KILL.
-    for sig in INT TERM KILL; do
+# stop NAME: its process group stopped: INT as roslaunch stops nodes (roscpp shuts down cleanly on
+# it), TERM, then KILL; reaped.
+stop() {
+  local pg=${pid_of[$1]} sig grace
+  for sig in INT TERM KILL; do
+    kill -0 -- "-$pg" 2>/dev/null || break
+    [ "$sig" = INT ] || echo "node_bag_test: $1 (group $pg) still running: $sig" >&2
+    kill "-$sig" -- "-$pg" 2>/dev/null || true
+    [ "$sig" = INT ] && grace=$STOP_GRACE || grace=2
+    for _ in $(seq $((grace * 10))); do
       kill -0 -- "-$pg" 2>/dev/null || break
-      [ "$sig" = INT ] || echo "node_bag_test: ${started[i]} (group $pg) still running: $sig" >&2
-      kill "-$sig" -- "-$pg" 2>/dev/null || true
-      [ "$sig" = INT ] && grace=$STOP_GRACE || grace=2
-      for _ in $(seq $((grace * 10))); do
-        kill -0 -- "-$pg" 2>/dev/null || break
-        sleep 0.1
-      done
+      sleep 0.1
     done
-    wait "$pg" 2>/dev/null || true
+  done
+  wait "$pg" 2>/dev/null || true
+}
+stop_all() {
+  local i
+  for ((i = ${#started[@]} - 1; i >= 0; --i)); do  # the last started first: roscore last
+    stop "${started[i]}"
   done
   started=()
 }
@@ -72,8 +82,8 @@ cleanup() {
   set +e
   stop_all
   if [ "$rc" -ne 0 ]; then
-    for f in roscore node checker client play; do
-      [ "$f" = checker ] && [ -n "${checker_shown:-}" ] && continue
+    for f in roscore node checker client play node_b checker_b play_b; do
+      [ "$f" = "${checker_shown:-}" ] && continue
       [ -s "$W/$f.log" ] && { echo "--- $f.log (last 40 lines)"; tail -n 40 "$W/$f.log"; }
     done
   fi
@@ -93,10 +103,11 @@ start() {
   started+=("$name")
 }
 alive() { kill -0 "${pid_of[$1]}" 2>/dev/null; }
-# The services that must outlive every wait: roscore and the node, once started.
+# The services that must outlive every wait: roscore and the round's node, once started.
+services=(roscore node)
 services_up() {
   local s
-  for s in roscore node; do
+  for s in "${services[@]}"; do
     [ -z "${pid_of[$s]:-}" ] || alive "$s" || die "$s exited (see $s.log)"
   done
 }
@@ -116,7 +127,7 @@ wait_for() {
 finish() {
   local limit; limit=$(bounded "$2"); local end=$((SECONDS + limit))
   while alive "$1"; do
-    [ "$1" = checker ] || services_up  # the checker may outlive a node that died after the bag
+    case $1 in checker*) ;; *) services_up ;; esac  # the checker may outlive a node that died after the bag
     [ "$SECONDS" -lt "$end" ] || die "$1 still running after ${limit} s"
     sleep 0.2
   done
@@ -127,6 +138,8 @@ finish() {
 # 1. The bag and measure's numbers on it (as drive_bag_measure.sh measures it).
 timeout "$(bounded 60)" "$MAKE_DRIVE_BAG" --out "$W/drive.bag" --truth "$W/truth.json" --seconds "$SECONDS_OF_DRIVE" \
   || die "make_drive_bag"
+timeout "$(bounded 60)" "$MAKE_DRIVE_BAG" --out "$W/drive_b.bag" --truth "$W/truth_b.json" \
+  --seconds "$SECONDS_OF_DRIVE" --pan-in-tf --raw-images || die "make_drive_bag --pan-in-tf --raw-images"
 measure_args=(--bag "$W/drive.bag" --image-topic /camera/image_raw/compressed --tf odom:base_link
               --joint-topic /joint_states --joint pan_joint --joint-axis 0,0,1 --joint-origin 0.1,0,0.3
               --features klt --sigma-px 0.5 --motion-noise absolute --sigma-odom 1e-4 --sigma-rot 1e-4
@@ -218,19 +231,50 @@ if [ -n "${SERVO_CLIENT:-}" ]; then
 fi
 
 # 6. The checker's verdict.
-finish checker 160
-checker_rc=$finished_rc
-cat "$W/checker.log"
-checker_shown=1
-# The node's warnings and errors, from /rosout's log (its stdout may be lost to a signal).
-rosout_log=$(ls "$ROS_LOG_DIR"/latest/rosout.log 2>/dev/null || true)
-if [ -n "$rosout_log" ] && grep -E -q ' (WARN|ERROR|FATAL) /yawdepth_node ' "$rosout_log"; then
-  echo "yawdepth_node's warnings and errors on /rosout (first 20):"
-  grep -E ' (WARN|ERROR|FATAL) /yawdepth_node ' "$rosout_log" | head -n 20 | cut -c1-400 | sed 's/^/  | /'
-fi
+# verdict CHECKER ROUND NODE: the checker's exit status (its log shown) and the node's warnings on /rosout.
+verdict() {
+  local checker=$1 round=$2 node=$3 rc rosout_log
+  finish "$checker" 160
+  rc=$finished_rc
+  echo "--- round $round: $node"
+  cat "$W/$checker.log"
+  checker_shown=$checker
+  # The node's warnings and errors, from /rosout's log (its stdout may be lost to a signal).
+  rosout_log=$(ls "$ROS_LOG_DIR"/latest/rosout.log 2>/dev/null || true)
+  if [ -n "$rosout_log" ] && grep -E -q " (WARN|ERROR|FATAL) $node " "$rosout_log"; then
+    echo "$node's warnings and errors on /rosout (first 20):"
+    grep -E " (WARN|ERROR|FATAL) $node " "$rosout_log" | head -n 20 | cut -c1-400 | sed 's/^/  | /'
+  fi
+  [ "$rc" -eq 0 ] || die "check_node_clouds.py ($node): exit $rc"
+}
+verdict checker A /yawdepth_node
 alive node || die "yawdepth_node exited before the end (see node.log)"
-[ "$checker_rc" -eq 0 ] || die "check_node_clouds.py: exit $checker_rc"
 if [ -n "${SERVO_CLIENT:-}" ]; then
   "$PYTHON" "$here/check_servo_depths.py" "$W/truth.json" "$W/depths.csv" || die "the servo client's depths (check_servo_depths.py)"
 fi
+
+# 7. Round B: the node (and the client) of round A stopped; on the same master, a node started as
+# rosrun starts it, with the motion from /odom, no joint (the pan link is in /tf: a moving mount),
+# raw images; its checker; bag B played.
+stop node
+[ -z "${SERVO_CLIENT:-}" ] || stop client
+services=(roscore node_b)
+node_b_args=(image:=/camera/image_raw __name:=yawdepth_odom _motion:=odom _camera_latency:=0.03
+             _sigma_px:=0.5 _motion_noise:=absolute _sigma_odom:=1e-4 _sigma_rot:=1e-4 _sigma_yaw:=1e-4)
+echo "+ yawdepth_node ${node_b_args[*]}"
+start node_b "$YAWDEPTH_NODE" "${node_b_args[@]}"
+checker_timeout=$(( $(bounded 100) - 10 ))
+[ "$checker_timeout" -ge 10 ] || checker_timeout=10
+start checker_b "$PYTHON" "$here/check_node_clouds.py" "$W/truth_b.json" --measure-stats "$W/measure_stats" \
+  --ready "$W/ready_b" --done "$W/done_b" --node /yawdepth_odom --image-topic /camera/image_raw \
+  --inputs /camera/image_raw /camera/camera_info /tf /tf_static /odom --ready-timeout 45 --timeout "$checker_timeout"
+wait_for checker_b 50 "checker B ready (connected to the node, the node subscribed)" test -e "$W/ready_b"
+echo "+ rosbag play --clock -q -d 1 drive_b.bag"
+start play_b timeout -k 5 "$(bounded $((SECONDS_OF_DRIVE + 60)))" rosbag play --clock -q -d 1 "$W/drive_b.bag"
+finish play_b $((SECONDS_OF_DRIVE + 70))
+[ "$finished_rc" -eq 0 ] || die "rosbag play drive_b.bag: exit $finished_rc"
+alive node_b || die "yawdepth_node (round B) exited during the bag (see node_b.log)"
+touch "$W/done_b"
+verdict checker_b B /yawdepth_odom
+alive node_b || die "yawdepth_node (round B) exited before the end (see node_b.log)"
 echo "node_bag_test: passed ($((SECONDS - start_time)) s)"

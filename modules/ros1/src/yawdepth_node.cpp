@@ -288,10 +288,9 @@ private:
       ROS_INFO("yawdepth_node: measuring: mount %s -> %s%s, method %s", node_.bodyFrame().c_str(),
                node_.cameraFrame().c_str(), node_.movingMount() ? " (moving: the camera's pose is the motion)" : "",
                yawdepth::toString(node_.settings().online.method));
-      if (node_.movingMount())
-        ROS_WARN("yawdepth_node: the camera's mount %s -> %s moves in /tf: the camera's own pose is the motion%s",
-                 node_.bodyFrame().c_str(), node_.cameraFrame().c_str(),
-                 node_.settings().joint.empty() ? "" : " (~joint is not used)");
+      if (node_.movingMount() && !node_.settings().joint.empty()) // the INFO above says it; a set ~joint is unused
+        ROS_WARN("yawdepth_node: the camera's mount %s -> %s moves in /tf, which holds the pan: ~joint %s is not used",
+                 node_.bodyFrame().c_str(), node_.cameraFrame().c_str(), node_.settings().joint.c_str());
     }
     {
       std::lock_guard<std::mutex> lock(stamps_mutex_);
