@@ -295,7 +295,7 @@ private:
     {
       std::lock_guard<std::mutex> lock(stamps_mutex_);
       stamps_.emplace_back(stamp.toSec(), stamp);
-      while (stamps_.size() > std::size_t(4 * node_.settings().online.max_queued_images + 8))
+      while (stamps_.size() > 4 * static_cast<std::size_t>(node_.settings().online.max_queued_images) + 8)
         stamps_.pop_front();
     }
     node_.pushImage(stamp.toSec(), gray);
