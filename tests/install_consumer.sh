@@ -40,4 +40,20 @@ for scenario in front side; do
   [ -n "$t" ] && [ -n "$e" ] || { echo "servo_pioneer_pan $scenario: did not converge (true: '$t', estimated: '$e')" >&2; exit 1; }
   [ $((100 * e)) -le $((105 * t)) ] || { echo "servo_pioneer_pan $scenario: $e iterations against $t with true depth" >&2; exit 1; }
 done
-echo "5 passed, 0 failed"
+passed=5
+# The ROS package (the `ros` component, installed when the node was built): roslaunch finds the
+# installed package through ROS_PACKAGE_PATH (docs/ros.md) and resolves its node to the installed
+# executable, every library of which loads.
+if [ -d "$tmp/prefix/share/yawdepth/ros" ]; then
+  pkg=$tmp/prefix/share/yawdepth/ros
+  args=$(ROS_PACKAGE_PATH=$pkg:/usr/share roslaunch --args /yawdepth_node yawdepth yawdepth.launch \
+           image:=/camera/image_raw) || { echo "roslaunch yawdepth yawdepth.launch: the installed package not found" >&2; exit 1; }
+  exe=$(printf '%s\n' "$args" | tr ' ' '\n' | grep '/yawdepth_node$' | head -n 1)
+  [ -n "$exe" ] && [ "$(readlink -f "$exe")" = "$(readlink -f "$tmp/prefix/lib/yawdepth/yawdepth_node")" ] ||
+    { echo "roslaunch resolves yawdepth_node to '$exe', not the installed $tmp/prefix/lib/yawdepth/yawdepth_node" >&2; exit 1; }
+  if ldd "$exe" | grep -q "not found"; then
+    echo "the installed yawdepth_node misses libraries:" >&2; ldd "$exe" | grep "not found" >&2; exit 1
+  fi
+  passed=$((passed + 1))
+fi
+echo "$passed passed, 0 failed"
