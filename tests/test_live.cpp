@@ -5,10 +5,14 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 #include <yawdepth/error.h>
 #include <yawdepth/live/measuring_node.h>
@@ -477,4 +481,129 @@ TEST_CASE("MeasuringNode: motion waiting for its transforms is pushed in order o
     REQUIRE(ok > 1000);
     CHECK(static_cast<double>(within) >= kWithin3SigmaFraction * static_cast<double>(ok));
   }
+}
+
+TEST_CASE("MeasuringNode: streams from their own threads in real time, a consumer and a servo client beside them",
+          "[live]")
+{
+  // The subject is the node's threads (a middleware's callbacks: one per stream, a consumer, a service),
+  // not its bounds: the motion kept long, so that a loaded or sanitized run measures every image.
+  MeasuringNodeSettings settings = liveSettings();
+  settings.online.max_image_age = 1e3;
+  settings.online.max_queued_images = 1000;
+  settings.service_wait = 0.05;
+  MeasuringNode node(settings);
+  REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+  node.setOdometryFrames("odom", "base_link", "/odom");
+  REQUIRE(node.start("camera_optical", fixedMount).empty()); // before the streams: none of them is ignored
+  const drive::Drive &d = liveDrive();
+  const double play = 1.5; // s of the drive played in real time
+  const auto start = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
+  const auto at = [&](double t) {
+    return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(t));
+  };
+  std::atomic<int> done{0};
+  std::atomic<std::size_t> images_pushed{0};
+  std::atomic<double> last_image_t{-1.0};
+  std::thread poses([&] {
+    for (const auto &p : d.poses) {
+      if (p.first > play + 0.1)
+        break;
+      std::this_thread::sleep_until(at(p.first));
+      node.setOdometryFrames("odom", "base_link", "/odom"); // as each odometry message does
+      node.pushMotion(p.first, wMv(p.second));
+    }
+    ++done;
+  });
+  std::thread joints([&] {
+    for (const auto &j : d.joints) {
+      if (j.first > play + 0.1)
+        break;
+      std::this_thread::sleep_until(at(j.first));
+      node.pushJointState(j.first, {"wheel", "pan"}, {0.5, j.second}, "/joint_states");
+    }
+    ++done;
+  });
+  std::thread images([&] {
+    for (std::size_t i = 0; i < d.image_times.size() && d.image_times[i] <= play; ++i) {
+      std::this_thread::sleep_until(at(d.image_times[i] + drive::kTimeOffset));
+      node.pushImage(d.image_times[i], d.images[i]);
+      ++images_pushed;
+      last_image_t = d.image_times[i];
+    }
+    ++done;
+  });
+  // A servo client: the points of the newest image it saw, asked at that image's stamp, over and over.
+  std::mutex seen_mutex;
+  ServoDepthRequest seen;
+  std::size_t answered = 0, refused = 0;
+  std::vector<std::string> unexpected;
+  std::atomic<bool> consumer_done{false};
+  std::thread servo([&] {
+    while (!consumer_done.load()) {
+      ServoDepthRequest q;
+      {
+        std::lock_guard<std::mutex> lock(seen_mutex);
+        q = seen;
+      }
+      if (!q.ids.empty()) {
+        const ServoDepthAnswer a = node.depths(q);
+        if (a.error.empty() && a.depths.size() == q.ids.size())
+          ++answered;
+        else if (a.error.rfind("no motion around", 0) == 0)
+          ++refused;
+        else
+          unexpected.push_back(a.error.empty() ? "wrong size" : a.error);
+      }
+      node.diagnostics();
+      std::this_thread::sleep_for(std::chrono::milliseconds(7));
+    }
+  });
+  std::vector<OnlineFrame> frames;
+  std::size_t ok = 0, within = 0;
+  for (;;) {
+    const bool finished = done.load() >= 3;
+    for (OnlineFrame &f : node.process()) {
+      for (const CloudPoint &c : node.cloud(f)) {
+        ++ok;
+        within += std::abs(c.c_P.z() - drive::wallDepth(d, f.pose, c.u, c.v)) <= 3 * c.sigma_z ? 1 : 0;
+      }
+      {
+        std::lock_guard<std::mutex> lock(seen_mutex);
+        seen = ServoDepthRequest();
+        seen.t = f.t;
+        for (const OnlinePoint &p : f.points) {
+          seen.ids.push_back(p.id);
+          seen.u.push_back(p.u);
+          seen.v.push_back(p.v);
+        }
+      }
+      frames.push_back(std::move(f));
+    }
+    if (finished && (frames.empty() || frames.back().t >= last_image_t.load()))
+      break;
+    if (finished && std::chrono::steady_clock::now() > at(play + 60.0))
+      break; // a measurer that stopped measuring: the checks below fail
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  consumer_done = true;
+  poses.join();
+  joints.join();
+  images.join();
+  servo.join();
+  INFO("images pushed " << images_pushed.load() << ", measured " << frames.size() << ", ok points "
+                                 << ok << ", servo answered " << answered << ", refused " << refused);
+  REQUIRE(images_pushed.load() > 30);
+  // Every image measured, but at most the first (before the drive's first pose).
+  CHECK(frames.size() + 1 >= images_pushed.load());
+  for (std::size_t k = 1; k < frames.size(); ++k)
+    CHECK(frames[k].t > frames[k - 1].t);
+  REQUIRE(ok > 1000);
+  CHECK(static_cast<double>(within) >= kWithin3SigmaFraction * static_cast<double>(ok));
+  CHECK(answered > 0);
+  CHECK(unexpected.empty());
+  bool counted = false;
+  for (const auto &[k, v] : node.diagnostics().values)
+    counted = counted || (k == "images measured" && v == std::to_string(frames.size()));
+  CHECK(counted);
 }
