@@ -216,12 +216,18 @@ fi
 
 # 5. The bag at its own rate, its clock published (-d: a second after advertising before publishing,
 # so the node's and the checker's connections are up for the first messages).
-echo "+ rosbag play --clock -q -d 1 drive.bag"
-start play timeout -k 5 "$(bounded $((SECONDS_OF_DRIVE + 60)))" rosbag play --clock -q -d 1 "$W/drive.bag"
-finish play $((SECONDS_OF_DRIVE + 70))
-[ "$finished_rc" -eq 0 ] || die "rosbag play: exit $finished_rc"
-alive node || die "yawdepth_node exited during the bag (see node.log)"
-touch "$W/done"
+# play_bag NAME BAG NODE DONE: rosbag play of BAG as process NAME; the process NODE must outlive it;
+# DONE touched after (the checker's cue).
+play_bag() {
+  local name=$1 bag=$2 node=$3 done_file=$4
+  echo "+ rosbag play --clock -q -d 1 $(basename "$bag")"
+  start "$name" timeout -k 5 "$(bounded $((SECONDS_OF_DRIVE + 60)))" rosbag play --clock -q -d 1 "$bag"
+  finish "$name" $((SECONDS_OF_DRIVE + 70))
+  [ "$finished_rc" -eq 0 ] || die "rosbag play $(basename "$bag"): exit $finished_rc"
+  alive "$node" || die "yawdepth_node ($node) exited during the bag (see $node.log)"
+  touch "$done_file"
+}
+play_bag play "$W/drive.bag" node "$W/done"
 
 # The servo client stopped (INT: roscpp shuts down, its CSV flushed) and its answers checked.
 if [ -n "${SERVO_CLIENT:-}" ]; then
@@ -269,12 +275,7 @@ start checker_b "$PYTHON" "$here/check_node_clouds.py" "$W/truth_b.json" --measu
   --ready "$W/ready_b" --done "$W/done_b" --node /yawdepth_odom --image-topic /camera/image_raw \
   --inputs /camera/image_raw /camera/camera_info /tf /tf_static /odom --ready-timeout 45 --timeout "$checker_timeout"
 wait_for checker_b 50 "checker B ready (connected to the node, the node subscribed)" test -e "$W/ready_b"
-echo "+ rosbag play --clock -q -d 1 drive_b.bag"
-start play_b timeout -k 5 "$(bounded $((SECONDS_OF_DRIVE + 60)))" rosbag play --clock -q -d 1 "$W/drive_b.bag"
-finish play_b $((SECONDS_OF_DRIVE + 70))
-[ "$finished_rc" -eq 0 ] || die "rosbag play drive_b.bag: exit $finished_rc"
-alive node_b || die "yawdepth_node (round B) exited during the bag (see node_b.log)"
-touch "$W/done_b"
+play_bag play_b "$W/drive_b.bag" node_b "$W/done_b"
 verdict checker_b B /yawdepth_odom
 alive node_b || die "yawdepth_node (round B) exited before the end (see node_b.log)"
 echo "node_bag_test: passed ($((SECONDS - start_time)) s)"
