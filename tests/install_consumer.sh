@@ -46,13 +46,15 @@ passed=5
 # executable, every library of which loads.
 if [ -d "$tmp/prefix/share/yawdepth/ros" ]; then
   pkg=$tmp/prefix/share/yawdepth/ros
+  command -v roslaunch >/dev/null || { echo "roslaunch missing (tools/bootstrap.sh installs it with the node's packages)" >&2; exit 1; }
   args=$(ROS_PACKAGE_PATH=$pkg:/usr/share roslaunch --args /yawdepth_node yawdepth yawdepth.launch \
            image:=/camera/image_raw) || { echo "roslaunch yawdepth yawdepth.launch: the installed package not found" >&2; exit 1; }
-  exe=$(printf '%s\n' "$args" | tr ' ' '\n' | grep '/yawdepth_node$' | head -n 1)
+  exe=$(printf '%s\n' "$args" | tr ' ' '\n' | { grep '/yawdepth_node$' || true; } | head -n 1)
   [ -n "$exe" ] && [ "$(readlink -f "$exe")" = "$(readlink -f "$tmp/prefix/lib/yawdepth/yawdepth_node")" ] ||
     { echo "roslaunch resolves yawdepth_node to '$exe', not the installed $tmp/prefix/lib/yawdepth/yawdepth_node" >&2; exit 1; }
-  if ldd "$exe" | grep -q "not found"; then
-    echo "the installed yawdepth_node misses libraries:" >&2; ldd "$exe" | grep "not found" >&2; exit 1
+  ldd "$exe" >"$tmp/node_ldd" || { echo "ldd $exe failed" >&2; exit 1; }
+  if grep "not found" "$tmp/node_ldd" >&2; then
+    echo "the installed yawdepth_node misses the libraries above" >&2; exit 1
   fi
   passed=$((passed + 1))
 fi

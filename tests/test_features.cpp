@@ -908,8 +908,9 @@ TEST_CASE("klt: prepare() ahead of track() changes no track; another image's pre
           "[features][klt]")
 {
   // A sequence along a wall: small sideways steps (plain LK), then a wide one (the guided search), a
-  // turn, and a step back; tracked three ways: track() alone, prepare() then track() with the same
-  // image, and prepare() of another image (discarded) then track().
+  // turn, and a step back; tracked four ways: track() alone, prepare() then track() with the same
+  // image, prepare() of another image (discarded) then track(), and the images as views into a
+  // larger buffer.
   constexpr std::size_t kMinTracked = 50; // per image: the comparison is over real tracks
   const PlaneScene scene;
   const cv::Mat im0 = scene.texture(5);
@@ -925,7 +926,10 @@ TEST_CASE("klt: prepare() ahead of track() changes no track; another image's pre
     images.push_back(scene.warp(im0, M));
   KltOptions o;
   o.max_features = 200;
-  KltTracker alone(scene.camera, o), ahead(scene.camera, o), other(scene.camera, o);
+  KltTracker alone(scene.camera, o), ahead(scene.camera, o), other(scene.camera, o), roi(scene.camera, o);
+  // The images as views into larger buffers (a camera driver's padded frames), their margin other
+  // pixels, the buffer overwritten after each step: the tracker keeps nothing of the caller's memory.
+  cv::Mat buffer(480 + 80, 640 + 80, CV_8UC1);
   for (std::size_t i = 0; i < images.size(); ++i) {
     CAPTURE(i);
     KltMotion m;
@@ -942,14 +946,21 @@ TEST_CASE("klt: prepare() ahead of track() changes no track; another image's pre
     CHECK_FALSE(ahead.prepared(images[i]));
     other.prepare(images[(i + 1) % images.size()]);
     const std::vector<FeatureObservation> c = other.track(images[i].clone(), motion);
+    cv::randu(buffer, 0, 256);
+    const cv::Mat view = buffer(cv::Rect(40, 40, 640, 480));
+    images[i].copyTo(view);
+    roi.prepare(view);
+    const std::vector<FeatureObservation> r = roi.track(view, motion);
     REQUIRE(a.size() >= kMinTracked);
     REQUIRE(b.size() == a.size());
     REQUIRE(c.size() == a.size());
+    REQUIRE(r.size() == a.size());
     for (std::size_t k = 0; k < a.size(); ++k) { // bit for bit
       CHECK((b[k].id == a[k].id && b[k].u == a[k].u && b[k].v == a[k].v));
       CHECK((c[k].id == a[k].id && c[k].u == a[k].u && c[k].v == a[k].v));
+      CHECK((r[k].id == a[k].id && r[k].u == a[k].u && r[k].v == a[k].v));
     }
-    for (const KltTracker *t : {&ahead, &other}) {
+    for (const KltTracker *t : {&ahead, &other, &roi}) {
       CHECK(t->lastStats().tracked == alone.lastStats().tracked);
       CHECK(t->lastStats().guided == alone.lastStats().guided);
       CHECK(t->lastStats().detected == alone.lastStats().detected);

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -403,20 +404,42 @@ TEST_CASE("MeasuringNode: motion waiting for its transforms is pushed in order o
         return std::nullopt;
       return vpHomogeneousMatrix(t, 0, 0, 0, 0, 0);
     };
+    const auto was_asked = [&asked](std::uint64_t tag) { return std::find(asked.begin(), asked.end(), tag) != asked.end(); };
     for (int k = 1; k <= 4; ++k)
       node.queueMotion(0.1 * k, static_cast<std::uint64_t>(100 + k));
-    node.queueMotion(0.35, 7); // not after the last queued (0.4): ignored
-    CHECK(node.resolveMotion(at) == 2); // 0.2 and 0.3; 0.1 is before the link's first reading: dropped
-    CHECK(std::find(asked.begin(), asked.end(), 103u) != asked.end()); // the tag given back
-    CHECK(std::find(asked.begin(), asked.end(), 7u) == asked.end());
+    node.queueMotion(0.35, 7); // before the last queued: in its place
+    CHECK(node.resolveMotion(at) == 3); // 0.2, 0.3, 0.35; 0.1 is before the link's first reading: dropped
+    CHECK(was_asked(103));             // the tag given back
+    CHECK(was_asked(7));
     CHECK(dropped(node) == 1);
+    node.queueMotion(0.25, 8); // not after the last pushed (0.35): ignored
+    node.queueMotion(0.4, 9);  // queued already (tag 104): ignored
     CHECK(node.resolveMotion(at) == 0); // 0.4 waits
+    CHECK_FALSE(was_asked(8));
+    CHECK_FALSE(was_asked(9));
     covered_to = 0.41;
     CHECK(node.resolveMotion(at) == 1);
-    node.queueMotion(0.45, 9);
-    node.queueMotion(1.0, 10); // 0.45 is more than max_image_age (0.5 s) behind: dropped
+    // A stamp ahead of the others (a post-dated transform) waits; the earlier ones go through.
+    node.queueMotion(0.9, 11);
+    node.queueMotion(0.5, 12);
+    node.queueMotion(0.6, 13);
+    covered_to = 0.65;
+    CHECK(node.resolveMotion(at) == 2);
+    covered_to = 0.95;
+    CHECK(node.resolveMotion(at) == 1);
+    CHECK(dropped(node) == 1);
+    // Bounded: a sample max_image_age (0.5 s) behind the newest queued is dropped.
+    node.queueMotion(1.0, 14);
+    node.queueMotion(1.6, 15);
     CHECK(dropped(node) == 2);
-    covered_to = 1.0;
+    covered_to = 2.0;
+    CHECK(node.resolveMotion(at) == 1);
+    // A pose the measurer refuses (not finite) is not retried: the next one goes through.
+    vpHomogeneousMatrix nan_pose;
+    nan_pose[0][3] = std::numeric_limits<double>::quiet_NaN();
+    node.queueMotion(1.7, 16, nan_pose);
+    node.queueMotion(1.8, 17, vpHomogeneousMatrix());
+    CHECK_THROWS_AS(node.resolveMotion(at), Error);
     CHECK(node.resolveMotion(at) == 1);
     CHECK(dropped(node) == 2);
   }

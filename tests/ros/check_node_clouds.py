@@ -157,6 +157,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("truth")
     ap.add_argument("--measure-stats", required=True, help="check_measure_truth.py --stats's file")
+    ap.add_argument("--measure-label", default="measure --bag (same bag)", help="its row's name")
     ap.add_argument("--ready", required=True, help="written when connected")
     ap.add_argument("--done", required=True, help="the test touches it when the bag has played")
     ap.add_argument("--node", default="/yawdepth_node")
@@ -308,7 +309,7 @@ def main():
         print(line("node camera cloud, every message", s_all))
         print(line("node world cloud, every message", s_world))
         print(line("node, each feature's last estimate", s_last))
-        print(f"{'measure --bag (same bag)':<34} {int(m_ok):>6} {'':>9} {100 * m_rel:>9.3f} {100 * m_within:>8.1f}")
+        print(f"{a.measure_label:<34} {int(m_ok):>6} {'':>9} {100 * m_rel:>9.3f} {100 * m_within:>8.1f}")
         med_world_dist = statistics.median(world_dist)
         info("world cloud: median |distance to wall|", f"{1000 * med_world_dist:.2f} mm")
         check("world cloud vs camera cloud, median |d|", f"{1000 * med_world_dist:.2f} mm vs {1000 * s_all[1]:.2f} mm",

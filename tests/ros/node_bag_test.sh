@@ -249,7 +249,7 @@ verdict() {
   rosout_log=$(ls "$ROS_LOG_DIR"/latest/rosout.log 2>/dev/null || true)
   if [ -n "$rosout_log" ] && grep -E -q " (WARN|ERROR|FATAL) $node " "$rosout_log"; then
     echo "$node's warnings and errors on /rosout (first 20):"
-    grep -E " (WARN|ERROR|FATAL) $node " "$rosout_log" | head -n 20 | cut -c1-400 | sed 's/^/  | /'
+    { grep -E " (WARN|ERROR|FATAL) $node " "$rosout_log" || true; } | head -n 20 | cut -c1-400 | sed 's/^/  | /' || true
   fi
   [ "$rc" -eq 0 ] || die "check_node_clouds.py ($node): exit $rc"
 }
@@ -273,6 +273,7 @@ checker_timeout=$(( $(bounded 100) - 10 ))
 [ "$checker_timeout" -ge 10 ] || checker_timeout=10
 start checker_b "$PYTHON" "$here/check_node_clouds.py" "$W/truth_b.json" --measure-stats "$W/measure_stats" \
   --ready "$W/ready_b" --done "$W/done_b" --node /yawdepth_odom --image-topic /camera/image_raw \
+  --measure-label "measure --bag (round A's bag)" \
   --inputs /camera/image_raw /camera/camera_info /tf /tf_static /odom --ready-timeout 45 --timeout "$checker_timeout"
 wait_for checker_b 50 "checker B ready (connected to the node, the node subscribed)" test -e "$W/ready_b"
 play_bag play_b "$W/drive_b.bag" node_b "$W/done_b"

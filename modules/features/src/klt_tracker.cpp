@@ -333,7 +333,10 @@ KltTracker::Ahead KltTracker::ahead(const cv::Mat &image) const
   Ahead a;
   a.image = image;
   const cv::Size win(options_.window, options_.window);
-  cv::buildOpticalFlowPyramid(image, a.pyramid, win, std::max(options_.pyramid_levels, options_.guided_levels), true);
+  // Its own copy (no reuse of a larger buffer around an ROI image): the borders LK would make itself,
+  // and nothing the caller may overwrite kept as the next step's previous image.
+  cv::buildOpticalFlowPyramid(image, a.pyramid, win, std::max(options_.pyramid_levels, options_.guided_levels), true,
+                              cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
   if (points_.empty() || previous_.empty())
     return a;
   const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
@@ -351,24 +354,33 @@ bool KltTracker::prepared(const cv::Mat &image) const
          ahead_.image.step == image.step && ahead_.image.type() == image.type();
 }
 
+namespace {
+/* The pixels of `image` alone: a view into a larger buffer (an ROI) copied, so that no filter reads
+   the pixels around it and nothing kept refers to the caller's memory. */
+cv::Mat ownPixels(const cv::Mat &image) { return image.isSubmatrix() ? image.clone() : image; }
+} // namespace
+
 void KltTracker::prepare(const cv::Mat &image)
 {
   checkImage(image);
-  if (!prepared(image))
-    ahead_ = ahead(image);
+  if (prepared(image))
+    return;
+  ahead_ = ahead(ownPixels(image));
+  ahead_.image = image; // the caller's: what track() recognises
 }
 
 std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const KltMotion *motion)
 {
   checkImage(image);
-  Ahead work = prepared(image) ? std::move(ahead_) : ahead(image);
+  const cv::Mat own = ownPixels(image);
+  Ahead work = prepared(image) ? std::move(ahead_) : ahead(own);
   ahead_ = Ahead();
   stats_ = KltStats();
-  const ImageInterior interior(image, options_.border_px);
+  const ImageInterior interior(own, options_.border_px);
 
   LiveFeatures kept;
   if (!points_.empty() && !previous_.empty())
-    kept = followFeatures(*this, options_, previous_, previous_pyramid_, image, work.pyramid, points_, ids_, motion,
+    kept = followFeatures(*this, options_, previous_, previous_pyramid_, own, work.pyramid, points_, ids_, motion,
                           hints_, interior, work.next, work.back, work.status, work.status_back, stats_);
   // Still one static point? Appearance and jumps (track_checks.h).
   appearance_cuts_.clear();
@@ -376,7 +388,7 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
     std::map<long, cv::Point2f> previous;
     for (std::size_t i = 0; i < ids_.size(); ++i)
       previous.emplace(ids_[i], points_[i]);
-    track_checks::checkTracks(camera_, options_, image, motion, previous, kept.points, kept.ids, state_, next_id_,
+    track_checks::checkTracks(camera_, options_, own, motion, previous, kept.points, kept.ids, state_, next_id_,
                               stats_, appearance_cuts_);
     stats_.tracked = static_cast<int>(kept.points.size());
   }
@@ -384,7 +396,7 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
   // New corners where the tracks thinned out, away from the live ones.
   const int alive = static_cast<int>(kept.points.size());
   if (alive < options_.redetect_fraction * options_.max_features || alive == 0) {
-    const std::vector<cv::Point2f> corners = detectCorners(image, options_, kept.points, options_.max_features - alive);
+    const std::vector<cv::Point2f> corners = detectCorners(own, options_, kept.points, options_.max_features - alive);
     // Sub-pixel refinement can pull two detections onto one corner: keep the spacing.
     const double min_d2 = options_.min_distance * options_.min_distance;
     const auto crowded = [&](const cv::Point2f &c) {
@@ -399,7 +411,7 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
       kept.points.push_back(c);
       kept.ids.push_back(next_id_);
       if (options_.min_ncc > 0) // the appearance check's reference
-        state_[next_id_].reference = track_checks::patchAt(image, c, options_.window);
+        state_[next_id_].reference = track_checks::patchAt(own, c, options_.window);
       ++next_id_;
       ++stats_.detected;
     }
@@ -414,7 +426,7 @@ std::vector<FeatureObservation> KltTracker::track(const cv::Mat &image, const Kl
     for (auto it = state_.begin(); it != state_.end();)
       it = std::binary_search(live.begin(), live.end(), it->first) ? std::next(it) : state_.erase(it);
   }
-  previous_ = image.clone();
+  previous_ = own.data == image.data ? own.clone() : own; // own pixels, kept
   previous_pyramid_ = std::move(work.pyramid);
   std::vector<FeatureObservation> out;
   out.reserve(points_.size());

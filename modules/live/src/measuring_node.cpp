@@ -98,6 +98,8 @@ std::string MeasuringNode::bodyFrame() const
 {
   if (settings_.motion == "tf")
     return settings_.body_frame;
+  if (started_) // set once before started_: no lock (a transform lookup under motion_mutex_ calls this)
+    return body_frame_;
   std::lock_guard<std::mutex> lock(mutex_);
   return odom_body_;
 }
@@ -178,11 +180,16 @@ void MeasuringNode::queueMotion(double t, std::uint64_t tag, const std::optional
   if (!started_ || !std::isfinite(t))
     return;
   std::lock_guard<std::mutex> lock(motion_mutex_);
-  if (!(t > last_queued_t_))
+  if (!(t > last_pushed_t_))
+    return; // the measurer would refuse it (out of order)
+  // In time order: a stamp ahead of the others (a post-dated transform) waits at the end while the
+  // earlier ones go through.
+  const auto at = std::upper_bound(pending_motion_.begin(), pending_motion_.end(), t,
+                                   [](double v, const PendingMotion &p) { return v < p.t; });
+  if (at != pending_motion_.begin() && std::prev(at)->t == t)
     return; // the sample queued at this time stands for it (its lookup sees every transform by then)
-  last_queued_t_ = t;
-  pending_motion_.push_back({t, tag, wMb});
-  const double keep_from = t - online_.max_image_age; // older: no image would wait for it
+  pending_motion_.insert(at, {t, tag, wMb});
+  const double keep_from = pending_motion_.back().t - online_.max_image_age; // older: no image would wait for it
   while (pending_motion_.front().t < keep_from) {
     pending_motion_.pop_front();
     ++unresolved_motion_;
@@ -196,20 +203,21 @@ std::size_t MeasuringNode::resolveMotion(const TransformAt &transform_at)
   std::lock_guard<std::mutex> lock(motion_mutex_);
   std::size_t pushed = 0;
   for (std::size_t i = 0; i < pending_motion_.size();) {
-    const PendingMotion &p = pending_motion_[i];
-    const std::optional<vpHomogeneousMatrix> X = transform_at(p.t, p.tag);
+    const std::optional<vpHomogeneousMatrix> X = transform_at(pending_motion_[i].t, pending_motion_[i].tag);
     if (!X) {
       ++i;
       continue;
     }
-    if (p.wMb)
+    const PendingMotion p = pending_motion_[i];
+    unresolved_motion_ += i; // the earlier ones never will be: the transforms cover a later time, not theirs
+    pending_motion_.erase(pending_motion_.begin(), pending_motion_.begin() + static_cast<std::ptrdiff_t>(i) + 1);
+    i = 0;
+    last_pushed_t_ = p.t;
+    if (p.wMb) // out of the queue first: a push that throws (a bad pose) is not retried
       pushMotion(p.t, *p.wMb, *X);
     else
       pushMotion(p.t, *X);
     ++pushed;
-    unresolved_motion_ += i; // the earlier ones never will be: the transforms cover a later time, not theirs
-    pending_motion_.erase(pending_motion_.begin(), pending_motion_.begin() + static_cast<std::ptrdiff_t>(i) + 1);
-    i = 0;
   }
   return pushed;
 }
@@ -234,6 +242,11 @@ void MeasuringNode::restart()
 {
   if (!started_)
     return;
+  // motion_mutex_ first (as resolveMotion() holds it while pushing): no sample of the old clock is
+  // pushed into the new measurer.
+  std::lock_guard<std::mutex> motion_lock(motion_mutex_);
+  pending_motion_.clear();
+  last_pushed_t_ = -std::numeric_limits<double>::infinity();
   std::lock_guard<std::mutex> lock(mutex_);
   std::atomic_store(&measurer_, std::make_shared<OnlineMeasurer>(*camera_, *rig_, online_));
   {
@@ -244,9 +257,6 @@ void MeasuringNode::restart()
   frames_ = 0;
   latencies_ms_.clear();
   ++restarts_;
-  std::lock_guard<std::mutex> motion_lock(motion_mutex_);
-  pending_motion_.clear();
-  last_queued_t_ = -std::numeric_limits<double>::infinity();
 }
 
 std::vector<OnlineFrame> MeasuringNode::process()

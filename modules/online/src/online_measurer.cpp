@@ -372,9 +372,11 @@ std::vector<OnlineFrame> OnlineMeasurer::process()
     }
     out.push_back(std::move(f));
   }
-  // The oldest image waits for its motion: the tracking that needs none now, not after it comes.
+  // The oldest image waits for its motion: the tracking that needs none now, not after it comes. Only
+  // in a call that measured nothing: the frames measured are returned without waiting for it (the
+  // consumer's next call, at the next push, does it).
   cv::Mat waiting;
-  {
+  if (out.empty()) {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     if (!images_.empty())
       waiting = images_.front().gray;

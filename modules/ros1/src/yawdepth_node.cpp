@@ -40,6 +40,7 @@
 #include <sensor_msgs/JointState.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <tf2/exceptions.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -358,19 +359,32 @@ private:
     return node_.resolveMotion([this](double, std::uint64_t tag) { return transformAt(tag); });
   }
 
-  /* /tf into the buffer; with `motion: tf`, each new stamp of this message queued for the chain
-     world -> motion frame at it; the queued motion whose transforms are now known, pushed. */
+  /* /tf into the buffer; with `motion: tf`, the stamps of this message's links of the chain world ->
+     motion frame queued (a pose at each; another transform's stamp, e.g. a localiser's post-dated
+     map -> odom, is not the motion's); the queued motion whose transforms are now known, pushed. */
   void onTf(const tf2_msgs::TFMessageConstPtr &msg)
   {
     guarded("/tf", [&] {
-      std::vector<ros::Time> stamps;
-      for (const geometry_msgs::TransformStamped &t : msg->transforms) {
+      for (const geometry_msgs::TransformStamped &t : msg->transforms)
         tf_.setTransform(t, "tf", false);
-        stamps.push_back(t.header.stamp);
-      }
       if (!node_.started())
         return;
       if (node_.settings().motion == "tf") {
+        const std::string &world = node_.settings().world_frame;
+        std::vector<std::string> chain;
+        try {
+          tf_._chainAsVector(world, ros::Time(), node_.motionFrame(), ros::Time(), world, chain);
+        } catch (const tf2::TransformException &) {
+          chain.clear(); // not connected (yet): nothing to queue
+        }
+        const auto bare = [](const std::string &f) { return !f.empty() && f.front() == '/' ? f.substr(1) : f; };
+        const auto in_chain = [&](const std::string &f) { // tf2 keeps frame ids without a leading '/'
+          return std::find(chain.begin(), chain.end(), bare(f)) != chain.end();
+        };
+        std::vector<ros::Time> stamps; // a link of the chain: both frames on it, its child not the world
+        for (const geometry_msgs::TransformStamped &t : msg->transforms)
+          if (in_chain(t.child_frame_id) && in_chain(t.header.frame_id) && bare(t.child_frame_id) != bare(world))
+            stamps.push_back(t.header.stamp);
         std::sort(stamps.begin(), stamps.end());
         stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
         for (const ros::Time &s : stamps)

@@ -178,7 +178,8 @@ public:
 
   /*!
     \brief Track the live features into `image` and detect new ones where tracks thinned out.
-    \param image The next frame, 8-bit gray, the camera's size (else yawdepth::Error).
+    \param image The next frame, 8-bit gray, the camera's size (else yawdepth::Error); a view into a
+    larger buffer (an ROI) is tracked as its own pixels (copied: the pixels around it never count).
     \param motion The camera's motion since the previous image, for the epipolar gate; nullptr: no gate.
     \return The features in this image: id and observed (distorted) pixel.
   */

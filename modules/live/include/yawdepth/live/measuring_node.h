@@ -163,8 +163,9 @@ public:
     odometry and a moving mount, the odometry's pose `wMb` (the transform is the mount body -> camera
     at its time). Queued in time order, pushed by resolveMotion() once its transform is known: a
     chain with a slower link, or a moving mount's link published after the odometry, loses no pose.
-    A time not after the last one queued is ignored; samples more than max_image_age behind the
-    newest are dropped (counted: "motion dropped (no transform)" in the diagnostics).
+    Kept in time order (a stamp ahead of the others waits while the earlier ones go through); a time
+    already queued, or not after the last one pushed, is ignored; samples more than max_image_age
+    behind the newest queued are dropped (counted: "motion dropped (no transform)" in the diagnostics).
   */
   void queueMotion(double t, std::uint64_t tag, const std::optional<vpHomogeneousMatrix> &wMb = std::nullopt);
   /*!
@@ -232,7 +233,7 @@ private:
   };
   std::mutex motion_mutex_; // the queue, and the order of its pushes
   std::deque<PendingMotion> pending_motion_;
-  double last_queued_t_ = -std::numeric_limits<double>::infinity();
+  double last_pushed_t_ = -std::numeric_limits<double>::infinity();
   std::atomic<std::size_t> unresolved_motion_{0};
   std::mutex provider_mutex_;
   std::unique_ptr<DepthProvider> provider_;

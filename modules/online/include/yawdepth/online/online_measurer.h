@@ -16,10 +16,10 @@
   yaw when no joint reading was pushed. Then KltTracker tracks the image's natural features, gated by
   the known motion since the previous measured image (kltMotion(), as trackSequence()), and a
   StreamEstimator (window by default, or fused) takes the frame; each measured image gives an
-  OnlineFrame with its points' estimates. While the oldest queued image waits for its motion,
-  process() does the part of its tracking that needs none (KltTracker::prepare(): the pyramid and
-  plain Lucas-Kanade, the same numbers as without), so that only the gated rest is left when the
-  motion comes.
+  OnlineFrame with its points' estimates. While the oldest queued image waits for its motion, a
+  process() call that measured nothing does the part of its tracking that needs none
+  (KltTracker::prepare(): the pyramid and plain Lucas-Kanade, the same numbers as without), so that
+  only the gated rest is left when the motion comes.
 
   Bounded memory and latency. An image whose motion time is more than `max_image_age` behind the
   newest time any stream has pushed (on the motion clock: poses and joints as they are, images plus
