@@ -630,3 +630,35 @@ TEST_CASE("MeasuringNode: streams from their own threads in real time, a consume
     counted = counted || (k == "images measured" && v == std::to_string(frames.size()));
   CHECK(counted);
 }
+
+TEST_CASE("MeasuringNode: restart() while another thread resolves queued motion (as a middleware's callbacks do)",
+          "[live]")
+{
+  // The lookup asks the node for its frames, as the ROS node's does: restart() and resolveMotion()
+  // must not wait for each other's locks (a deadlock hangs this test until ctest's timeout).
+  MeasuringNode node(liveSettings());
+  REQUIRE(node.setCameraInfo(liveCameraInfo(), "/camera/camera_info"));
+  node.setOdometryFrames("odom", "base_link", "/odom");
+  REQUIRE(node.start("camera_optical", fixedMount).empty());
+  std::atomic<bool> stop{false};
+  std::atomic<std::size_t> pushed{0}, restarts{0};
+  std::thread callbacks([&] {
+    for (int k = 1; !stop.load(); ++k) {
+      node.queueMotion(0.01 * k, static_cast<std::uint64_t>(k), vpHomogeneousMatrix(0.001 * k, 0, 0, 0, 0, 0));
+      pushed += node.resolveMotion([&](double, std::uint64_t) -> std::optional<vpHomogeneousMatrix> {
+        return node.bodyFrame() == "base_link" ? std::optional<vpHomogeneousMatrix>(vpHomogeneousMatrix())
+                                               : std::nullopt;
+      });
+      node.diagnostics();
+    }
+  });
+  for (int i = 0; i < 200; ++i) {
+    node.restart();
+    ++restarts;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  stop = true;
+  callbacks.join();
+  CHECK(restarts.load() == 200);
+  CHECK(pushed.load() > 0);
+}
