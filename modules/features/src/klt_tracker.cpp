@@ -189,10 +189,10 @@ struct LiveFeatures {
 
 /*!
   \brief The features at `points` (ids `ids`) of `previous` followed into `image`: plain LK's
-  forward and backward pass (`flow`: next, back and their status, from plainFlow()) and, with a
+  forward and backward pass (`next_in`, `back` and their status, KltTracker::ahead()'s) and, with a
   `motion`, the guided search; those lost (no flow, forward-backward error, border, outside the
   epipolar band when `motion` is given) are counted in `stats` and left out. The pyramids are the
-  images' lkPyramid().
+  images' LK pyramids (KltTracker::ahead()).
 */
 LiveFeatures followFeatures(const KltTracker &tracker, const KltOptions &options, const cv::Mat &previous,
                             const std::vector<cv::Mat> &previous_pyramid, const cv::Mat &image,
