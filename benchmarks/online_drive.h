@@ -16,8 +16,12 @@
   measurer computes), so the render and the measurer agree exactly.
 */
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <functional>
+#include <thread>
 #include <utility>
 #include <vector>
 #include <opencv2/core.hpp>
@@ -152,6 +156,42 @@ inline std::vector<Event> events(const Drive &d, double stall_from = 1e9, double
     e.push_back({d.image_times[i] + kTimeOffset, Event::Image, i});
   std::stable_sort(e.begin(), e.end(), [](const Event &a, const Event &b) { return a.t_motion < b.t_motion; });
   return e;
+}
+
+/* The drive's first `seconds` played in real time, as a robot's streams arrive: one thread per stream
+   (poses and joint readings to `seconds` + 0.1 s, images to `seconds`), each calling its callback with
+   the index in its stream at that push's motion time from 50 ms after the call (images at camera
+   time + kTimeOffset); `done` counts the streams finished. Join the threads returned. */
+inline std::vector<std::thread> playInRealTime(const Drive &d, double seconds,
+                                               const std::function<void(std::size_t)> &pose,
+                                               const std::function<void(std::size_t)> &joint,
+                                               const std::function<void(std::size_t)> &image, std::atomic<int> &done)
+{
+  const auto start = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
+  const auto at = [start](double t) {
+    return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(t));
+  };
+  const auto stream = [at, &done](std::vector<double> times, double until, std::function<void(std::size_t)> push) {
+    return std::thread([at, &done, times = std::move(times), until, push = std::move(push)] {
+      for (std::size_t i = 0; i < times.size() && times[i] <= until; ++i) {
+        std::this_thread::sleep_until(at(times[i]));
+        push(i);
+      }
+      ++done;
+    });
+  };
+  std::vector<double> pose_t, joint_t, image_t;
+  for (const auto &p : d.poses)
+    pose_t.push_back(p.first);
+  for (const auto &j : d.joints)
+    joint_t.push_back(j.first);
+  for (double t : d.image_times)
+    image_t.push_back(t + kTimeOffset);
+  std::vector<std::thread> threads;
+  threads.push_back(stream(std::move(pose_t), seconds + 0.1, pose));
+  threads.push_back(stream(std::move(joint_t), seconds + 0.1, joint));
+  threads.push_back(stream(std::move(image_t), seconds + kTimeOffset, image));
+  return threads;
 }
 
 } // namespace yawdepth::bench::drive

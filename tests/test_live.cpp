@@ -521,41 +521,23 @@ TEST_CASE("MeasuringNode: streams from their own threads in real time, a consume
   REQUIRE(node.start("camera_optical", fixedMount).empty()); // before the streams: none of them is ignored
   const drive::Drive &d = liveDrive();
   const double play = 1.5; // s of the drive played in real time
-  const auto start = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
-  const auto at = [&](double t) {
-    return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(t));
-  };
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(play + 60.0);
   std::atomic<int> done{0};
   std::atomic<std::size_t> images_pushed{0};
   std::atomic<double> last_image_t{-1.0};
-  std::thread poses([&] {
-    for (const auto &p : d.poses) {
-      if (p.first > play + 0.1)
-        break;
-      std::this_thread::sleep_until(at(p.first));
-      node.setOdometryFrames("odom", "base_link", "/odom"); // as each odometry message does
-      node.pushMotion(p.first, wMv(p.second));
-    }
-    ++done;
-  });
-  std::thread joints([&] {
-    for (const auto &j : d.joints) {
-      if (j.first > play + 0.1)
-        break;
-      std::this_thread::sleep_until(at(j.first));
-      node.pushJointState(j.first, {"wheel", "pan"}, {0.5, j.second}, "/joint_states");
-    }
-    ++done;
-  });
-  std::thread images([&] {
-    for (std::size_t i = 0; i < d.image_times.size() && d.image_times[i] <= play; ++i) {
-      std::this_thread::sleep_until(at(d.image_times[i] + drive::kTimeOffset));
-      node.pushImage(d.image_times[i], d.images[i]);
-      ++images_pushed;
-      last_image_t = d.image_times[i];
-    }
-    ++done;
-  });
+  std::vector<std::thread> streams = drive::playInRealTime(
+      d, play,
+      [&](std::size_t i) {
+        node.setOdometryFrames("odom", "base_link", "/odom"); // as each odometry message does
+        node.pushMotion(d.poses[i].first, wMv(d.poses[i].second));
+      },
+      [&](std::size_t i) { node.pushJointState(d.joints[i].first, {"wheel", "pan"}, {0.5, d.joints[i].second}, "/joint_states"); },
+      [&](std::size_t i) {
+        node.pushImage(d.image_times[i], d.images[i]);
+        ++images_pushed;
+        last_image_t = d.image_times[i];
+      },
+      done);
   // A servo client: the points of the newest image it saw, asked at that image's stamp, over and over.
   std::mutex seen_mutex;
   ServoDepthRequest seen;
@@ -605,14 +587,13 @@ TEST_CASE("MeasuringNode: streams from their own threads in real time, a consume
     }
     if (finished && (frames.empty() || frames.back().t >= last_image_t.load()))
       break;
-    if (finished && std::chrono::steady_clock::now() > at(play + 60.0))
+    if (finished && std::chrono::steady_clock::now() > give_up)
       break; // a measurer that stopped measuring: the checks below fail
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   consumer_done = true;
-  poses.join();
-  joints.join();
-  images.join();
+  for (std::thread &t : streams)
+    t.join();
   servo.join();
   INFO("images pushed " << images_pushed.load() << ", measured " << frames.size() << ", ok points "
                                  << ok << ", servo answered " << answered << ", refused " << refused);

@@ -197,49 +197,28 @@ TEST_CASE("OnlineMeasurer: three threads pushing in real time, a consumer thread
   o.max_queued_images = 1000;
   OnlineMeasurer m(onlineCamera(), d.rig, o);
   const double play = 1.5; // s of the drive played in real time
-  const auto start = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
-  auto at = [&](double t) { return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(t)); };
   std::atomic<int> done{0};
   std::atomic<double> slowest_push_ms{0};
-  auto note = [&](std::chrono::steady_clock::time_point t0) {
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    double prev = slowest_push_ms.load();
-    while (ms > prev && !slowest_push_ms.compare_exchange_weak(prev, ms)) {
-    }
+  // Each push timed (reported below).
+  const auto timed = [&](const auto &push) {
+    return [&slowest_push_ms, push](std::size_t i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      push(i);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      double prev = slowest_push_ms.load();
+      while (ms > prev && !slowest_push_ms.compare_exchange_weak(prev, ms)) {
+      }
+    };
   };
-  std::thread poses([&] {
-    for (const auto &p : d.poses) {
-      if (p.first > play + 0.1)
-        break;
-      std::this_thread::sleep_until(at(p.first));
-      const auto t0 = std::chrono::steady_clock::now();
-      m.pushPose(p.first, p.second);
-      note(t0);
-    }
-    ++done;
-  });
-  std::thread joints([&] {
-    for (const auto &j : d.joints) {
-      if (j.first > play + 0.1)
-        break;
-      std::this_thread::sleep_until(at(j.first));
-      const auto t0 = std::chrono::steady_clock::now();
-      m.pushJoint(j.first, j.second);
-      note(t0);
-    }
-    ++done;
-  });
-  std::size_t pushed_images = 0;
-  std::thread images([&] {
-    for (std::size_t i = 0; i < d.image_times.size() && d.image_times[i] <= play; ++i) {
-      std::this_thread::sleep_until(at(d.image_times[i] + kOnlineTimeOffset));
-      const auto t0 = std::chrono::steady_clock::now();
-      m.pushImage(d.image_times[i], d.images[i]);
-      note(t0);
-      ++pushed_images;
-    }
-    ++done;
-  });
+  std::atomic<std::size_t> pushed_images{0};
+  std::vector<std::thread> streams = drive::playInRealTime(
+      d, play, timed([&](std::size_t i) { m.pushPose(d.poses[i].first, d.poses[i].second); }),
+      timed([&](std::size_t i) { m.pushJoint(d.joints[i].first, d.joints[i].second); }),
+      timed([&](std::size_t i) {
+        m.pushImage(d.image_times[i], d.images[i]);
+        ++pushed_images;
+      }),
+      done);
   std::vector<OnlineFrame> frames;
   for (;;) {
     const bool finished = done.load() == 3;
@@ -250,13 +229,12 @@ TEST_CASE("OnlineMeasurer: three threads pushing in real time, a consumer thread
       break;
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
-  poses.join();
-  joints.join();
-  images.join();
+  for (std::thread &t : streams)
+    t.join();
   const OnlineStats s = m.stats();
-  REQUIRE(pushed_images > 40);
-  CHECK(frames.size() == pushed_images);
-  CHECK(s.images_measured == pushed_images);
+  REQUIRE(pushed_images.load() > 40);
+  CHECK(frames.size() == pushed_images.load());
+  CHECK(s.images_measured == pushed_images.load());
   CHECK(s.dropped_stale + s.dropped_uncovered + s.dropped_overflow == 0);
   // A push only enqueues (the mutex is not held while tracking); its wall time is reported, not
   // asserted: a descheduled thread on a loaded machine would make any bound flaky.
