@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <deque>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -235,7 +236,14 @@ public:
       if (!last_now_.isZero() && now + ros::Duration(1.0) < last_now_) {
         ROS_WARN("yawdepth_node: the clock jumped back %.1f s (a bag played again?): measuring afresh",
                  (last_now_ - now).toSec());
-        tf_.clear();
+        {
+          // The moving transforms of the old clock go; the static ones stay (latched once: a simulator
+          // reset does not publish them again).
+          std::lock_guard<std::mutex> lock(statics_mutex_);
+          tf_.clear();
+          for (const auto &[child, t] : statics_)
+            tf_.setTransform(t, "tf_static", true);
+        }
         node_.restart();
       }
       last_now_ = now;
@@ -334,9 +342,11 @@ private:
 
   void onTfStatic(const tf2_msgs::TFMessageConstPtr &msg)
   {
+    std::lock_guard<std::mutex> lock(statics_mutex_);
     for (const geometry_msgs::TransformStamped &t : msg->transforms) {
       tf_.setTransform(t, "tf_static", true);
       static_tf_.setTransform(t, "tf_static", true);
+      statics_[t.child_frame_id] = t; // one per frame: bounded however often it is published
     }
   }
 
@@ -565,8 +575,10 @@ private:
   ros::CallbackQueue service_queue_;
   ros::ServiceServer depths_srv_;
   std::string camera_info_topic_;
-  tf2_ros::Buffer tf_{ros::Duration(30.0)};        // /tf, /tf_static (and the odometry): the motion
+  tf2_ros::Buffer tf_{ros::Duration(30.0)};        // /tf and /tf_static: the motion
   tf2::BufferCore static_tf_{ros::Duration(10.0)}; // /tf_static alone: whether the mount is fixed
+  std::mutex statics_mutex_;
+  std::map<std::string, geometry_msgs::TransformStamped> statics_; // /tf_static by child frame: kept over a restart
 
   std::mutex stamps_mutex_; // the images' stamps as received, by their seconds
   std::deque<std::pair<double, ros::Time>> stamps_;
